@@ -1,0 +1,285 @@
+//! The discrete Dynamic Movement Primitive of the paper (eqs. 1-4) and its batch least-squares fit
+//! (method.md §2.3):
+//!
+//! ```text
+//! tau dz/dt = alpha_z (beta_z (g - y) - z) + f(x)      (1)
+//! tau dy/dt = z                                        (2)
+//! tau dx/dt = -alpha_x x                               (3)
+//! f(x) = sum_k w_k Psi_k(x) / sum_k Psi_k(x) * x       (4)
+//! ```
+//!
+//! There is no `(g - y0)` amplitude factor in `f`: weights are in the units of `y`, so weights of
+//! demonstrations with different goals can be interpolated. Every degree of freedom has its own
+//! weights and goal; the phase `x` and `tau` are shared.
+
+use nalgebra::{DMatrix, DMatrixView, DVector};
+
+use crate::basis::{Basis, phase};
+use crate::diff;
+use crate::error::{Error, Result, check_finite_matrix, check_increasing, check_scalar};
+
+/// Design-matrix entries below this are set to zero, as in the lab's fitting code.
+const DESIGN_CUTOFF: f64 = 1e-8;
+/// Relative ridge added to the normal equations of the fit. It keeps a kernel that no sample
+/// activates at weight 0 instead of making the system singular, and changes well-posed fits by
+/// about 1e-10 relative.
+const FIT_RIDGE: f64 = 1e-10;
+
+/// The meta-parameters of a DMP: its constants and the size of its basis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DmpConfig {
+    pub n_basis: usize,
+    pub alpha_z: f64,
+    pub beta_z: f64,
+    pub alpha_x: f64,
+    /// `h_k = width_factor / (c_{k+1} - c_k)^2`; 2 in the lab code, 1 in the lab's later papers.
+    pub width_factor: f64,
+}
+
+impl Default for DmpConfig {
+    /// The JSI lab's constants (method.md §2.2): alpha_z = 48, beta_z = alpha_z / 4 (critically
+    /// damped), alpha_x = 2, width factor 2; 25 kernels.
+    fn default() -> Self {
+        Self { n_basis: 25, alpha_z: 48.0, beta_z: 12.0, alpha_x: 2.0, width_factor: 2.0 }
+    }
+}
+
+impl DmpConfig {
+    pub fn validate(&self) -> Result<()> {
+        check_scalar("alpha_z", self.alpha_z, true)?;
+        check_scalar("beta_z", self.beta_z, true)?;
+        check_scalar("alpha_x", self.alpha_x, true)?;
+        check_scalar("width_factor", self.width_factor, true)?;
+        if self.n_basis < 2 {
+            return Err(Error::InvalidParameter {
+                name: "n_basis",
+                value: self.n_basis.to_string(),
+                requirement: "must be at least 2",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Positions of a demonstration with optional measured derivatives, all `D x T` (one column per
+/// sample; a C-ordered `(T, D)` numpy array is exactly this layout).
+#[derive(Debug, Clone, Copy)]
+pub struct Demonstration<'a> {
+    pub t: &'a [f64],
+    pub y: DMatrixView<'a, f64>,
+    pub yd: Option<DMatrixView<'a, f64>>,
+    pub ydd: Option<DMatrixView<'a, f64>>,
+}
+
+/// A multi-DOF discrete DMP.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dmp {
+    config: DmpConfig,
+    basis: Basis,
+    /// `N x D`: column d holds the weights of DOF d.
+    weights: DMatrix<f64>,
+    goal: DVector<f64>,
+    y0: DVector<f64>,
+    tau: f64,
+}
+
+impl Dmp {
+    /// Builds a DMP from its parameters, validating every one.
+    pub fn new(
+        config: DmpConfig,
+        weights: DMatrix<f64>,
+        goal: DVector<f64>,
+        y0: DVector<f64>,
+        tau: f64,
+    ) -> Result<Self> {
+        config.validate()?;
+        let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
+        if weights.nrows() != config.n_basis || weights.ncols() == 0 {
+            return Err(Error::Shape {
+                name: "weights",
+                expected: format!("(n_dof >= 1, {}) (n_dof, n_basis)", config.n_basis),
+                got: format!("({}, {})", weights.ncols(), weights.nrows()),
+            });
+        }
+        let n_dof = weights.ncols();
+        for (name, v) in [("goal", &goal), ("y0", &y0)] {
+            if v.len() != n_dof {
+                return Err(Error::Shape {
+                    name,
+                    expected: format!("({n_dof},), one entry per DOF of the weights"),
+                    got: format!("({},)", v.len()),
+                });
+            }
+        }
+        check_vector("goal", &goal)?;
+        check_vector("y0", &y0)?;
+        check_scalar("tau", tau, true)?;
+        for (k, w) in weights.column_iter().enumerate() {
+            if let Some((n, &v)) = w.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(Error::NonFinite { name: "weights", location: format!("[{k}, {n}]"), value: v });
+            }
+        }
+        Ok(Self { config, basis, weights, goal, y0, tau })
+    }
+
+    /// Fits a DMP to one demonstration by batch least squares (method.md §2.3):
+    /// `tau = t_T - t_1`, `g = y_T`, `y0 = y_1`, `x_j = exp(-alpha_x (t_j - t_1)/tau)`,
+    /// `F_j = tau^2 ydd_j - alpha_z (beta_z (g - y_j) - tau yd_j)`, and `w = argmin |A w - F|`
+    /// with `A_jk = Psi_k(x_j) x_j / sum_i Psi_i(x_j)`.
+    ///
+    /// Missing derivatives are computed with [`diff::gradient`] (second order, non-uniform grid).
+    pub fn fit(demo: &Demonstration<'_>, config: DmpConfig) -> Result<Self> {
+        config.validate()?;
+        let (t, y) = (demo.t, &demo.y);
+        let n_dof = y.nrows();
+        if n_dof == 0 {
+            return Err(Error::Shape { name: "y", expected: "at least one column".into(), got: format!("({}, 0)", t.len()) });
+        }
+        if y.ncols() != t.len() {
+            return Err(Error::Shape {
+                name: "y",
+                expected: format!("({}, {n_dof}) with one row per entry of t", t.len()),
+                got: format!("({}, {n_dof})", y.ncols()),
+            });
+        }
+        if t.len() < diff::MIN_SAMPLES {
+            return Err(Error::TooFewSamples {
+                name: "t",
+                got: t.len(),
+                needed: diff::MIN_SAMPLES,
+                why: "second-order finite differences need 3",
+            });
+        }
+        check_increasing("t", t)?;
+        check_finite_matrix("y", y)?;
+        for (name, d) in [("yd", &demo.yd), ("ydd", &demo.ydd)] {
+            if let Some(d) = d {
+                if d.shape() != y.shape() {
+                    return Err(Error::Shape {
+                        name,
+                        expected: format!("({}, {n_dof}) like y", t.len()),
+                        got: format!("({}, {})", d.ncols(), d.nrows()),
+                    });
+                }
+                check_finite_matrix(name, d)?;
+            }
+        }
+        let yd = match demo.yd {
+            Some(v) => v.into_owned(),
+            None => diff::gradient(t, y),
+        };
+        let ydd = match demo.ydd {
+            Some(v) => v.into_owned(),
+            None => diff::gradient(t, &yd.as_view()),
+        };
+
+        let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
+        let n = config.n_basis;
+        let t0 = t[0];
+        let tau = t[t.len() - 1] - t0;
+        let goal: DVector<f64> = y.column(t.len() - 1).into_owned();
+        let y0: DVector<f64> = y.column(0).into_owned();
+
+        // Normal equations A^T A w = A^T F, accumulated row by row: each row of A has only a
+        // handful of entries above the cut-off, so this costs O(T) instead of O(T N^2).
+        let mut ata = DMatrix::<f64>::zeros(n, n);
+        let mut atf = DMatrix::<f64>::zeros(n, n_dof);
+        let mut psi = vec![0.0; n];
+        let mut force = vec![0.0; n_dof];
+        for j in 0..t.len() {
+            let x = phase(t[j] - t0, tau, config.alpha_x);
+            let range = basis.normalized_activations(x, &mut psi);
+            // Row j of the design matrix, with the lab code's cut-off; only its non-zero span
+            // (about six kernels) enters the normal equations.
+            let mut nz = range.end..range.start;
+            for k in range {
+                psi[k] *= x;
+                if psi[k] < DESIGN_CUTOFF {
+                    psi[k] = 0.0;
+                } else {
+                    nz.start = nz.start.min(k);
+                    nz.end = k + 1;
+                }
+            }
+            let yj = y.column(j);
+            for d in 0..n_dof {
+                force[d] = tau * tau * ydd[(d, j)]
+                    - config.alpha_z * (config.beta_z * (goal[d] - yj[d]) - tau * yd[(d, j)]);
+            }
+            // Column-major slices of the rows nz of A^T A and A^T F: contiguous, so vectorized.
+            let row = &psi[nz.clone()];
+            for l in nz.clone() {
+                let col = &mut ata.as_mut_slice()[l * n + nz.start..l * n + nz.end];
+                for (c, a) in col.iter_mut().zip(row) {
+                    *c += a * psi[l];
+                }
+            }
+            for (d, &f) in force.iter().enumerate() {
+                let col = &mut atf.as_mut_slice()[d * n + nz.start..d * n + nz.end];
+                for (c, a) in col.iter_mut().zip(row) {
+                    *c += a * f;
+                }
+            }
+        }
+        let ridge = FIT_RIDGE * ata.trace() / n as f64;
+        let ridge = if ridge > 0.0 { ridge } else { FIT_RIDGE };
+        for k in 0..n {
+            ata[(k, k)] += ridge;
+        }
+        let chol = ata.cholesky().ok_or_else(|| Error::Numerical {
+            context: "DMP fit",
+            detail: "the normal equations are not positive definite".into(),
+        })?;
+        let weights = chol.solve(&atf);
+        if weights.iter().any(|w| !w.is_finite()) {
+            return Err(Error::Numerical { context: "DMP fit", detail: "non-finite weights".into() });
+        }
+        Ok(Self { config, basis, weights, goal, y0, tau })
+    }
+
+    pub fn config(&self) -> &DmpConfig {
+        &self.config
+    }
+    pub fn basis(&self) -> &Basis {
+        &self.basis
+    }
+    /// `N x D`, column d = the weights of DOF d.
+    pub fn weights(&self) -> &DMatrix<f64> {
+        &self.weights
+    }
+    pub fn goal(&self) -> &DVector<f64> {
+        &self.goal
+    }
+    pub fn y0(&self) -> &DVector<f64> {
+        &self.y0
+    }
+    pub fn tau(&self) -> f64 {
+        self.tau
+    }
+    pub fn n_dof(&self) -> usize {
+        self.goal.len()
+    }
+    pub fn n_basis(&self) -> usize {
+        self.config.n_basis
+    }
+
+    /// The same movement towards a new goal (weights unchanged).
+    pub fn with_goal(&self, goal: DVector<f64>) -> Result<Self> {
+        Self::new(self.config, self.weights.clone(), goal, self.y0.clone(), self.tau)
+    }
+    /// The same movement from a new start.
+    pub fn with_start(&self, y0: DVector<f64>) -> Result<Self> {
+        Self::new(self.config, self.weights.clone(), self.goal.clone(), y0, self.tau)
+    }
+    /// The same path at another speed: tau only scales time.
+    pub fn with_tau(&self, tau: f64) -> Result<Self> {
+        Self::new(self.config, self.weights.clone(), self.goal.clone(), self.y0.clone(), tau)
+    }
+}
+
+fn check_vector(name: &'static str, v: &DVector<f64>) -> Result<()> {
+    match v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        Some((i, &x)) => Err(Error::NonFinite { name, location: format!("[{i}]"), value: x }),
+        None => Ok(()),
+    }
+}

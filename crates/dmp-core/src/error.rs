@@ -1,0 +1,104 @@
+//! The one error type of `dmp-core`. Every variant says what was wrong and where, so that the
+//! Python layer can pass the message through unchanged.
+
+use thiserror::Error;
+
+/// Errors raised by fitting, rollout and generalization.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum Error {
+    /// A NaN or infinity in an input array or parameter.
+    #[error("{name}{location} is {value}: all values must be finite")]
+    NonFinite {
+        name: &'static str,
+        /// An index such as `[12, 3]`, or empty for a scalar.
+        location: String,
+        value: f64,
+    },
+    /// Arrays whose shapes do not fit together.
+    #[error("{name} has shape {got}, expected {expected}")]
+    Shape {
+        name: &'static str,
+        expected: String,
+        got: String,
+    },
+    /// Fewer samples than the method needs.
+    #[error("{name} has {got} samples, but {needed} are needed ({why})")]
+    TooFewSamples {
+        name: &'static str,
+        got: usize,
+        needed: usize,
+        why: &'static str,
+    },
+    /// Sample times that repeat or go backwards.
+    #[error(
+        "{name} must be strictly increasing, but {name}[{index}] = {value} is not greater than {name}[{prev_index}] = {prev}",
+        prev_index = index - 1
+    )]
+    NotIncreasing {
+        name: &'static str,
+        index: usize,
+        value: f64,
+        prev: f64,
+    },
+    /// A scalar parameter outside its domain.
+    #[error("{name} = {value} is invalid: {requirement}")]
+    InvalidParameter {
+        name: &'static str,
+        value: String,
+        requirement: &'static str,
+    },
+    /// The input was valid but the computation failed (e.g. a matrix that is not positive definite).
+    #[error("numerical failure in {context}: {detail}")]
+    Numerical { context: &'static str, detail: String },
+}
+
+impl Error {
+    /// True when the caller's input was wrong (Python maps these to `ValueError` subclasses).
+    pub fn is_input_error(&self) -> bool {
+        !matches!(self, Error::Numerical { .. })
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Checks a scalar: finite and, if `positive`, strictly positive.
+pub(crate) fn check_scalar(name: &'static str, value: f64, positive: bool) -> Result<()> {
+    if !value.is_finite() {
+        return Err(Error::NonFinite { name, location: String::new(), value });
+    }
+    if positive && value <= 0.0 {
+        return Err(Error::InvalidParameter {
+            name,
+            value: value.to_string(),
+            requirement: "must be > 0",
+        });
+    }
+    Ok(())
+}
+
+/// Checks that every entry of a time-major `(T, D)` array (stored as the columns of a `D x T`
+/// matrix) is finite, naming the first offender as `name[j, d]`.
+pub(crate) fn check_finite_matrix(
+    name: &'static str,
+    values: &nalgebra::DMatrixView<'_, f64>,
+) -> Result<()> {
+    for (j, col) in values.column_iter().enumerate() {
+        if let Some((d, &v)) = col.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite { name, location: format!("[{j}, {d}]"), value: v });
+        }
+    }
+    Ok(())
+}
+
+/// Checks that a 1-D array is finite and strictly increasing.
+pub(crate) fn check_increasing(name: &'static str, t: &[f64]) -> Result<()> {
+    if let Some((j, &v)) = t.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(Error::NonFinite { name, location: format!("[{j}]"), value: v });
+    }
+    for j in 1..t.len() {
+        if t[j] <= t[j - 1] {
+            return Err(Error::NotIncreasing { name, index: j, value: t[j], prev: t[j - 1] });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,16 @@
+//! # dmp-core
+//!
+//! The numerical core of dmprs: the Dynamic Movement Primitives of Nemec, Vuga and Ude,
+//! "Efficient sensorimotor learning from multiple demonstrations" (2013), eqs. 1-4, their fit
+//! from demonstrations and their rollout. Pure Rust on nalgebra; no Python, no learners.
+
+pub mod basis;
+pub mod diff;
+pub mod dmp;
+pub mod error;
+pub mod rollout;
+
+pub use basis::Basis;
+pub use dmp::{Demonstration, Dmp, DmpConfig};
+pub use error::{Error, Result};
+pub use rollout::{RolloutOptions, Trajectory, rollout_batch};

@@ -1,0 +1,191 @@
+//! `dmprs._core.Dmp` and `rollout_batch`: numpy in, numpy out. `dmprs.DMP` (Python) wraps these
+//! and documents them; the arrays reaching here are already float64 and of the right rank.
+
+use dmp_core::{Demonstration, Dmp, DmpConfig, RolloutOptions, Trajectory, rollout_batch};
+use nalgebra::{DMatrix, DMatrixView, DVector};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+
+use crate::errors::{IntoPyResult, raise};
+
+/// A C-ordered `(T, D)` array viewed as the `D x T` matrix the core expects (no copy).
+fn time_major<'a>(name: &str, a: &'a PyReadonlyArray2<'_, f64>) -> PyResult<DMatrixView<'a, f64>> {
+    let (t, d) = (a.shape()[0], a.shape()[1]);
+    let slice = a
+        .as_slice()
+        .map_err(|_| raise("InvalidInputError", format!("{name} must be a C-contiguous array")))?;
+    Ok(DMatrixView::from_slice(slice, d, t))
+}
+
+fn vector(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<DVector<f64>> {
+    let slice = a
+        .as_slice()
+        .map_err(|_| raise("InvalidInputError", format!("{name} must be a contiguous array")))?;
+    Ok(DVector::from_column_slice(slice))
+}
+
+type TrajectoryArrays<'py> =
+    (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+
+fn trajectory_arrays(py: Python<'_>, tr: Trajectory) -> PyResult<TrajectoryArrays<'_>> {
+    let shape = [tr.t.len(), tr.n_dof];
+    Ok((
+        tr.t.into_pyarray(py),
+        tr.y.into_pyarray(py).reshape(shape)?,
+        tr.yd.into_pyarray(py).reshape(shape)?,
+        tr.ydd.into_pyarray(py).reshape(shape)?,
+    ))
+}
+
+#[pyclass(name = "Dmp", module = "dmprs._core", frozen)]
+pub struct PyDmp {
+    pub inner: Dmp,
+}
+
+#[pymethods]
+impl PyDmp {
+    #[new]
+    #[pyo3(signature = (weights, goal, y0, tau, *, alpha_z, beta_z, alpha_x, width_factor))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        weights: PyReadonlyArray2<'_, f64>,
+        goal: PyReadonlyArray1<'_, f64>,
+        y0: PyReadonlyArray1<'_, f64>,
+        tau: f64,
+        alpha_z: f64,
+        beta_z: f64,
+        alpha_x: f64,
+        width_factor: f64,
+    ) -> PyResult<Self> {
+        // weights arrive (D, N) C-ordered, which is the N x D column-major matrix of the core.
+        let n = weights.shape()[1];
+        let w = time_major("weights", &weights)?;
+        let config = DmpConfig { n_basis: n, alpha_z, beta_z, alpha_x, width_factor };
+        let inner = Dmp::new(config, DMatrix::from(w), vector("goal", &goal)?, vector("y0", &y0)?, tau);
+        Ok(Self { inner: inner.py_err()? })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (t, y, yd, ydd, *, n_basis, alpha_z, beta_z, alpha_x, width_factor))]
+    #[allow(clippy::too_many_arguments)]
+    fn fit(
+        t: PyReadonlyArray1<'_, f64>,
+        y: PyReadonlyArray2<'_, f64>,
+        yd: Option<PyReadonlyArray2<'_, f64>>,
+        ydd: Option<PyReadonlyArray2<'_, f64>>,
+        n_basis: usize,
+        alpha_z: f64,
+        beta_z: f64,
+        alpha_x: f64,
+        width_factor: f64,
+    ) -> PyResult<Self> {
+        let t_slice = t
+            .as_slice()
+            .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
+        let demo = Demonstration {
+            t: t_slice,
+            y: time_major("y", &y)?,
+            yd: yd.as_ref().map(|a| time_major("yd", a)).transpose()?,
+            ydd: ydd.as_ref().map(|a| time_major("ydd", a)).transpose()?,
+        };
+        let config = DmpConfig { n_basis, alpha_z, beta_z, alpha_x, width_factor };
+        Ok(Self { inner: Dmp::fit(&demo, config).py_err()? })
+    }
+
+    #[pyo3(signature = (dt, duration=None, until_rest=false, rest_tol=1e-4))]
+    fn rollout<'py>(
+        &self,
+        py: Python<'py>,
+        dt: f64,
+        duration: Option<f64>,
+        until_rest: bool,
+        rest_tol: f64,
+    ) -> PyResult<TrajectoryArrays<'py>> {
+        let opts = RolloutOptions { dt, duration, until_rest, rest_tol };
+        let tr = py.detach(|| self.inner.rollout(&opts)).py_err()?;
+        trajectory_arrays(py, tr)
+    }
+
+    fn with_goal(&self, goal: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self { inner: self.inner.with_goal(vector("goal", &goal)?).py_err()? })
+    }
+
+    fn with_start(&self, y0: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self { inner: self.inner.with_start(vector("y0", &y0)?).py_err()? })
+    }
+
+    fn with_tau(&self, tau: f64) -> PyResult<Self> {
+        Ok(Self { inner: self.inner.with_tau(tau).py_err()? })
+    }
+
+    /// (D, N)
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let w = self.inner.weights();
+        Ok(w.as_slice().to_vec().into_pyarray(py).reshape([w.ncols(), w.nrows()])?)
+    }
+    #[getter]
+    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.goal().as_slice().to_vec().into_pyarray(py)
+    }
+    #[getter]
+    fn y0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.y0().as_slice().to_vec().into_pyarray(py)
+    }
+    #[getter]
+    fn tau(&self) -> f64 {
+        self.inner.tau()
+    }
+    #[getter]
+    fn n_dof(&self) -> usize {
+        self.inner.n_dof()
+    }
+    #[getter]
+    fn n_basis(&self) -> usize {
+        self.inner.n_basis()
+    }
+    #[getter]
+    fn alpha_z(&self) -> f64 {
+        self.inner.config().alpha_z
+    }
+    #[getter]
+    fn beta_z(&self) -> f64 {
+        self.inner.config().beta_z
+    }
+    #[getter]
+    fn alpha_x(&self) -> f64 {
+        self.inner.config().alpha_x
+    }
+    #[getter]
+    fn width_factor(&self) -> f64 {
+        self.inner.config().width_factor
+    }
+    #[getter]
+    fn centers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.basis().centers().to_vec().into_pyarray(py)
+    }
+    #[getter]
+    fn widths<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.basis().widths().to_vec().into_pyarray(py)
+    }
+}
+
+/// Rolls out many DMPs on all cores with the GIL released.
+#[pyfunction(name = "rollout_batch")]
+#[pyo3(signature = (dmps, dt, duration=None, until_rest=false, rest_tol=1e-4))]
+pub fn py_rollout_batch<'py>(
+    py: Python<'py>,
+    dmps: Vec<PyRef<'py, PyDmp>>,
+    dt: f64,
+    duration: Option<f64>,
+    until_rest: bool,
+    rest_tol: f64,
+) -> PyResult<Vec<TrajectoryArrays<'py>>> {
+    let owned: Vec<Dmp> = dmps.iter().map(|d| d.inner.clone()).collect();
+    let opts = RolloutOptions { dt, duration, until_rest, rest_tol };
+    let trajectories = py.detach(|| rollout_batch(&owned, &opts)).py_err()?;
+    trajectories.into_iter().map(|tr| trajectory_arrays(py, tr)).collect()
+}

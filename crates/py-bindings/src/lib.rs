@@ -1,0 +1,21 @@
+//! PyO3 bindings: the module `dmprs._core`. Thin wrappers only; the algorithms live in
+//! `dmp-core` and `learner`, the user-facing classes and docs in `python/dmprs`.
+
+mod dmp;
+mod errors;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+mod _core {
+    #[pymodule_export]
+    use super::dmp::PyDmp;
+    #[pymodule_export]
+    use super::dmp::py_rollout_batch;
+
+    #[pymodule_init]
+    fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {
+        use pyo3::types::PyModuleMethods;
+        m.add("__version__", env!("CARGO_PKG_VERSION"))
+    }
+}

@@ -1,0 +1,20 @@
+"""dmprs: learn a robot skill from two or three demonstrations and get it right in a handful of
+trials (Nemec, Vuga, Ude, "Efficient sensorimotor learning from multiple demonstrations", 2013).
+
+The numerical core is Rust (``dmprs._core``); this package is the API users import.
+"""
+
+from dmprs._core import __version__
+from dmprs.dmp import DMP, rollout_batch
+from dmprs.errors import DmprsError, InvalidInputError, NumericalError
+from dmprs.trajectory import Trajectory
+
+__all__ = [
+    "DMP",
+    "DmprsError",
+    "InvalidInputError",
+    "NumericalError",
+    "Trajectory",
+    "__version__",
+    "rollout_batch",
+]

@@ -1,0 +1,24 @@
+"""The exceptions of dmprs.
+
+Everything dmprs raises on purpose derives from :class:`DmprsError`. Errors caused by the
+caller's input also derive from :class:`ValueError`, so ``except ValueError`` keeps working.
+The Rust core raises these same classes (``crates/py-bindings/src/errors.rs``).
+"""
+
+from __future__ import annotations
+
+__all__ = ["DmprsError", "InvalidInputError", "NumericalError"]
+
+
+class DmprsError(Exception):
+    """Base class of every error dmprs raises on purpose."""
+
+
+class InvalidInputError(DmprsError, ValueError):
+    """An argument is malformed: wrong shape or dtype, NaN or inf, non-increasing time, a
+    parameter outside its domain. The message says what and where."""
+
+
+class NumericalError(DmprsError, ArithmeticError):
+    """The input was valid but a computation failed (e.g. a matrix that is not positive
+    definite, a rollout that does not come to rest)."""
