@@ -1,0 +1,133 @@
+"""DMP benchmark: dmprs against movement_primitives and pydmps on one workload.
+
+Workload (issue 2): a 7-DOF, 1000-sample, 1 s demonstration, 50 basis functions. Measured in
+one process: fit time, rollout time per step per DOF (called from Python, at dt = 1 ms), and
+each library's own reproduction RMS error (its rollout interpolated onto the demo's times; the
+libraries use different constants, see benches/README.md). Then rollout_batch of 1000 DMPs
+against a Python loop over the same DMPs, to show both cores at work.
+
+    pip install ".[bench]" && python benches/bench_dmp.py
+
+Prints a markdown table; medians of repeated runs.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import sys
+import time
+import warnings
+
+import numpy as np
+
+import dmprs
+from dmprs.demo import reaching_demo
+
+N_DOF, N_SAMPLES, N_BASIS, DT = 7, 1000, 50, 0.001
+REPEATS = 30
+
+
+def median_time(fn, repeats: int = REPEATS) -> float:
+    fn()  # warm up
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def rms(t_demo, y_demo, t_roll, y_roll) -> float:
+    y_i = np.stack([np.interp(t_demo, t_roll, y_roll[:, d]) for d in range(y_demo.shape[1])], 1)
+    return float(np.sqrt(np.mean((y_i - y_demo) ** 2)))
+
+
+def bench_dmprs(t, y):
+    fit = median_time(lambda: dmprs.DMP.fit(t, y, N_BASIS))
+    dmp = dmprs.DMP.fit(t, y, N_BASIS)
+    roll = median_time(lambda: dmp.rollout(dt=DT))
+    tr = dmp.rollout(dt=DT)
+    return fit, roll / (tr.n_samples * N_DOF), rms(t, y, tr.t, tr.y)
+
+
+def bench_movement_primitives(t, y):
+    from movement_primitives.dmp import DMP
+
+    def make():
+        d = DMP(n_dims=N_DOF, execution_time=1.0, dt=DT, n_weights_per_dim=N_BASIS, int_dt=DT)
+        d.imitate(t, y)
+        return d
+
+    fit = median_time(make)
+    d = make()
+    best = None
+    for step in ("euler-cython", "rk4-cython", "euler"):
+        try:
+            d.open_loop(step_function=step)
+        except Exception:  # a step function this build lacks
+            continue
+        roll = median_time(lambda: d.open_loop(step_function=step), repeats=10)
+        if best is None or roll < best[0]:
+            best = (roll, step)
+    T, Y = d.open_loop(step_function=best[1])
+    return fit, best[0] / (len(T) * N_DOF), rms(t, y, np.asarray(T), np.asarray(Y)), best[1]
+
+
+def bench_pydmps(t, y):
+    import pydmps.dmp_discrete
+
+    def make():
+        d = pydmps.dmp_discrete.DMPs_discrete(n_dmps=N_DOF, n_bfs=N_BASIS, dt=DT)
+        d.imitate_path(y_des=y.T.copy())
+        return d
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = median_time(make, repeats=10)
+        d = make()
+        roll = median_time(lambda: (d.reset_state(), d.rollout()), repeats=5)
+        d.reset_state()
+        Y, _, _ = d.rollout()
+    T = np.arange(len(Y)) * DT
+    return fit, roll / (len(T) * N_DOF), rms(t, y, T, Y)
+
+
+def bench_batch(t, y, n=1000):
+    base = dmprs.DMP.fit(t, y, N_BASIS)
+    dmps = [base.with_goal(base.goal + 1e-4 * i) for i in range(n)]
+    loop = median_time(lambda: [d.rollout(dt=DT) for d in dmps], repeats=5)
+    batch = median_time(lambda: dmprs.rollout_batch(dmps, dt=DT), repeats=5)
+    return loop, batch
+
+
+def main() -> None:
+    t, y = reaching_demo(N_SAMPLES, 1.0, N_DOF)
+    rows = [("dmprs", *bench_dmprs(t, y), "Euler (Rust)")]
+    try:
+        f, r, e, step = bench_movement_primitives(t, y)
+        rows.append(("movement_primitives 0.9.1", f, r, e, step))
+    except ImportError as exc:
+        print(f"movement_primitives not installed ({exc}); pip install '.[bench]'", file=sys.stderr)
+    try:
+        rows.append(("pydmps", *bench_pydmps(t, y), "Euler (Python)"))
+    except ImportError as exc:
+        print(f"pydmps not installed ({exc})", file=sys.stderr)
+
+    ours = rows[0]
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"Python {platform.python_version()}, numpy {np.__version__}\n")
+    print("| library | fit (ms) | rollout (ns / step / DOF) | reproduction RMS (rad) | step function | fit vs dmprs | rollout vs dmprs |")
+    print("|---|---:|---:|---:|---|---:|---:|")
+    for name, fit, roll, err, step in rows:
+        print(f"| {name} | {fit * 1e3:.3f} | {roll * 1e9:.1f} | {err:.2e} | {step} | "
+              f"{fit / ours[1]:.0f}x | {roll / ours[2]:.0f}x |")
+    loop, batch = bench_batch(t, y)
+    print(f"\nrollout_batch of 1000 DMPs (7 DOF, 1 s at 1 ms): {batch * 1e3:.1f} ms; "
+          f"a Python loop of DMP.rollout: {loop * 1e3:.1f} ms; speed-up {loop / batch:.2f}x "
+          f"on {os.cpu_count()} cores")
+
+
+if __name__ == "__main__":
+    main()
