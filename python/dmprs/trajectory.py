@@ -60,7 +60,8 @@ class Trajectory:
         """Wraps arrays fresh from the core (already valid) without re-checking them."""
         self = object.__new__(cls)
         for name, arr in (("t", t), ("y", y), ("yd", yd), ("ydd", ydd)):
-            arr.setflags(write=False)
+            if arr is not None:
+                arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         return self
 

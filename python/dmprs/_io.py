@@ -1,0 +1,101 @@
+"""Crash-safe files: atomic writes and append-only JSON lines.
+
+A finished trial must survive a crash or Ctrl-C at any later moment, so every write is either
+atomic (temp file in the same directory, fsync, rename, fsync of the directory) or an append of
+one complete line followed by flush and fsync.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def _fsync_dir(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Writes ``data`` to ``path`` so that readers see the old file or the new one, never a mix."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    _fsync_dir(path.parent)
+
+
+def write_npz_atomic(path: Path, arrays: Mapping[str, Any]) -> bytes:
+    """Saves arrays as an uncompressed .npz atomically; returns the bytes written (for hashing)."""
+    buf = io.BytesIO()
+    np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
+    data = buf.getvalue()
+    write_atomic(path, data)
+    return data
+
+
+def append_jsonl(path: Path, record: Mapping[str, Any]) -> None:
+    """Appends one JSON object as one line and forces it to disk."""
+    line = json.dumps(record, separators=(",", ":"), allow_nan=True) + "\n"
+    with open(path, "a", encoding="utf-8") as f:
+        f.write(line)
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def read_jsonl(path: Path) -> tuple[list[dict[str, Any]], str | None]:
+    """Reads complete lines; returns them and a description of a cut last line, if any.
+
+    Only the last line may be incomplete (a crash mid-append); a bad line elsewhere means the
+    file is not ours and raises ``ValueError`` naming the line.
+    """
+    text = Path(path).read_text(encoding="utf-8")
+    lines = text.split("\n")
+    records: list[dict[str, Any]] = []
+    cut = None
+    for i, line in enumerate(lines):
+        if not line.strip():
+            continue
+        last = i == len(lines) - 1  # no newline after it: the write may have been cut
+        try:
+            value = json.loads(line)
+            if not isinstance(value, dict):
+                raise ValueError("not a JSON object")
+        except ValueError as exc:
+            if last:
+                cut = f"line {i + 1} of {path} was cut mid-write ({len(line)} bytes) and is ignored"
+                break
+            raise ValueError(f"{path}, line {i + 1}: not a JSON record ({exc})") from None
+        records.append(value)
+    return records, cut
+
+
+def truncate_cut_line(path: Path) -> None:
+    """Drops an incomplete last line so that appends start on a fresh line."""
+    data = Path(path).read_bytes()
+    if data and not data.endswith(b"\n"):
+        keep = data.rfind(b"\n") + 1
+        with open(path, "r+b") as f:
+            f.truncate(keep)
+            f.flush()
+            os.fsync(f.fileno())

@@ -1,0 +1,153 @@
+"""The episodic hardware-adapter interface: one call executes one whole trajectory.
+
+Simulations and real robots implement :class:`Adapter`. Subclass :class:`BaseAdapter` and
+write ``_execute``: it gets the shared pre-execution check, dry runs, error capture, stop and
+context-manager handling for free.
+"""
+
+from __future__ import annotations
+
+import abc
+import threading
+import time
+import traceback
+from types import TracebackType
+
+from dmprs.adapters.spec import AdapterSpec, Outcome, Status
+from dmprs.errors import DmprsError
+from dmprs.trajectory import Trajectory
+
+
+class AdapterError(DmprsError, RuntimeError):
+    """An adapter was used out of order (e.g. execute before connect)."""
+
+
+class Adapter(abc.ABC):
+    """The protocol every adapter follows.
+
+    ``spec`` describes the DOFs, limits and outcome signals. ``connect``/``disconnect`` (or a
+    ``with`` block) bracket a session. ``reset(seed=...)`` puts the world back in its initial
+    state. ``check`` lists every reason a trajectory would be rejected, without moving anything.
+    ``execute`` runs one trajectory and returns an :class:`Outcome`. ``stop`` halts motion at once
+    and may be called at any time, from any thread, any number of times.
+    """
+
+    spec: AdapterSpec
+
+    @abc.abstractmethod
+    def connect(self) -> None: ...
+
+    @abc.abstractmethod
+    def disconnect(self) -> None: ...
+
+    @abc.abstractmethod
+    def reset(self, seed: int | None = None) -> None: ...
+
+    @abc.abstractmethod
+    def check(self, trajectory: Trajectory) -> list[str]: ...
+
+    @abc.abstractmethod
+    def execute(
+        self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
+    ) -> Outcome: ...
+
+    @abc.abstractmethod
+    def stop(self) -> None: ...
+
+    def __enter__(self) -> Adapter:
+        self.connect()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        try:
+            self.stop()
+        finally:
+            self.disconnect()
+
+
+class BaseAdapter(Adapter):
+    """Shared behaviour; subclasses implement :meth:`_execute` (and usually :meth:`_reset`).
+
+    ``execute`` checks the trajectory against the spec (rejecting, never clipping), honours
+    ``dry_run``, and turns anything ``_execute`` raises into an ``error`` outcome with the
+    traceback in the message, so one failing trial cannot lose the run. ``_execute`` should call
+    :meth:`_interrupted` between control steps: it becomes true after :meth:`stop` or when the
+    deadline of ``timeout_s`` has passed, and ``_execute`` should then return early with
+    :meth:`_interrupted_outcome`.
+    """
+
+    def __init__(self, spec: AdapterSpec) -> None:
+        self.spec = spec
+        self._connected = False
+        self._stop = threading.Event()
+        self._deadline: float | None = None
+
+    @property
+    def connected(self) -> bool:
+        return self._connected
+
+    def connect(self) -> None:
+        self._connected = True
+
+    def disconnect(self) -> None:
+        self._connected = False
+
+    def reset(self, seed: int | None = None) -> None:
+        self._stop.clear()
+        self._reset(seed)
+
+    def _reset(self, seed: int | None) -> None:
+        """Hook: restore the initial state. Simulations re-seed here."""
+
+    def check(self, trajectory: Trajectory) -> list[str]:
+        return self.spec.check(trajectory) + self._extra_checks(trajectory)
+
+    def _extra_checks(self, trajectory: Trajectory) -> list[str]:
+        """Hook: adapter-specific checks (workspace, collisions) on an in-limits trajectory."""
+        return []
+
+    def stop(self) -> None:
+        self._stop.set()
+
+    def _interrupted(self) -> bool:
+        return self._stop.is_set() or (
+            self._deadline is not None and time.monotonic() > self._deadline
+        )
+
+    def _interrupted_outcome(self, executed: Trajectory | None = None) -> Outcome:
+        if self._stop.is_set():
+            return Outcome(Status.STOPPED, executed=executed, message="stop() was called")
+        return Outcome(Status.TIMEOUT, executed=executed, message="the trial exceeded timeout_s")
+
+    def execute(
+        self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
+    ) -> Outcome:
+        if not self._connected:
+            raise AdapterError(f"{self.spec.name}: execute() before connect()")
+        problems = self.check(trajectory)
+        if problems:
+            return Outcome(Status.REJECTED, message="; ".join(problems))
+        if dry_run:
+            return Outcome(Status.DRY_RUN, message="checked, not executed")
+        self._stop.clear()
+        self._deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        try:
+            outcome = self._execute(trajectory)
+        except Exception as exc:  # noqa: BLE001 - any failure of one trial becomes its outcome
+            self.stop()
+            tb = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+            return Outcome(Status.ERROR, message=f"{self.spec.name} raised during the trial: {tb}")
+        finally:
+            self._deadline = None
+        if outcome.status is Status.OK and self._interrupted():
+            return self._interrupted_outcome(outcome.executed)
+        return outcome
+
+    @abc.abstractmethod
+    def _execute(self, trajectory: Trajectory) -> Outcome:
+        """Runs a checked trajectory and measures the outcome signals."""

@@ -1,0 +1,144 @@
+"""``check_adapter``: the conformance suite any adapter implementer can run, in the spirit of
+scikit-learn's ``check_estimator`` and Gymnasium's ``check_env``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from dmprs.adapters.base import Adapter
+from dmprs.adapters.spec import AdapterSpec, Outcome, Status
+from dmprs.errors import DmprsError
+from dmprs.trajectory import Trajectory
+
+
+class AdapterConformanceError(DmprsError, AssertionError):
+    """``check_adapter`` found violations of the adapter protocol; the message lists them all."""
+
+
+def check_adapter(
+    adapter: Adapter,
+    valid_trajectory: Trajectory,
+    *,
+    execute: bool = True,
+    deterministic: bool = True,
+) -> list[str]:
+    """Checks that ``adapter`` follows the protocol; raises listing every failure.
+
+    ``valid_trajectory`` must be one the adapter accepts. With ``execute=False`` nothing moves
+    (for a first check on real hardware): only the spec, check, dry run, stop and connection
+    handling are exercised. With ``deterministic=True`` two executions after ``reset(seed=0)``
+    must give identical signals (simulations); set it False for real robots.
+
+    Returns the names of the checks that passed.
+    """
+    failures: list[str] = []
+    passed: list[str] = []
+
+    def run(name: str, fn: Callable[[], None]) -> None:
+        try:
+            fn()
+        except Exception as exc:  # noqa: BLE001 - each failure is reported, not raised
+            failures.append(f"{name}: {type(exc).__name__}: {exc}")
+        else:
+            passed.append(name)
+
+    spec = getattr(adapter, "spec", None)
+
+    def spec_is_valid() -> None:
+        assert isinstance(spec, AdapterSpec), "adapter.spec must be an AdapterSpec"
+        assert spec.n_dof == valid_trajectory.n_dof, (
+            f"valid_trajectory has {valid_trajectory.n_dof} DOFs, spec has {spec.n_dof}")
+
+    run("spec", spec_is_valid)
+    if failures:
+        raise AdapterConformanceError("; ".join(failures))
+
+    def check_accepts_valid() -> None:
+        problems = adapter.check(valid_trajectory)
+        assert problems == [], f"check() rejects the valid trajectory: {problems}"
+
+    def check_rejects(name: str, make: Callable[[np.ndarray], np.ndarray]) -> Callable[[], None]:
+        def fn() -> None:
+            bad = Trajectory._trusted(valid_trajectory.t.copy(), make(valid_trajectory.y.copy()),
+                                      None, None)
+            problems = adapter.check(bad)
+            assert problems and all(isinstance(p, str) and p for p in problems), (
+                f"check() accepted a trajectory with {name}")
+        return fn
+
+    def nan(y: np.ndarray) -> np.ndarray:
+        y[len(y) // 2, 0] = np.nan
+        return y
+
+    def far(y: np.ndarray) -> np.ndarray:
+        return y + 1e6
+
+    def wrong_dofs(y: np.ndarray) -> np.ndarray:
+        return np.hstack([y, y[:, :1]])
+
+    def outcome_shape(o: Outcome, allowed: set[Status]) -> None:
+        assert isinstance(o, Outcome), f"execute() returned {type(o).__name__}, not Outcome"
+        assert o.status in allowed, f"status {o.status} not in {sorted(s.value for s in allowed)}"
+
+    def lifecycle() -> None:
+        adapter.connect()
+        adapter.connect()  # idempotent
+        adapter.disconnect()
+        adapter.disconnect()
+        with adapter as a:
+            assert a is adapter, "__enter__ must return the adapter"
+
+    def dry_run() -> None:
+        with adapter:
+            adapter.reset(seed=0)
+            o = adapter.execute(valid_trajectory, dry_run=True)
+            outcome_shape(o, {Status.DRY_RUN})
+            bad = Trajectory._trusted(valid_trajectory.t.copy(), nan(valid_trajectory.y.copy()), None, None)
+            o = adapter.execute(bad, dry_run=True)
+            outcome_shape(o, {Status.REJECTED})
+            assert o.message, "a rejection must say why"
+
+    def rejected_never_raises() -> None:
+        with adapter:
+            adapter.reset(seed=0)
+            bad = Trajectory._trusted(valid_trajectory.t.copy(), far(valid_trajectory.y.copy()), None, None)
+            o = adapter.execute(bad)
+            outcome_shape(o, {Status.REJECTED})
+
+    def stop_is_idempotent() -> None:
+        adapter.stop()
+        adapter.stop()
+
+    def executes() -> None:
+        with adapter:
+            adapter.reset(seed=0)
+            o = adapter.execute(valid_trajectory)
+            outcome_shape(o, {Status.OK})
+            names = {s.name for s in spec.signals}
+            missing = names - set(o.signals)
+            assert not missing, f"outcome lacks declared signals {sorted(missing)}"
+            extra = set(o.signals) - names
+            assert not extra, f"outcome has undeclared signals {sorted(extra)}"
+            if deterministic:
+                adapter.reset(seed=0)
+                again = adapter.execute(valid_trajectory)
+                for k in names:
+                    assert np.array_equal(np.asarray(o.signals[k]), np.asarray(again.signals[k])), (
+                        f"signal {k!r} differs between two runs after reset(seed=0)")
+
+    run("check accepts the valid trajectory", check_accepts_valid)
+    run("check rejects NaN", check_rejects("a NaN", nan))
+    run("check rejects positions far outside the limits", check_rejects("positions 1e6 away", far))
+    run("check rejects the wrong DOF count", check_rejects("an extra DOF", wrong_dofs))
+    run("connect/disconnect idempotent, context manager", lifecycle)
+    run("dry run", dry_run)
+    run("stop is idempotent", stop_is_idempotent)
+    if execute:
+        run("a rejected trajectory is an outcome, not an exception", rejected_never_raises)
+        run("execute returns the declared signals", executes)
+    if failures:
+        raise AdapterConformanceError(
+            f"{type(adapter).__name__} fails {len(failures)} check(s): " + "; ".join(failures))
+    return passed

@@ -1,0 +1,157 @@
+"""Adapters that record trials and serve recorded trials again."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dmprs._io import append_jsonl, read_jsonl, write_npz_atomic
+from dmprs.adapters.base import Adapter, AdapterError
+from dmprs.adapters.spec import AdapterSpec, Outcome, Status
+from dmprs.errors import InvalidInputError
+from dmprs.trajectory import Trajectory
+
+_INDEX = "recording.jsonl"
+
+
+def _trajectory_arrays(prefix: str, tr: Trajectory | None) -> dict[str, np.ndarray]:
+    if tr is None:
+        return {}
+    out = {f"{prefix}t": tr.t, f"{prefix}y": tr.y}
+    for name in ("yd", "ydd"):
+        value = getattr(tr, name)
+        if value is not None:
+            out[f"{prefix}{name}"] = value
+    return out
+
+
+def _trajectory_from(arrays: Any, prefix: str) -> Trajectory | None:
+    if f"{prefix}t" not in arrays:
+        return None
+    get = lambda k: arrays[f"{prefix}{k}"] if f"{prefix}{k}" in arrays else None  # noqa: E731
+    return Trajectory(get("t"), get("y"), get("yd"), get("ydd"))
+
+
+class RecordingAdapter(Adapter):
+    """Wraps another adapter and records every trial that passes through it: the commanded
+    trajectory, the outcome's status, message and signals, and the executed trajectory.
+
+    Each trial is one line of ``recording.jsonl`` plus ``trial_NNNN.npz``, both forced to disk
+    before ``execute`` returns. A :class:`ReplayAdapter` serves them again.
+    """
+
+    def __init__(self, inner: Adapter, directory: str | Path) -> None:
+        self.inner = inner
+        self.spec = inner.spec
+        self.directory = Path(directory)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        index = self.directory / _INDEX
+        self._n = len(read_jsonl(index)[0]) if index.exists() else 0
+
+    def connect(self) -> None:
+        self.inner.connect()
+
+    def disconnect(self) -> None:
+        self.inner.disconnect()
+
+    def reset(self, seed: int | None = None) -> None:
+        self.inner.reset(seed=seed)
+
+    def check(self, trajectory: Trajectory) -> list[str]:
+        return self.inner.check(trajectory)
+
+    def stop(self) -> None:
+        self.inner.stop()
+
+    def execute(
+        self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
+    ) -> Outcome:
+        outcome = self.inner.execute(trajectory, dry_run=dry_run, timeout_s=timeout_s)
+        name = f"trial_{self._n:04d}.npz"
+        arrays = {**_trajectory_arrays("cmd_", trajectory), **_trajectory_arrays("exe_", outcome.executed)}
+        arrays.update({f"sig_{k}": np.asarray(v) for k, v in outcome.signals.items()})
+        write_npz_atomic(self.directory / name, arrays)
+        append_jsonl(self.directory / _INDEX, {
+            "trial": self._n, "file": name, "status": outcome.status.value,
+            "message": outcome.message, "dry_run": dry_run, "signals": sorted(outcome.signals),
+        })
+        self._n += 1
+        return outcome
+
+
+class ReplayAdapter(Adapter):
+    """Serves the outcomes of a recording, in order, without any robot or simulation.
+
+    With ``strict=True`` (default) each trajectory must equal the recorded command to within
+    ``atol``; a different one gets an ``error`` outcome naming the first mismatch, because
+    replaying another trial's outcome would be a lie. The spec is that of the recorded adapter
+    and must be given (recordings store data, not code).
+    """
+
+    def __init__(self, directory: str | Path, spec: AdapterSpec, strict: bool = True,
+                 atol: float = 1e-9) -> None:
+        self.spec = spec
+        self.directory = Path(directory)
+        index = self.directory / _INDEX
+        if not index.exists():
+            raise InvalidInputError(f"{index} does not exist: not a dmprs recording")
+        self._records, _ = read_jsonl(index)
+        self.strict, self.atol = strict, atol
+        self._next = 0
+        self._connected = False
+
+    def __len__(self) -> int:
+        return len(self._records)
+
+    def connect(self) -> None:
+        self._connected = True
+
+    def disconnect(self) -> None:
+        self._connected = False
+
+    def reset(self, seed: int | None = None) -> None:
+        self._next = 0
+
+    def check(self, trajectory: Trajectory) -> list[str]:
+        return self.spec.check(trajectory)
+
+    def stop(self) -> None:
+        pass
+
+    def execute(
+        self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
+    ) -> Outcome:
+        if not self._connected:
+            raise AdapterError("ReplayAdapter: execute() before connect()")
+        if dry_run:
+            problems = self.check(trajectory)
+            status = Status.REJECTED if problems else Status.DRY_RUN
+            return Outcome(status, message="; ".join(problems) or "checked, not executed")
+        problems = self.check(trajectory)
+        if problems:
+            # The recorded adapter rejected it too; skip its record if it is the next one.
+            if self._next < len(self._records) and self._records[self._next]["status"] == Status.REJECTED.value:
+                self._next += 1
+            return Outcome(Status.REJECTED, message="; ".join(problems))
+        if self._next >= len(self._records):
+            return Outcome(Status.ERROR, message=f"the recording has only {len(self._records)} trials")
+        record = self._records[self._next]
+        self._next += 1
+        path = self.directory / record["file"]
+        with np.load(path, allow_pickle=False) as arrays:
+            command = _trajectory_from(arrays, "cmd_")
+            executed = _trajectory_from(arrays, "exe_")
+            signals = {k[4:]: (arrays[k].item() if arrays[k].ndim == 0 else arrays[k])
+                       for k in arrays.files if k.startswith("sig_")}
+        if self.strict and command is not None:
+            same = command.y.shape == trajectory.y.shape and np.allclose(
+                command.y, trajectory.y, rtol=0, atol=self.atol) and np.allclose(
+                command.t, trajectory.t, rtol=0, atol=self.atol)
+            if not same:
+                return Outcome(Status.ERROR, message=(
+                    f"trajectory differs from the one recorded in {path.name}; "
+                    "replaying its outcome would be wrong"))
+        status = Status(record["status"])
+        return Outcome(status, signals=signals, executed=executed, message=record.get("message", ""))

@@ -1,0 +1,50 @@
+"""Finding adapters by name: the ones shipped with dmprs and third-party ones registered under
+the entry-point group ``dmprs.adapters`` (so the core never imports a robot SDK).
+
+A robot package declares, in its pyproject.toml::
+
+    [project.entry-points."dmprs.adapters"]
+    my_arm = "my_arm_dmprs:MyArmAdapter"
+"""
+
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import entry_points
+from typing import Any
+
+from dmprs.adapters.base import Adapter
+from dmprs.errors import InvalidInputError
+
+ENTRY_POINT_GROUP = "dmprs.adapters"
+
+# Built-in adapters, imported lazily (the simulations pull in their physics engines).
+_BUILTIN: dict[str, str] = {}
+
+
+def register_builtin(name: str, target: str) -> None:
+    """Registers ``"module:Class"`` under ``name`` (used by dmprs's own task modules)."""
+    _BUILTIN[name] = target
+
+
+def available_adapters() -> list[str]:
+    names = set(_BUILTIN) | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)}
+    return sorted(names)
+
+
+def load_adapter(name: str, **kwargs: Any) -> Adapter:
+    """Instantiates the adapter registered under ``name`` with ``kwargs``."""
+    if name in _BUILTIN:
+        module, _, attr = _BUILTIN[name].partition(":")
+        cls = getattr(importlib.import_module(module), attr)
+    else:
+        matches = [ep for ep in entry_points(group=ENTRY_POINT_GROUP) if ep.name == name]
+        if not matches:
+            raise InvalidInputError(
+                f"unknown adapter {name!r}; available: {', '.join(available_adapters()) or 'none'}"
+            )
+        cls = matches[0].load()
+    adapter = cls(**kwargs)
+    if not isinstance(adapter, Adapter):
+        raise InvalidInputError(f"adapter {name!r} ({cls!r}) does not implement dmprs.adapters.Adapter")
+    return adapter
