@@ -3,7 +3,6 @@ and speed. Runs until the paper's experiments (``dmprs reproduce``) replace it a
 
 from __future__ import annotations
 
-import argparse
 import time
 from pathlib import Path
 
@@ -73,11 +72,3 @@ def _plot(out: Path, t, y, repro, adapted) -> None:
     path = out / "dmp_demo.png"
     fig.savefig(path, dpi=120)
     print(f"figure written to {path}")
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m dmprs demo", description=__doc__)
-    parser.add_argument("--out", type=Path, default=Path("out"), help="folder for the figure")
-    args = parser.parse_args(argv)
-    run(args.out)
-    return 0

@@ -1,0 +1,142 @@
+"""The ``dmprs`` command line: learn, record demonstrations, plot and resume runs."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from dmprs.errors import DmprsError
+
+
+def _progress(console: Any) -> Any:
+    def show(record: Any) -> None:
+        eps = "-" if record.eps is None else ", ".join(f"{e:+.4g}" for e in record.eps)
+        q = ", ".join(f"{v:.4g}" for v in record.query)
+        mark = "[green]success[/green]" if record.success else record.status
+        console.print(f"trial {record.index + 1:>3}  query [{q}]  eps [{eps}]  {mark}")
+    return show
+
+
+def _console() -> Any:
+    from rich.console import Console
+
+    return Console(highlight=False)
+
+
+def _report(console: Any, result: Any) -> None:
+    if result.cut_note:
+        console.print(f"[yellow]note:[/yellow] {result.cut_note}")
+    verdict = "[green]converged[/green]" if result.converged else "[red]not converged[/red]"
+    q = None if result.learned_query is None else [round(float(v), 6) for v in result.learned_query]
+    console.print(f"{verdict} after {result.n_trials} trial(s): {result.stop_reason}; learned query {q}")
+    if result.log_dir is not None:
+        console.print(f"log: {result.log_dir}")
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="dmprs")
+def main() -> None:
+    """Learn robot skills from a few demonstrations (Nemec, Vuga, Ude 2013)."""
+
+
+@main.command("learn")
+@click.argument("task")
+@click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root (default: the paper's choice for the task)")
+@click.option("--desired", type=float, default=None, help="desired query (task units)")
+@click.option("--max-trials", type=int, default=20, show_default=True)
+@click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")
+@click.option("--log-dir", type=click.Path(path_type=Path), default=None, help="run directory for the trial log")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--noise", type=float, default=None, help="measurement noise (analytic task)")
+@click.option("--volume", type=float, default=None, help="bottle volume in litres (pouring)")
+@click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
+def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
+              tol: float | None, log_dir: Path | None, seed: int, noise: float | None,
+              volume: float | None, demos: str | None) -> None:
+    """Learn TASK (analytic, matchbox, pouring) from its demonstrations, one trial at a time."""
+    from dmprs import experiments
+
+    options = {k: v for k, v in {"desired": desired, "noise": noise, "bottle_volume": volume,
+                                 "demos": demos}.items() if v is not None}
+    console = _console()
+    try:
+        result = experiments.run(task, learner=learner, max_trials=max_trials, tol=tol,
+                                 log_dir=log_dir, seed=seed, on_trial=_progress(console), **options)
+    except (DmprsError, TypeError) as exc:
+        raise click.ClickException(str(exc)) from None
+    _report(console, result)
+    sys.exit(0 if result.converged else 1)
+
+
+@main.command("resume")
+@click.argument("run", type=click.Path(path_type=Path))
+@click.option("--max-trials", type=int, default=None, help="raise the trial cap of the run")
+def resume_cmd(run: Path, max_trials: int | None) -> None:
+    """Continue the run logged in RUN where it stopped."""
+    from dmprs import experiments
+    from dmprs.learning import learn
+    from dmprs.runlog import RunLog
+
+    console = _console()
+    try:
+        meta = RunLog(run).meta()
+        if "experiment" not in meta:
+            raise DmprsError(f"{run / 'run.json'} was not written by 'dmprs learn': resume it from Python")
+        setup = experiments.SETUPS[meta["experiment"]](**meta.get("setup_options", {}))
+        learner = setup.make_learner(meta["learner_name"], **meta.get("learner_options", {}))
+        result = learn(setup.task, setup.generalizer, setup.desired_query, learner,
+                       max_trials=max_trials or meta["max_trials"], tol=meta.get("tol"),
+                       log_dir=run, resume=True, seed=meta.get("seed", 0),
+                       on_trial=_progress(console))
+    except DmprsError as exc:
+        raise click.ClickException(str(exc)) from None
+    _report(console, result)
+    sys.exit(0 if result.converged else 1)
+
+
+@main.command("demos")
+@click.argument("task")
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="database directory to write")
+@click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
+def demos_cmd(task: str, out: Path, demos: str | None) -> None:
+    """Record TASK's scripted demonstrations into a database directory."""
+    from dmprs import experiments
+
+    try:
+        if task not in experiments.SETUPS:
+            raise DmprsError(f"unknown task {task!r}; choose from {', '.join(sorted(experiments.SETUPS))}")
+        setup = experiments.SETUPS[task](**({"demos": demos} if demos else {}))
+        setup.database.save(out)
+    except DmprsError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"{len(setup.database)} demonstrations of {task} written to {out}")
+
+
+@main.command("plot")
+@click.argument("run", type=click.Path(path_type=Path))
+@click.option("--out", type=click.Path(path_type=Path), default=None, help="PNG path (default RUN/learning.png)")
+def plot_cmd(run: Path, out: Path | None) -> None:
+    """Plot error and query per trial of RUN (like the paper's Figs. 4 and 9)."""
+    from dmprs.plots import plot_run
+
+    try:
+        path = plot_run(run, out)
+    except DmprsError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"figure written to {path}")
+
+
+@main.command("demo")
+@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
+def demo_cmd(out: Path) -> None:
+    """Fit, reproduce and adapt a 7-DOF DMP (a quick look at the core)."""
+    from dmprs import demo
+
+    demo.run(out)
+
+
+if __name__ == "__main__":
+    main()

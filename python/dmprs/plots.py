@@ -1,0 +1,58 @@
+"""Figures. matplotlib is an optional extra (``pip install 'dmprs[plot]'``), imported lazily."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from dmprs.errors import DmprsError
+from dmprs.runlog import RunLog
+
+
+def _pyplot():
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise DmprsError("plotting needs matplotlib: pip install 'dmprs[plot]'") from None
+    return plt
+
+
+def plot_run(run: str | Path, out: str | Path | None = None) -> Path:
+    """Error and query per trial of a logged run, in the style of the paper's Figs. 4 and 9."""
+    log = RunLog(run)
+    meta = log.meta()
+    trials, _ = log.read()
+    ok = [t for t in trials if t.eps is not None]
+    if not ok:
+        raise DmprsError(f"{log.trials_path} has no scored trial to plot")
+    plt = _pyplot()
+    n = np.arange(1, len(ok) + 1)
+    eps = np.array([t.eps for t in ok])
+    q = np.array([t.query for t in ok])
+    names = meta.get("query_names") or [f"q{i}" for i in range(q.shape[1])]
+    units = meta.get("query_units") or [""] * q.shape[1]
+    fig, ax = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+    for i in range(q.shape[1]):
+        ax[0].plot(n, q[:, i], "o-", label=f"query {names[i]} ({units[i]})")
+        ax[1].plot(n, eps[:, i], "o-", label=f"error eps ({units[i]})")
+    desired = np.atleast_1d(meta.get("desired_query", []))
+    for d in desired:
+        ax[0].axhline(float(d), color="grey", ls="--", lw=0.8, label="desired query")
+    ax[1].axhline(0.0, color="grey", lw=0.8)
+    for i, t in enumerate(ok):
+        if t.success:
+            ax[1].plot(n[i], eps[i, 0], "*", ms=14, color="tab:green", label="success")
+    ax[0].legend(fontsize=8)
+    ax[1].legend(fontsize=8)
+    ax[1].set_xlabel("trial")
+    ax[0].set_title(f"{meta.get('task', '')}: {meta.get('learner', '')}")
+    ax[1].set_xticks(n)
+    fig.tight_layout()
+    path = Path(out) if out is not None else log.directory / "learning.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
