@@ -80,7 +80,8 @@ impl Dmp {
             steps
         };
         let values = (steps + 1.0) * n_dof as f64;
-        if !(values <= MAX_VALUES as f64) {
+        // Also catches a NaN step count.
+        if values.is_nan() || values > MAX_VALUES as f64 {
             return Err(Error::InvalidParameter {
                 name: "dt",
                 value: opts.dt.to_string(),

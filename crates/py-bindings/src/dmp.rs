@@ -125,7 +125,7 @@ impl PyDmp {
     #[getter]
     fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w = self.inner.weights();
-        Ok(w.as_slice().to_vec().into_pyarray(py).reshape([w.ncols(), w.nrows()])?)
+        w.as_slice().to_vec().into_pyarray(py).reshape([w.ncols(), w.nrows()])
     }
     #[getter]
     fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
