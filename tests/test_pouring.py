@@ -8,6 +8,7 @@ under test, which the tests also exercise.
 import concurrent.futures
 import math
 import multiprocessing
+import threading
 
 import numpy as np
 import pytest
@@ -245,6 +246,17 @@ def test_a_timeout_ends_the_pour_early():
     with adapter:
         o = adapter.execute(tilt_profile(1.7), timeout_s=0.0)
     assert o.status is Status.TIMEOUT
+    assert o.executed is None or o.executed.duration < 3.0
+
+
+def test_stop_from_another_thread_ends_the_pour():
+    adapter = PouringAdapter(0.3)
+    timer = threading.Timer(0.05, adapter.stop)
+    with adapter:
+        timer.start()
+        o = adapter.execute(tilt_profile(1.7))
+    timer.join()
+    assert o.status is Status.STOPPED, o.status
     assert o.executed is None or o.executed.duration < 3.0
 
 

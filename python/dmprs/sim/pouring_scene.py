@@ -212,7 +212,7 @@ class _Scene:
         bottle.position = PIVOT
         space.add(bottle)
         outline = bottle_outline()
-        for a, b in zip(outline[:-1], outline[1:]):
+        for a, b in zip(outline[:-1], outline[1:], strict=True):
             seg = pymunk.Segment(bottle, a, b, WALL_RADIUS)
             seg.friction = 0.0
             seg.elasticity = 0.0
@@ -220,7 +220,7 @@ class _Scene:
 
         bodies = []
         vel = np.zeros_like(positions) if velocities is None else velocities
-        for r, p, v in zip(radii.tolist(), positions.tolist(), vel.tolist()):
+        for r, p, v in zip(radii.tolist(), positions.tolist(), vel.tolist(), strict=True):
             mass = DENSITY * math.pi * r * r
             body = pymunk.Body(mass, pymunk.moment_for_circle(mass, 0.0, r))
             body.position = p
