@@ -346,7 +346,7 @@ def _calibrate(v: float, target: float, seed: int, tol: float, max_evals: int, l
     if path is not None:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp")
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")  # parallel runs never share a temp file
             tmp.write_text(json.dumps(asdict(cal)))
             os.replace(tmp, path)
         except OSError:
