@@ -88,7 +88,64 @@ def analytic_setup(noise: float = 0.0, tol: float = 0.01, desired: float = 1.5,
     )
 
 
-SETUPS: dict[str, Callable[..., ExperimentSetup]] = {"analytic": analytic_setup}
+# --- pouring (paper section 5, method.md §9) -------------------------------------------------
+
+#: Gain of the "fixed" learner for pouring, in litres of assumed volume per litre of poured
+#: error: K = 1 l/l is eq. 16 with K = I, untuned and the same at every volume, which is what the
+#: paper's fixed-gain attempt did. Its contraction per trial is 1 - K |dV_poured/dq|, and the
+#: slope |dV_poured/dq| measured in the simulation is ~0.4 l/l near 0.4-0.5 l but ~0.65 l/l near
+#: 0.7 l: one gain gives different learning rates at different volumes (lower volumes would need
+#: higher gains, as the paper reports), which golden section avoids. Pass ``fixed_gain`` to try
+#: others (the Newton gain 1/|slope| is ~2-2.5 l/l here).
+POURING_FIXED_GAIN = 1.0
+
+
+def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: float = 0.010,
+                  liquid_seed: int = 0, demo_seed: int = 0, fixed_gain: float = POURING_FIXED_GAIN,
+                  reseed_liquid: bool = False, cache_dir: str | None = None) -> ExperimentSetup:
+    """Pour ``target_volume`` (0.2 l) from a bottle holding ``bottle_volume`` l (method.md §9).
+
+    Two scripted demonstrations pour ``target_volume`` from bottles of 0.3 l and 1.0 l (their
+    queries are those volumes; their peak tilts are calibrated in the simulation with the liquid
+    of ``demo_seed``, and cached, see :func:`dmprs.tasks.pouring.calibrate_peak_tilt`);
+    linear generalization with N = 40 kernels; the desired query is the true ``bottle_volume``.
+    Learners: ``golden`` (default, the paper's choice, paper mode, bracket [0.3, 1.0] l),
+    ``fixed`` (eq. 16 with the scalar gain ``fixed_gain`` in l/l) and the generic query learners
+    (``error``, ``weighted`` with scale 0.05 l, ``secant``, ``golden-robust``, ``root``).
+    """
+    from dmprs import Database, Generalizer
+    from dmprs.tasks.pouring import DEMO_VOLUMES, Pouring, demonstration
+
+    task = Pouring(bottle_volume, target_volume=target_volume, tol=tol,
+                   liquid_seed=liquid_seed, reseed_liquid=reseed_liquid)
+    gain = float(fixed_gain)
+    if not (np.isfinite(gain) and gain > 0):
+        raise InvalidInputError(f"fixed_gain = {fixed_gain!r} must be > 0 l/l")
+    db = Database(query_names=task.query_names, query_units=task.query_units)
+    for volume in DEMO_VOLUMES:
+        query, traj, _ = demonstration(volume, task.target_volume, liquid_seed=demo_seed,
+                                       cache_dir=cache_dir)
+        db.add(query, traj)
+    gen = Generalizer(db, method="linear", n_basis=40)
+    low, high = min(DEMO_VOLUMES), max(DEMO_VOLUMES)  # the demos' queries (method.md §6.2 #9)
+    learners = query_learners(low, high, scale=0.05)  # eq. 17's scale for litres (method.md §5.1)
+
+    def fixed(q0: NDArray[np.float64], **kw: Any) -> Any:
+        from dmprs import learners as L
+
+        kw.setdefault("gain", gain)
+        kw.setdefault("max_trials", 50)
+        return L.ErrorLearning(q0, **kw)
+
+    learners["fixed"] = fixed
+    return ExperimentSetup(
+        task=task, database=db, generalizer=gen,
+        desired_query=task.validate_query(bottle_volume), default_learner="golden",
+        learners=learners, low=low, high=high,
+    )
+
+
+SETUPS: dict[str, Callable[..., ExperimentSetup]] = {"analytic": analytic_setup, "pouring": pouring_setup}
 
 
 def run(name: str, *, learner: str | None = None, learner_options: dict[str, Any] | None = None,
@@ -112,3 +169,14 @@ def analytic(desired: float = 1.5, learner: str = "error", max_trials: int = 20,
     """The analytic task end to end (see :mod:`dmprs.tasks.analytic`)."""
     return run("analytic", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
                noise=noise, desired=desired)
+
+
+def pouring(bottle_volume: float = 0.5, learner: str = "golden", max_trials: int = 20,
+            log_dir: str | Path | None = None, seed: int = 0, **setup_options: Any) -> LearningResult:
+    """Pouring end to end (see :mod:`dmprs.tasks.pouring`): learn the assumed bottle volume that
+    pours 0.2 l from a bottle holding ``bottle_volume`` l. ``learner``: ``"golden"`` (the
+    paper's), ``"fixed"`` (fixed-gain error learning), ``"root"``, ``"secant"``, ... ``seed``
+    draws the simulated liquid of the bottle (the demonstrations keep ``demo_seed``, 0)."""
+    setup_options.setdefault("liquid_seed", seed)
+    return run("pouring", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
+               bottle_volume=bottle_volume, **setup_options)
