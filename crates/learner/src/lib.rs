@@ -6,3 +6,4 @@
 //! and matchbox issues; for now it only re-exports the DMP types it will build on.
 
 pub use dmp_core::{Dmp, DmpConfig, Trajectory};
+pub mod matchbox;
