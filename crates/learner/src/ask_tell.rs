@@ -33,7 +33,10 @@ pub enum Status {
     TrialCap,
     /// The iterates ran into a search limit and stayed there: the root lies outside the limits,
     /// or the sign convention of eps is wrong (method.md §5.3, §6.2 item 4).
-    HitBound { high: bool, value: f64 },
+    HitBound {
+        high: bool,
+        value: f64,
+    },
     /// |eps| grew in several consecutive trials to well above its first value: the gain is
     /// too high or the sign convention is wrong.
     Diverged,
@@ -61,7 +64,11 @@ impl std::fmt::Display for Status {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Status::HitBound { high, value } => {
-                write!(f, "hit-bound: pinned at the {} limit {value}", if *high { "upper" } else { "lower" })
+                write!(
+                    f,
+                    "hit-bound: pinned at the {} limit {value}",
+                    if *high { "upper" } else { "lower" }
+                )
             }
             s => f.write_str(s.name()),
         }
@@ -119,7 +126,13 @@ pub struct Record {
 impl Record {
     pub(crate) fn new(max_trials: usize) -> Result<Self> {
         crate::error::check_max_trials(max_trials)?;
-        Ok(Self { pending: None, history: Vec::new(), best: None, max_trials, status: Status::Running })
+        Ok(Self {
+            pending: None,
+            history: Vec::new(),
+            best: None,
+            max_trials,
+            status: Status::Running,
+        })
     }
 
     pub fn best(&self) -> Option<&Trial> {
@@ -133,7 +146,9 @@ impl Record {
     /// The start of every `ask`: refuses after a stop, repeats a pending query.
     pub(crate) fn pending_or_running(&self) -> Result<Option<Vec<f64>>> {
         if !self.status.is_running() {
-            return Err(LearnerError::Finished { status: self.status.to_string() });
+            return Err(LearnerError::Finished {
+                status: self.status.to_string(),
+            });
         }
         Ok(self.pending.clone())
     }
@@ -145,10 +160,18 @@ impl Record {
 
     /// The start of every `tell`: the order of calls, the query, and the feedback's size and
     /// finiteness. `feedback_lens` lists the accepted lengths.
-    pub(crate) fn check_tell(&self, q: &[f64], feedback: &[f64], feedback_name: &'static str, feedback_lens: &[usize]) -> Result<()> {
+    pub(crate) fn check_tell(
+        &self,
+        q: &[f64],
+        feedback: &[f64],
+        feedback_name: &'static str,
+        feedback_lens: &[usize],
+    ) -> Result<()> {
         let Some(expected) = &self.pending else {
             if !self.status.is_running() {
-                return Err(LearnerError::Finished { status: self.status.to_string() });
+                return Err(LearnerError::Finished {
+                    status: self.status.to_string(),
+                });
             }
             return Err(LearnerError::NotAsked);
         };
@@ -156,12 +179,21 @@ impl Record {
         // Equal up to rounding: the caller may have passed the query through another float
         // representation (a list, a JSON log) and back.
         let same = q.len() == expected.len()
-            && q.iter().zip(expected).all(|(a, b)| (a - b).abs() <= 1e-12 * (1.0 + b.abs()));
+            && q.iter()
+                .zip(expected)
+                .all(|(a, b)| (a - b).abs() <= 1e-12 * (1.0 + b.abs()));
         if !same {
-            return Err(LearnerError::UnexpectedQuery { expected: expected.clone(), got: q.to_vec() });
+            return Err(LearnerError::UnexpectedQuery {
+                expected: expected.clone(),
+                got: q.to_vec(),
+            });
         }
         if !feedback_lens.contains(&feedback.len()) {
-            let expected = feedback_lens.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" or ");
+            let expected = feedback_lens
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(" or ");
             return Err(LearnerError::Dimension {
                 name: feedback_name,
                 expected: format!("{expected} entries"),
@@ -174,7 +206,11 @@ impl Record {
     /// Appends a told trial (the pending query) and applies the trial cap. Returns its index.
     pub(crate) fn push(&mut self, feedback: &[f64], score: f64) -> Result<usize> {
         let q = self.pending.take().ok_or(LearnerError::NotAsked)?;
-        self.history.push(Trial { q, feedback: feedback.to_vec(), score });
+        self.history.push(Trial {
+            q,
+            feedback: feedback.to_vec(),
+            score,
+        });
         let i = self.history.len() - 1;
         if self.best.is_none_or(|b| score < self.history[b].score) {
             self.best = Some(i);

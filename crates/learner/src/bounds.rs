@@ -20,7 +20,12 @@ pub struct Bounds {
 impl Bounds {
     /// `low`/`high` may be absent (then -inf/+inf); present ones must have `n` finite entries
     /// with low < high.
-    pub fn new(low: Option<&[f64]>, high: Option<&[f64]>, n: usize, pin_limit: usize) -> Result<Option<Self>> {
+    pub fn new(
+        low: Option<&[f64]>,
+        high: Option<&[f64]>,
+        n: usize,
+        pin_limit: usize,
+    ) -> Result<Option<Self>> {
         if low.is_none() && high.is_none() {
             return Ok(None);
         }
@@ -39,9 +44,18 @@ impl Bounds {
         let low = side(low, "low", f64::NEG_INFINITY)?;
         let high = side(high, "high", f64::INFINITY)?;
         if let Some(i) = (0..n).find(|&i| low[i] >= high[i]) {
-            return Err(invalid("low", format!("{} (at index {i}, with high = {})", low[i], high[i]), "must be < high"));
+            return Err(invalid(
+                "low",
+                format!("{} (at index {i}, with high = {})", low[i], high[i]),
+                "must be < high",
+            ));
         }
-        Ok(Some(Self { low, high, pin_limit, pinned: 0 }))
+        Ok(Some(Self {
+            low,
+            high,
+            pin_limit,
+            pinned: 0,
+        }))
     }
 
     /// Checks that a start query lies inside the limits.
@@ -51,7 +65,10 @@ impl Bounds {
             return Err(invalid(
                 name,
                 format!("{} (at index {i})", q[i]),
-                &format!("must lie within [low, high] = [{}, {}]", self.low[i], self.high[i]),
+                &format!(
+                    "must lie within [low, high] = [{}, {}]",
+                    self.low[i], self.high[i]
+                ),
             ));
         }
         Ok(())
@@ -68,9 +85,15 @@ impl Bounds {
     pub fn observe(&mut self, q: &[f64], push: &[f64]) -> Option<Status> {
         let at = (0..q.len()).find_map(|i| {
             if q[i] >= self.high[i] && push[i] > 0.0 {
-                Some(Status::HitBound { high: true, value: self.high[i] })
+                Some(Status::HitBound {
+                    high: true,
+                    value: self.high[i],
+                })
             } else if q[i] <= self.low[i] && push[i] < 0.0 {
-                Some(Status::HitBound { high: false, value: self.low[i] })
+                Some(Status::HitBound {
+                    high: false,
+                    value: self.low[i],
+                })
             } else {
                 None
             }

@@ -29,17 +29,24 @@ pub enum LearnerError {
         requirement: String,
     },
     /// `tell` without a pending `ask`.
-    #[error("tell() was called without a pending ask(): call q = learner.ask(), run the trial, then learner.tell(q, ...)")]
+    #[error(
+        "tell() was called without a pending ask(): call q = learner.ask(), run the trial, then learner.tell(q, ...)"
+    )]
     NotAsked,
     /// `tell` of a query other than the one `ask` returned.
-    #[error("tell() got the query {got:?}, but the pending ask() returned {expected:?}: pass back the query you executed")]
+    #[error(
+        "tell() got the query {got:?}, but the pending ask() returned {expected:?}: pass back the query you executed"
+    )]
     UnexpectedQuery { expected: Vec<f64>, got: Vec<f64> },
     /// `ask` after the learner stopped.
     #[error("the learner has stopped ({status}); read learner.best, or start a new learner")]
     Finished { status: String },
     /// Valid input, failed computation.
     #[error("numerical failure in {context}: {detail}")]
-    Numerical { context: &'static str, detail: String },
+    Numerical {
+        context: &'static str,
+        detail: String,
+    },
 }
 
 impl LearnerError {
@@ -57,7 +64,9 @@ impl LearnerError {
     pub fn is_state_error(&self) -> bool {
         matches!(
             self,
-            LearnerError::NotAsked | LearnerError::UnexpectedQuery { .. } | LearnerError::Finished { .. }
+            LearnerError::NotAsked
+                | LearnerError::UnexpectedQuery { .. }
+                | LearnerError::Finished { .. }
         )
     }
 }
@@ -67,7 +76,11 @@ pub type Result<T> = std::result::Result<T, LearnerError>;
 /// A finite scalar parameter, strictly positive if `positive`.
 pub(crate) fn check_scalar(name: &'static str, value: f64, positive: bool) -> Result<()> {
     if !value.is_finite() {
-        return Err(LearnerError::NonFinite { name, location: String::new(), value });
+        return Err(LearnerError::NonFinite {
+            name,
+            location: String::new(),
+            value,
+        });
     }
     if positive && value <= 0.0 {
         return Err(invalid(name, value, "must be > 0"));
@@ -89,13 +102,25 @@ pub(crate) fn check_vector(name: &'static str, values: &[f64], len: usize) -> Re
 
 pub(crate) fn check_finite(name: &'static str, values: &[f64]) -> Result<()> {
     match values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        Some((i, &v)) => Err(LearnerError::NonFinite { name, location: format!("[{i}]"), value: v }),
+        Some((i, &v)) => Err(LearnerError::NonFinite {
+            name,
+            location: format!("[{i}]"),
+            value: v,
+        }),
         None => Ok(()),
     }
 }
 
-pub(crate) fn invalid(name: &'static str, value: impl std::fmt::Display, requirement: &str) -> LearnerError {
-    LearnerError::InvalidParameter { name, value: value.to_string(), requirement: requirement.to_string() }
+pub(crate) fn invalid(
+    name: &'static str,
+    value: impl std::fmt::Display,
+    requirement: &str,
+) -> LearnerError {
+    LearnerError::InvalidParameter {
+        name,
+        value: value.to_string(),
+        requirement: requirement.to_string(),
+    }
 }
 
 /// `max_trials >= 1`.

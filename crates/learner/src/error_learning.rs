@@ -105,7 +105,11 @@ impl ErrorLearning {
     pub fn new(q0: &[f64], cfg: ErrorLearningConfig) -> Result<Self> {
         let n = q0.len();
         if n == 0 {
-            return Err(LearnerError::Dimension { name: "q0", expected: "at least 1 entry".into(), got: "0 entries".into() });
+            return Err(LearnerError::Dimension {
+                name: "q0",
+                expected: "at least 1 entry".into(),
+                got: "0 entries".into(),
+            });
         }
         check_vector("q0", q0, n)?;
         if cfg.gain.shape() != (n, n) {
@@ -169,9 +173,18 @@ impl ErrorLearning {
 
     /// The eq. 16/17 step from q with error eps, clipped to the limits.
     fn step(&self, q: &DVector<f64>, eps: &DVector<f64>) -> DVector<f64> {
-        let w = if self.weighted { (-(eps / self.scale).norm_squared()).exp() } else { 1.0 };
+        let w = if self.weighted {
+            (-(eps / self.scale).norm_squared()).exp()
+        } else {
+            1.0
+        };
         // A J that passed the safeguard is invertible; fall back to I rather than panic.
-        let newton = self.jac.clone().lu().solve(eps).unwrap_or_else(|| eps.clone());
+        let newton = self
+            .jac
+            .clone()
+            .lu()
+            .solve(eps)
+            .unwrap_or_else(|| eps.clone());
         let mut next = q + w * (&self.gain * newton);
         if let Some(b) = &self.bounds {
             b.clip(next.as_mut_slice());
@@ -181,7 +194,9 @@ impl ErrorLearning {
 
     /// The finite-difference probe after `k` told trials (k = 1..=n), or None when done.
     fn probe(&self, k: usize) -> Option<DVector<f64>> {
-        let Jacobian::FiniteDifference { delta } = self.mode else { return None };
+        let Jacobian::FiniteDifference { delta } = self.mode else {
+            return None;
+        };
         (k <= self.n).then(|| {
             let mut q = self.q0.clone();
             q[k - 1] += self.probe_step(k - 1, delta);

@@ -111,9 +111,15 @@ impl GoldenSection {
     /// `HitBound` at an unconfirmed limit, else `Bracketed` (used when the bracket is spent).
     fn spent(&self) -> Status {
         if !self.high_confirmed {
-            Status::HitBound { high: true, value: self.qh }
+            Status::HitBound {
+                high: true,
+                value: self.qh,
+            }
         } else if !self.low_confirmed {
-            Status::HitBound { high: false, value: self.ql }
+            Status::HitBound {
+                high: false,
+                value: self.ql,
+            }
         } else {
             Status::Bracketed
         }
@@ -122,16 +128,25 @@ impl GoldenSection {
     /// Robust mode §6.3 (b). `up`: eps > 0 at q. Returns `HitBound` when expansions are spent.
     fn expand(&mut self, q: f64, up: bool) -> Option<Status> {
         let window = EXPAND_WINDOW * self.first_width;
-        let (near, confirmed, side) =
-            if up { (self.qh - q <= window, self.high_confirmed, 1) } else { (q - self.ql <= window, self.low_confirmed, 0) };
+        let (near, confirmed, side) = if up {
+            (self.qh - q <= window, self.high_confirmed, 1)
+        } else {
+            (q - self.ql <= window, self.low_confirmed, 0)
+        };
         if !near || confirmed {
             return None;
         }
         if self.expansions[side] >= self.max_expansions {
             return Some(if up {
-                Status::HitBound { high: true, value: self.qh }
+                Status::HitBound {
+                    high: true,
+                    value: self.qh,
+                }
             } else {
-                Status::HitBound { high: false, value: self.ql }
+                Status::HitBound {
+                    high: false,
+                    value: self.ql,
+                }
             });
         }
         self.expansions[side] += 1;

@@ -96,7 +96,10 @@ impl Pi2 {
         if dim == 0 || dim % cfg.n_dof != 0 || dim / cfg.n_dof < 2 {
             return Err(LearnerError::Dimension {
                 name: "theta0",
-                expected: format!("n_dof * n_basis entries with n_dof = {} and n_basis >= 2", cfg.n_dof),
+                expected: format!(
+                    "n_dof * n_basis entries with n_dof = {} and n_basis >= 2",
+                    cfg.n_dof
+                ),
                 got: format!("{dim} entries"),
             });
         }
@@ -106,7 +109,11 @@ impl Pi2 {
             return Err(invalid("n_rollouts", cfg.n_rollouts, "must be at least 2"));
         }
         if cfg.n_reuse >= cfg.n_rollouts {
-            return Err(invalid("n_reuse", cfg.n_reuse, &format!("must be < n_rollouts = {}", cfg.n_rollouts)));
+            return Err(invalid(
+                "n_reuse",
+                cfg.n_reuse,
+                &format!("must be < n_rollouts = {}", cfg.n_rollouts),
+            ));
         }
         check_scalar("h", cfg.h, true)?;
         if cfg.n_updates == 0 {
@@ -119,7 +126,8 @@ impl Pi2 {
             check_scalar("cost_tol", t, false)?;
         }
         let n_basis = dim / cfg.n_dof;
-        let basis = Basis::new(n_basis, cfg.alpha_x, cfg.width_factor).map_err(|e| invalid("basis", e, "alpha_x and width_factor must be > 0"))?;
+        let basis = Basis::new(n_basis, cfg.alpha_x, cfg.width_factor)
+            .map_err(|e| invalid("basis", e, "alpha_x and width_factor must be > 0"))?;
         let t = cfg.n_steps;
         let mut g = Vec::with_capacity(t);
         let mut time_w = Vec::with_capacity(t);
@@ -186,16 +194,30 @@ impl Pi2 {
         let eps: Vec<Vec<f64>> = self
             .batch
             .iter()
-            .map(|r| r.theta.iter().zip(&self.theta).map(|(a, b)| a - b).collect())
+            .map(|r| {
+                r.theta
+                    .iter()
+                    .zip(&self.theta)
+                    .map(|(a, b)| a - b)
+                    .collect()
+            })
             .collect();
         let mut num = vec![0.0; self.theta.len()];
         let mut den = vec![0.0; self.theta.len()];
         let mut p = vec![0.0; k];
         for i in 0..t {
             let s: Vec<f64> = self.batch.iter().map(|r| r.cost_to_go[i]).collect();
-            let (lo, hi) = s.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+            let (lo, hi) = s
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                    (l.min(v), h.max(v))
+                });
             for (pk, sk) in p.iter_mut().zip(&s) {
-                *pk = if hi > lo { (-self.cfg.h * (sk - lo) / (hi - lo)).exp() } else { 1.0 };
+                *pk = if hi > lo {
+                    (-self.cfg.h * (sk - lo) / (hi - lo)).exp()
+                } else {
+                    1.0
+                };
             }
             let total: f64 = p.iter().sum();
             for d in 0..self.cfg.n_dof {
@@ -258,7 +280,8 @@ impl AskTell for Pi2 {
     }
 
     fn tell(&mut self, theta: &[f64], costs: &[f64]) -> Result<()> {
-        self.rec.check_tell(theta, costs, "costs", &[1, self.cfg.n_steps])?;
+        self.rec
+            .check_tell(theta, costs, "costs", &[1, self.cfg.n_steps])?;
         let cost_to_go = self.cost_to_go(costs);
         self.rec.push(costs, cost_to_go[0])?;
         let mut stop = None;
@@ -268,7 +291,10 @@ impl AskTell for Pi2 {
                 stop = Some(Status::Converged);
             }
         } else {
-            self.batch.push(Rollout { theta: theta.to_vec(), cost_to_go });
+            self.batch.push(Rollout {
+                theta: theta.to_vec(),
+                cost_to_go,
+            });
             if self.batch.len() == self.cfg.n_rollouts {
                 self.improve();
                 self.need_eval = true;

@@ -62,14 +62,22 @@ impl PolicyGradient {
     pub fn new(q0: &[f64], cfg: PolicyGradientConfig) -> Result<Self> {
         let n = q0.len();
         if n == 0 {
-            return Err(LearnerError::Dimension { name: "q0", expected: "at least 1 entry".into(), got: "0 entries".into() });
+            return Err(LearnerError::Dimension {
+                name: "q0",
+                expected: "at least 1 entry".into(),
+                got: "0 entries".into(),
+            });
         }
         check_vector("q0", q0, n)?;
         check_scalar("alpha0", cfg.alpha0, true)?;
         check_scalar("decay", cfg.decay, true)?;
         if cfg.decay > 1.0 || cfg.decay <= 0.5 {
             // Robbins-Monro: sum alpha diverges only for decay <= 1, sum alpha^2 converges only for decay > 1/2.
-            return Err(crate::error::invalid("decay", cfg.decay, "must lie in (0.5, 1] (Robbins-Monro)"));
+            return Err(crate::error::invalid(
+                "decay",
+                cfg.decay,
+                "must lie in (0.5, 1] (Robbins-Monro)",
+            ));
         }
         check_scalar("delta", cfg.delta, true)?;
         check_scalar("scale", cfg.scale, true)?;
@@ -79,7 +87,16 @@ impl PolicyGradient {
             b.check_inside("q0", q0)?;
         }
         let rec = Record::new(cfg.max_trials)?;
-        let mut pg = Self { n, cfg, bounds, center: DVector::from_column_slice(q0), plan: Vec::new(), costs: Vec::new(), update: 0, rec };
+        let mut pg = Self {
+            n,
+            cfg,
+            bounds,
+            center: DVector::from_column_slice(q0),
+            plan: Vec::new(),
+            costs: Vec::new(),
+            update: 0,
+            rec,
+        };
         pg.plan = pg.plan_update();
         Ok(pg)
     }
@@ -148,7 +165,11 @@ impl AskTell for PolicyGradient {
             let grad = DVector::from_fn(self.n, |i, _| {
                 let (p, m) = (&self.plan[off + 2 * i], &self.plan[off + 2 * i + 1]);
                 let h = p[i] - m[i]; // 2 delta unless a limit clipped a probe
-                if h > 0.0 { (self.costs[off + 2 * i] - self.costs[off + 2 * i + 1]) / h } else { 0.0 }
+                if h > 0.0 {
+                    (self.costs[off + 2 * i] - self.costs[off + 2 * i + 1]) / h
+                } else {
+                    0.0
+                }
             });
             let alpha = self.alpha(self.update);
             self.center = self.clipped(&self.center - alpha * &grad);

@@ -67,10 +67,18 @@ pub(crate) fn per_parameter(sigma: &[f64], dim: usize) -> Result<Vec<f64>> {
     };
     for (i, &v) in s.iter().enumerate() {
         if !v.is_finite() {
-            return Err(LearnerError::NonFinite { name: "sigma", location: format!("[{i}]"), value: v });
+            return Err(LearnerError::NonFinite {
+                name: "sigma",
+                location: format!("[{i}]"),
+                value: v,
+            });
         }
         if v <= 0.0 {
-            return Err(invalid("sigma", format!("{v} (at index {i})"), "must be > 0"));
+            return Err(invalid(
+                "sigma",
+                format!("{v} (at index {i})"),
+                "must be > 0",
+            ));
         }
     }
     Ok(s)
@@ -79,10 +87,17 @@ pub(crate) fn per_parameter(sigma: &[f64], dim: usize) -> Result<Vec<f64>> {
 impl Power {
     pub fn new(theta0: &[f64], cfg: PowerConfig) -> Result<Self> {
         if theta0.is_empty() {
-            return Err(LearnerError::Dimension { name: "theta0", expected: "at least 1 entry".into(), got: "0 entries".into() });
+            return Err(LearnerError::Dimension {
+                name: "theta0",
+                expected: "at least 1 entry".into(),
+                got: "0 entries".into(),
+            });
         }
         check_vector("theta0", theta0, theta0.len())?;
-        let var0: Vec<f64> = per_parameter(&cfg.sigma, theta0.len())?.iter().map(|s| s * s).collect();
+        let var0: Vec<f64> = per_parameter(&cfg.sigma, theta0.len())?
+            .iter()
+            .map(|s| s * s)
+            .collect();
         if cfg.n_best == 0 {
             return Err(invalid("n_best", 0, "must be at least 1"));
         }
@@ -172,7 +187,11 @@ impl AskTell for Power {
         self.rec.check_tell(theta, ret, "return", &[1])?;
         let r = ret[0];
         if r <= 0.0 {
-            return Err(invalid("return", r, "must be > 0: PoWER weights rollouts by their return (e.g. R = exp(-(eps/s)^2))"));
+            return Err(invalid(
+                "return",
+                r,
+                "must be > 0: PoWER weights rollouts by their return (e.g. R = exp(-(eps/s)^2))",
+            ));
         }
         self.rec.push(ret, -r)?;
         self.rollouts.push((theta.to_vec(), r, self.var.clone()));

@@ -123,7 +123,11 @@ impl IllinoisRootFinder {
         let hi = b.min(a + self.allowed);
         let margin = (0.25 * self.q_tol).min(0.25 * (hi - lo));
         let (lo, hi) = (lo + margin, hi - margin);
-        if lo <= hi { x.clamp(lo, hi) } else { 0.5 * (a + b) }
+        if lo <= hi {
+            x.clamp(lo, hi)
+        } else {
+            0.5 * (a + b)
+        }
     }
 }
 
@@ -173,8 +177,14 @@ impl AskTell for IllinoisRootFinder {
         let width = self.b - self.a;
         let stop = if width < self.q_tol {
             Some(match (self.fa, self.fb) {
-                (_, None) => Status::HitBound { high: true, value: self.b },
-                (None, _) => Status::HitBound { high: false, value: self.a },
+                (_, None) => Status::HitBound {
+                    high: true,
+                    value: self.b,
+                },
+                (None, _) => Status::HitBound {
+                    high: false,
+                    value: self.a,
+                },
                 _ => Status::Bracketed,
             })
         } else {

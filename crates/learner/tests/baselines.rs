@@ -16,7 +16,15 @@ fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
 fn power(seed: u64, dim: usize) -> Power {
     Power::new(
         &vec![0.0; dim],
-        PowerConfig { sigma: vec![0.3], n_best: 10, adapt_variance: false, variance_window: 100, target_return: None, max_trials: 400, seed },
+        PowerConfig {
+            sigma: vec![0.3],
+            n_best: 10,
+            adapt_variance: false,
+            variance_window: 100,
+            target_return: None,
+            max_trials: 400,
+            seed,
+        },
     )
     .unwrap()
 }
@@ -39,7 +47,15 @@ fn power_adaptive_variance_stays_within_its_clip() {
     let t = target(dim);
     let mut p = Power::new(
         &[0.0; 3],
-        PowerConfig { sigma: vec![0.3, 0.2, 0.1], n_best: 10, adapt_variance: true, variance_window: 100, target_return: Some(0.999), max_trials: 600, seed: 5 },
+        PowerConfig {
+            sigma: vec![0.3, 0.2, 0.1],
+            n_best: 10,
+            adapt_variance: true,
+            variance_window: 100,
+            target_return: Some(0.999),
+            max_trials: 600,
+            seed: 5,
+        },
     )
     .unwrap();
     common::run(&mut p, |th| vec![(-sq_dist(th, &t)).exp()]);
@@ -67,7 +83,10 @@ fn power_rejects_a_non_positive_return() {
     let mut p = power(0, 2);
     let th = p.ask().unwrap();
     let e = p.tell(&th, &[0.0]).unwrap_err();
-    assert!(e.is_input_error() && e.to_string().contains("must be > 0"), "{e}");
+    assert!(
+        e.is_input_error() && e.to_string().contains("must be > 0"),
+        "{e}"
+    );
 }
 
 fn pi2_cfg(seed: u64, projection: bool) -> Pi2Config {
@@ -108,11 +127,26 @@ fn pi2_with_a_terminal_cost_and_no_projection_is_pi_bb() {
             batch.push((th, c));
         }
         // PI^BB (Stulp & Sigaud 2012): theta += sum_k P_k (theta_k - theta)
-        let (lo, hi) = batch.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), (_, c)| (l.min(*c), h.max(*c)));
-        let p: Vec<f64> = batch.iter().map(|(_, c)| (-10.0 * (c - lo) / (hi - lo)).exp()).collect();
+        let (lo, hi) = batch
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), (_, c)| {
+                (l.min(*c), h.max(*c))
+            });
+        let p: Vec<f64> = batch
+            .iter()
+            .map(|(_, c)| (-10.0 * (c - lo) / (hi - lo)).exp())
+            .collect();
         let sum: f64 = p.iter().sum();
-        let expected: Vec<f64> =
-            (0..dim).map(|j| theta[j] + batch.iter().zip(&p).map(|((th, _), pk)| pk / sum * (th[j] - theta[j])).sum::<f64>()).collect();
+        let expected: Vec<f64> = (0..dim)
+            .map(|j| {
+                theta[j]
+                    + batch
+                        .iter()
+                        .zip(&p)
+                        .map(|((th, _), pk)| pk / sum * (th[j] - theta[j]))
+                        .sum::<f64>()
+            })
+            .collect();
         for (a, b) in l.theta().iter().zip(&expected) {
             assert!((a - b).abs() < 1e-12, "update {update}: {a} vs {b}");
         }
@@ -140,7 +174,12 @@ fn pi2_with_projection_blends_neighbouring_weights_and_still_learns() {
     // ... but it reduces the cost, with terminal and with per-step costs.
     let start = sq_dist(&vec![0.0; dim], &t);
     common::run(&mut a, |th| vec![sq_dist(th, &t)]);
-    assert!(sq_dist(a.theta(), &t) < 0.3 * start, "{} -> {}", start, sq_dist(a.theta(), &t));
+    assert!(
+        sq_dist(a.theta(), &t) < 0.3 * start,
+        "{} -> {}",
+        start,
+        sq_dist(a.theta(), &t)
+    );
     let mut c = Pi2::new(&vec![0.0; dim], pi2_cfg(4, true)).unwrap();
     common::run(&mut c, |th| vec![sq_dist(th, &t) / 50.0; 50]);
     assert!(sq_dist(c.theta(), &t) < 0.3 * start);
@@ -157,7 +196,10 @@ fn pi2_reduces_a_quadratic_cost_and_converges_on_an_evaluation_rollout() {
     let n = common::run(&mut l, |th| vec![sq_dist(th, &t)]);
     assert!(l.converged(), "{:?} after {n}", l.status());
     // evaluation rollouts are the 1st, 12th, 18th, ... (1 + 10, then 1 + 5 per update)
-    assert!(n == 1 || (n - 12) % 6 == 0, "converged on trial {n}, not an evaluation rollout");
+    assert!(
+        n == 1 || (n - 12) % 6 == 0,
+        "converged on trial {n}, not an evaluation rollout"
+    );
     assert!(sq_dist(l.theta(), &t) <= 0.05);
 }
 
@@ -175,7 +217,11 @@ fn pi2_is_deterministic_for_a_seed_and_checks_its_cost_shape() {
     let mut l = Pi2::new(&vec![0.0; dim], pi2_cfg(1, true)).unwrap();
     let th = l.ask().unwrap();
     let e = l.tell(&th, &[1.0, 2.0]).unwrap_err();
-    assert!(e.to_string().contains("costs has 2 entries, expected 1 or 50 entries"), "{e}");
-    let e = Pi2::new(&vec![0.0; 15], pi2_cfg(1, true)).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("costs has 2 entries, expected 1 or 50 entries"),
+        "{e}"
+    );
+    let e = Pi2::new(&[0.0; 15], pi2_cfg(1, true)).unwrap_err();
     assert!(e.is_input_error(), "{e}");
 }

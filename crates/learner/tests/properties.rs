@@ -4,14 +4,24 @@
 
 mod common;
 
-use learner::{AskTell, GoldenConfig, GoldenMode, GoldenSection, IllinoisRootFinder, RootFinderConfig, Status};
+use learner::{
+    AskTell, GoldenConfig, GoldenMode, GoldenSection, IllinoisRootFinder, RootFinderConfig, Status,
+};
 use proptest::prelude::*;
 
 /// A decreasing eps(q) with root r: linear + cubic + an optional jump across zero at r.
 fn make_eps(r: f64, s1: f64, s3: f64, jump: f64) -> impl Fn(f64) -> f64 + Copy {
     move |q: f64| {
         let d = q - r;
-        -(s1 * d + s3 * d * d * d + if d > 0.0 { jump } else if d < 0.0 { -jump } else { 0.0 })
+        -(s1 * d
+            + s3 * d * d * d
+            + if d > 0.0 {
+                jump
+            } else if d < 0.0 {
+                -jump
+            } else {
+                0.0
+            })
     }
 }
 

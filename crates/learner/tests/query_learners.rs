@@ -5,8 +5,9 @@ mod common;
 
 use common::{Noise, bisect, eps1, run};
 use learner::{
-    AskTell, ErrorLearning, ErrorLearningConfig, GoldenConfig, GoldenMode, GoldenSection, IllinoisRootFinder,
-    Jacobian, LearnerError, PolicyGradient, PolicyGradientConfig, RootFinderConfig, Status,
+    AskTell, ErrorLearning, ErrorLearningConfig, GoldenConfig, GoldenMode, GoldenSection,
+    IllinoisRootFinder, Jacobian, LearnerError, PolicyGradient, PolicyGradientConfig,
+    RootFinderConfig, Status,
 };
 use nalgebra::{DMatrix, dmatrix};
 
@@ -17,11 +18,33 @@ fn el(q0: &[f64], f: impl FnOnce(&mut ErrorLearningConfig)) -> ErrorLearning {
 }
 
 fn golden(q0: f64, lo: f64, hi: f64, mode: GoldenMode) -> GoldenSection {
-    GoldenSection::new(q0, lo, hi, GoldenConfig { mode, tol: 1e-3, q_tol: 1e-4, max_trials: 60, max_expansions: 3 }).unwrap()
+    GoldenSection::new(
+        q0,
+        lo,
+        hi,
+        GoldenConfig {
+            mode,
+            tol: 1e-3,
+            q_tol: 1e-4,
+            max_trials: 60,
+            max_expansions: 3,
+        },
+    )
+    .unwrap()
 }
 
 fn finder(q0: f64, lo: f64, hi: f64) -> IllinoisRootFinder {
-    IllinoisRootFinder::new(q0, lo, hi, RootFinderConfig { tol: 1e-3, q_tol: 1e-4, max_trials: 60 }).unwrap()
+    IllinoisRootFinder::new(
+        q0,
+        lo,
+        hi,
+        RootFinderConfig {
+            tol: 1e-3,
+            q_tol: 1e-4,
+            max_trials: 60,
+        },
+    )
+    .unwrap()
 }
 
 // ---- error learning -------------------------------------------------------------------------
@@ -83,7 +106,9 @@ fn identity_gain_cycles_at_slope_two_but_secant_and_finite_difference_converge()
     assert!((secant.jacobian()[(0, 0)] - 2.0).abs() < 1e-12);
 
     // Finite difference: q0, one probe, then the exact Newton step.
-    let mut fd = el(&[1.0], |c| c.jacobian = Jacobian::FiniteDifference { delta: 0.01 });
+    let mut fd = el(&[1.0], |c| {
+        c.jacobian = Jacobian::FiniteDifference { delta: 0.01 }
+    });
     assert_eq!(run(&mut fd, f), 3);
     assert!((fd.jacobian()[(0, 0)] - 2.0).abs() < 1e-9);
 }
@@ -126,7 +151,11 @@ fn wrong_sign_convention_runs_into_a_bound_and_says_so() {
         c.max_trials = 100;
     });
     let n = run(&mut l, wrong);
-    assert!(matches!(l.status(), Status::HitBound { high: true, value } if value == 3.0), "{:?}", l.status());
+    assert!(
+        matches!(l.status(), Status::HitBound { high: true, value } if value == 3.0),
+        "{:?}",
+        l.status()
+    );
     assert!(n < 15, "{n} trials");
 
     let mut free = el(&[1.2], |c| c.max_trials = 100);
@@ -136,17 +165,29 @@ fn wrong_sign_convention_runs_into_a_bound_and_says_so() {
 
     let mut g = golden(1.2, 0.5, 2.0, GoldenMode::Robust);
     let n = run(&mut g, wrong);
-    assert!(matches!(g.status(), Status::HitBound { high: true, .. }), "{:?}", g.status());
+    assert!(
+        matches!(g.status(), Status::HitBound { high: true, .. }),
+        "{:?}",
+        g.status()
+    );
     assert!(n < 40, "{n}");
 
     let mut r = finder(1.2, 0.5, 2.0);
     let n = run(&mut r, wrong);
-    assert!(matches!(r.status(), Status::HitBound { high: true, value } if value == 2.0), "{:?}", r.status());
+    assert!(
+        matches!(r.status(), Status::HitBound { high: true, value } if value == 2.0),
+        "{:?}",
+        r.status()
+    );
     assert!(n < 40);
 
     let mut p = golden(1.2, 0.5, 2.0, GoldenMode::Paper);
     run(&mut p, wrong);
-    assert!(matches!(p.status(), Status::HitBound { high: true, .. }), "{:?}", p.status());
+    assert!(
+        matches!(p.status(), Status::HitBound { high: true, .. }),
+        "{:?}",
+        p.status()
+    );
 }
 
 // ---- golden section -------------------------------------------------------------------------
@@ -196,7 +237,10 @@ fn golden_section_shrinks_its_bracket_by_0_382_or_0_618_per_trial() {
             && g.status() == Status::Running
         {
             let r = w / p;
-            assert!((r - 0.618).abs() < 1e-9 || (r - 0.382).abs() < 1e-9, "ratio {r}");
+            assert!(
+                (r - 0.618).abs() < 1e-9 || (r - 0.382).abs() < 1e-9,
+                "ratio {r}"
+            );
         }
         // the next point is at 0.618 or 0.382 of the new bracket
         if g.status() == Status::Running {
@@ -261,7 +305,11 @@ fn discontinuous_map_bracketing_learners_find_the_window_fixed_gain_cycles() {
         c.max_trials = 30;
     });
     run(&mut k, eps1(1.0, matchbox_like));
-    assert_eq!(k.status(), Status::TrialCap, "K = I oscillates across the jump");
+    assert_eq!(
+        k.status(),
+        Status::TrialCap,
+        "K = I oscillates across the jump"
+    );
 }
 
 #[test]
@@ -288,12 +336,38 @@ fn noisy_measurements_still_converge_near_the_root() {
         let sigma = 0.003;
         let mut noise = Noise::new(seed);
         let mut f = move |q: &[f64]| vec![q0 - sine_map(q[0]) + sigma * noise.gauss()];
-        let mut g = GoldenSection::new(q0, 0.3, 1.8, GoldenConfig { mode: GoldenMode::Robust, tol: 0.01, q_tol: 1e-3, max_trials: 40, max_expansions: 3 }).unwrap();
+        let mut g = GoldenSection::new(
+            q0,
+            0.3,
+            1.8,
+            GoldenConfig {
+                mode: GoldenMode::Robust,
+                tol: 0.01,
+                q_tol: 1e-3,
+                max_trials: 40,
+                max_expansions: 3,
+            },
+        )
+        .unwrap();
         run(&mut g, &mut f);
         // |eps_measured| < 0.01 and |noise| < 5 sigma -> |true eps| < 0.025 -> |q - truth| < 0.025/0.7
-        assert!(matches!(g.status(), Status::Converged | Status::Bracketed), "{:?}", g.status());
+        assert!(
+            matches!(g.status(), Status::Converged | Status::Bracketed),
+            "{:?}",
+            g.status()
+        );
         assert!((g.best().unwrap().q[0] - truth).abs() < 0.04, "seed {seed}");
-        let mut r = IllinoisRootFinder::new(q0, 0.3, 1.8, RootFinderConfig { tol: 0.01, q_tol: 1e-3, max_trials: 40 }).unwrap();
+        let mut r = IllinoisRootFinder::new(
+            q0,
+            0.3,
+            1.8,
+            RootFinderConfig {
+                tol: 0.01,
+                q_tol: 1e-3,
+                max_trials: 40,
+            },
+        )
+        .unwrap();
         run(&mut r, &mut f);
         assert!(matches!(r.status(), Status::Converged | Status::Bracketed));
         assert!((r.best().unwrap().q[0] - truth).abs() < 0.04, "seed {seed}");
@@ -327,7 +401,18 @@ fn policy_gradient_counts_every_perturbed_trial() {
     let c = 0.2;
     let mut pg = PolicyGradient::new(
         &[1.0],
-        PolicyGradientConfig { alpha0: 0.5, decay: 0.602, delta: 0.05, scale: 1.0, evaluate_center: true, low: None, high: None, tol: 1e-9, max_trials: 50, pin_limit: 3 },
+        PolicyGradientConfig {
+            alpha0: 0.5,
+            decay: 0.602,
+            delta: 0.05,
+            scale: 1.0,
+            evaluate_center: true,
+            low: None,
+            high: None,
+            tol: 1e-9,
+            max_trials: 50,
+            pin_limit: 3,
+        },
     )
     .unwrap();
     let n = run(&mut pg, eps1(1.0, |q| q + c));
@@ -341,11 +426,24 @@ fn policy_gradient_counts_every_perturbed_trial() {
 fn policy_gradient_converges_in_two_dimensions_with_decaying_steps() {
     let mut pg = PolicyGradient::new(
         &[0.0, 0.0],
-        PolicyGradientConfig { alpha0: 0.3, decay: 0.602, delta: 0.01, scale: 1.0, evaluate_center: true, low: None, high: None, tol: 1e-3, max_trials: 400, pin_limit: 3 },
+        PolicyGradientConfig {
+            alpha0: 0.3,
+            decay: 0.602,
+            delta: 0.01,
+            scale: 1.0,
+            evaluate_center: true,
+            low: None,
+            high: None,
+            tol: 1e-3,
+            max_trials: 400,
+            pin_limit: 3,
+        },
     )
     .unwrap();
     assert!((pg.alpha(3) - 0.3 / 4f64.powf(0.602)).abs() < 1e-15);
-    run(&mut pg, |q| vec![0.5 - (q[0] + 0.3 * q[0].sin()), -0.3 - 1.5 * q[1]]);
+    run(&mut pg, |q| {
+        vec![0.5 - (q[0] + 0.3 * q[0].sin()), -0.3 - 1.5 * q[1]]
+    });
     assert!(pg.converged(), "{:?}", pg.status());
     // every update costs 1 + 2n = 5 trials, all of them counted
     assert!(pg.n_told() > 5);
@@ -360,26 +458,83 @@ fn bad_input_is_a_clear_error() {
     assert_eq!(l.tell(&[1.0], &[0.1]), Err(LearnerError::NotAsked));
     let q = l.ask().unwrap();
     let e = l.tell(&q, &[f64::NAN]).unwrap_err();
-    assert!(e.is_input_error() && e.to_string().contains("eps[0] is NaN"), "{e}");
+    assert!(
+        e.is_input_error() && e.to_string().contains("eps[0] is NaN"),
+        "{e}"
+    );
     let e = l.tell(&q, &[0.1, 0.2]).unwrap_err();
-    assert!(e.is_input_error() && e.to_string().contains("eps has 2 entries, expected 1"), "{e}");
+    assert!(
+        e.is_input_error() && e.to_string().contains("eps has 2 entries, expected 1"),
+        "{e}"
+    );
     let e = l.tell(&[1.5], &[0.1]).unwrap_err();
     assert!(e.is_state_error(), "{e}");
     // nothing was recorded by the failed calls
     assert_eq!(l.n_told(), 0);
     l.tell(&q, &[0.0]).unwrap();
     let e = l.ask().unwrap_err();
-    assert!(e.is_state_error() && e.to_string().contains("converged"), "{e}");
+    assert!(
+        e.is_state_error() && e.to_string().contains("converged"),
+        "{e}"
+    );
 
-    let cfg = GoldenConfig { mode: GoldenMode::Paper, tol: 1e-3, q_tol: 1e-4, max_trials: 10, max_expansions: 3 };
+    let cfg = GoldenConfig {
+        mode: GoldenMode::Paper,
+        tol: 1e-3,
+        q_tol: 1e-4,
+        max_trials: 10,
+        max_expansions: 3,
+    };
     let e = GoldenSection::new(0.5, 1.0, 1.0, cfg.clone()).unwrap_err();
-    assert!(e.is_input_error() && e.to_string().contains("must be < high"), "{e}");
-    let e = IllinoisRootFinder::new(0.5, 2.0, 1.0, RootFinderConfig { tol: 1e-3, q_tol: 1e-4, max_trials: 10 }).unwrap_err();
+    assert!(
+        e.is_input_error() && e.to_string().contains("must be < high"),
+        "{e}"
+    );
+    let e = IllinoisRootFinder::new(
+        0.5,
+        2.0,
+        1.0,
+        RootFinderConfig {
+            tol: 1e-3,
+            q_tol: 1e-4,
+            max_trials: 10,
+        },
+    )
+    .unwrap_err();
     assert!(e.is_input_error());
-    let e = ErrorLearning::new(&[0.5], ErrorLearningConfig { low: Some(vec![1.0]), high: Some(vec![0.0]), ..ErrorLearningConfig::new(1, 1e-3, 10) }).unwrap_err();
-    assert!(e.is_input_error() && e.to_string().contains("must be < high"), "{e}");
-    let e = ErrorLearning::new(&[0.5], ErrorLearningConfig { gain: DMatrix::identity(2, 2), ..ErrorLearningConfig::new(1, 1e-3, 10) }).unwrap_err();
-    assert!(e.to_string().contains("gain has shape (2, 2), expected shape (1, 1)"), "{e}");
-    let e = ErrorLearning::new(&[0.5], ErrorLearningConfig { jacobian: Jacobian::Fixed(DMatrix::zeros(1, 1)), ..ErrorLearningConfig::new(1, 1e-3, 10) }).unwrap_err();
+    let e = ErrorLearning::new(
+        &[0.5],
+        ErrorLearningConfig {
+            low: Some(vec![1.0]),
+            high: Some(vec![0.0]),
+            ..ErrorLearningConfig::new(1, 1e-3, 10)
+        },
+    )
+    .unwrap_err();
+    assert!(
+        e.is_input_error() && e.to_string().contains("must be < high"),
+        "{e}"
+    );
+    let e = ErrorLearning::new(
+        &[0.5],
+        ErrorLearningConfig {
+            gain: DMatrix::identity(2, 2),
+            ..ErrorLearningConfig::new(1, 1e-3, 10)
+        },
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("gain has shape (2, 2), expected shape (1, 1)"),
+        "{e}"
+    );
+    let e = ErrorLearning::new(
+        &[0.5],
+        ErrorLearningConfig {
+            jacobian: Jacobian::Fixed(DMatrix::zeros(1, 1)),
+            ..ErrorLearningConfig::new(1, 1e-3, 10)
+        },
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("invertible"), "{e}");
 }

@@ -3,11 +3,15 @@
 //! builds them through the static constructors below.
 
 use learner::{
-    AskTell, ErrorLearning, ErrorLearningConfig, GoldenConfig, GoldenMode, GoldenSection, IllinoisRootFinder, Jacobian,
-    Pi2, Pi2Config, PolicyGradient, PolicyGradientConfig, Power, PowerConfig, RootFinderConfig, Status,
+    AskTell, ErrorLearning, ErrorLearningConfig, GoldenConfig, GoldenMode, GoldenSection,
+    IllinoisRootFinder, Jacobian, Pi2, Pi2Config, PolicyGradient, PolicyGradientConfig, Power,
+    PowerConfig, RootFinderConfig, Status,
 };
 use nalgebra::DMatrix;
-use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -51,17 +55,29 @@ pub struct PyLearner {
 }
 
 fn slice<'a>(name: &str, a: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| raise("InvalidInputError", format!("{name} must be a contiguous array")))
+    a.as_slice().map_err(|_| {
+        raise(
+            "InvalidInputError",
+            format!("{name} must be a contiguous array"),
+        )
+    })
 }
 
 fn opt_vec(name: &str, a: &Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option<Vec<f64>>> {
-    a.as_ref().map(|a| slice(name, a).map(<[f64]>::to_vec)).transpose()
+    a.as_ref()
+        .map(|a| slice(name, a).map(<[f64]>::to_vec))
+        .transpose()
 }
 
 /// A C-ordered (r, c) array as an nalgebra matrix.
 fn matrix(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<DMatrix<f64>> {
     let (r, c) = (a.shape()[0], a.shape()[1]);
-    let s = a.as_slice().map_err(|_| raise("InvalidInputError", format!("{name} must be a contiguous array")))?;
+    let s = a.as_slice().map_err(|_| {
+        raise(
+            "InvalidInputError",
+            format!("{name} must be a contiguous array"),
+        )
+    })?;
     Ok(DMatrix::from_row_slice(r, c, s))
 }
 
@@ -96,7 +112,9 @@ impl PyLearner {
             (other, _) => {
                 return Err(raise(
                     "InvalidInputError",
-                    format!("jacobian = {other:?} is invalid: use \"identity\", \"secant\", \"finite-difference\" or an (n, n) array"),
+                    format!(
+                        "jacobian = {other:?} is invalid: use \"identity\", \"secant\", \"finite-difference\" or an (n, n) array"
+                    ),
                 ));
             }
         };
@@ -111,26 +129,63 @@ impl PyLearner {
             max_trials,
             pin_limit,
         };
-        Ok(Self { inner: Inner::ErrorLearning(ErrorLearning::new(slice("q0", &q0)?, cfg).py_err()?) })
+        Ok(Self {
+            inner: Inner::ErrorLearning(ErrorLearning::new(slice("q0", &q0)?, cfg).py_err()?),
+        })
     }
 
     #[staticmethod]
     #[pyo3(signature = (q0, low, high, mode, tol, q_tol, max_trials, max_expansions))]
     #[allow(clippy::too_many_arguments)]
-    fn golden(q0: f64, low: f64, high: f64, mode: &str, tol: f64, q_tol: f64, max_trials: usize, max_expansions: usize) -> PyResult<Self> {
+    fn golden(
+        q0: f64,
+        low: f64,
+        high: f64,
+        mode: &str,
+        tol: f64,
+        q_tol: f64,
+        max_trials: usize,
+        max_expansions: usize,
+    ) -> PyResult<Self> {
         let mode = match mode {
             "paper" => GoldenMode::Paper,
             "robust" => GoldenMode::Robust,
-            other => return Err(raise("InvalidInputError", format!("mode = {other:?} is invalid: use \"paper\" or \"robust\""))),
+            other => {
+                return Err(raise(
+                    "InvalidInputError",
+                    format!("mode = {other:?} is invalid: use \"paper\" or \"robust\""),
+                ));
+            }
         };
-        let cfg = GoldenConfig { mode, tol, q_tol, max_trials, max_expansions };
-        Ok(Self { inner: Inner::Golden(GoldenSection::new(q0, low, high, cfg).py_err()?) })
+        let cfg = GoldenConfig {
+            mode,
+            tol,
+            q_tol,
+            max_trials,
+            max_expansions,
+        };
+        Ok(Self {
+            inner: Inner::Golden(GoldenSection::new(q0, low, high, cfg).py_err()?),
+        })
     }
 
     #[staticmethod]
-    fn root_finder(q0: f64, low: f64, high: f64, tol: f64, q_tol: f64, max_trials: usize) -> PyResult<Self> {
-        let cfg = RootFinderConfig { tol, q_tol, max_trials };
-        Ok(Self { inner: Inner::Root(IllinoisRootFinder::new(q0, low, high, cfg).py_err()?) })
+    fn root_finder(
+        q0: f64,
+        low: f64,
+        high: f64,
+        tol: f64,
+        q_tol: f64,
+        max_trials: usize,
+    ) -> PyResult<Self> {
+        let cfg = RootFinderConfig {
+            tol,
+            q_tol,
+            max_trials,
+        };
+        Ok(Self {
+            inner: Inner::Root(IllinoisRootFinder::new(q0, low, high, cfg).py_err()?),
+        })
     }
 
     #[staticmethod]
@@ -161,7 +216,9 @@ impl PyLearner {
             max_trials,
             pin_limit,
         };
-        Ok(Self { inner: Inner::PolicyGradient(PolicyGradient::new(slice("q0", &q0)?, cfg).py_err()?) })
+        Ok(Self {
+            inner: Inner::PolicyGradient(PolicyGradient::new(slice("q0", &q0)?, cfg).py_err()?),
+        })
     }
 
     #[staticmethod]
@@ -177,8 +234,18 @@ impl PyLearner {
         max_trials: usize,
         seed: u64,
     ) -> PyResult<Self> {
-        let cfg = PowerConfig { sigma: slice("sigma", &sigma)?.to_vec(), n_best, adapt_variance, variance_window, target_return, max_trials, seed };
-        Ok(Self { inner: Inner::Power(Power::new(slice("theta0", &theta0)?, cfg).py_err()?) })
+        let cfg = PowerConfig {
+            sigma: slice("sigma", &sigma)?.to_vec(),
+            n_best,
+            adapt_variance,
+            variance_window,
+            target_return,
+            max_trials,
+            seed,
+        };
+        Ok(Self {
+            inner: Inner::Power(Power::new(slice("theta0", &theta0)?, cfg).py_err()?),
+        })
     }
 
     #[staticmethod]
@@ -215,14 +282,20 @@ impl PyLearner {
             max_trials,
             seed,
         };
-        Ok(Self { inner: Inner::Pi2(Pi2::new(slice("theta0", &theta0)?, cfg).py_err()?) })
+        Ok(Self {
+            inner: Inner::Pi2(Pi2::new(slice("theta0", &theta0)?, cfg).py_err()?),
+        })
     }
 
     fn ask<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         Ok(self.inner.get_mut().ask().py_err()?.into_pyarray(py))
     }
 
-    fn tell(&mut self, q: PyReadonlyArray1<'_, f64>, feedback: PyReadonlyArray1<'_, f64>) -> PyResult<()> {
+    fn tell(
+        &mut self,
+        q: PyReadonlyArray1<'_, f64>,
+        feedback: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<()> {
         let (q, f) = (slice("q", &q)?, slice("feedback", &feedback)?);
         self.inner.get_mut().tell(q, f).py_err()
     }
@@ -256,15 +329,38 @@ impl PyLearner {
     /// (q, feedback, score) of the best trial, or None before the first tell.
     #[getter]
     #[allow(clippy::type_complexity)]
-    fn best<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
-        self.inner.get().best().map(|t| (t.q.clone().into_pyarray(py), t.feedback.clone().into_pyarray(py), t.score))
+    fn best<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> Option<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
+        self.inner.get().best().map(|t| {
+            (
+                t.q.clone().into_pyarray(py),
+                t.feedback.clone().into_pyarray(py),
+                t.score,
+            )
+        })
     }
 
     /// [(q, feedback, score), ...] in the order of the trials.
     #[getter]
     #[allow(clippy::type_complexity)]
-    fn history<'py>(&self, py: Python<'py>) -> Vec<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
-        self.inner.get().history().iter().map(|t| (t.q.clone().into_pyarray(py), t.feedback.clone().into_pyarray(py), t.score)).collect()
+    fn history<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> Vec<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
+        self.inner
+            .get()
+            .history()
+            .iter()
+            .map(|t| {
+                (
+                    t.q.clone().into_pyarray(py),
+                    t.feedback.clone().into_pyarray(py),
+                    t.score,
+                )
+            })
+            .collect()
     }
 
     /// Learner-specific state: bracket, jacobian, center, mean, variance, theta.
@@ -274,11 +370,16 @@ impl PyLearner {
             Inner::ErrorLearning(l) => {
                 let j = l.jacobian();
                 let rows: Vec<f64> = j.transpose().as_slice().to_vec(); // row-major for numpy
-                d.set_item("jacobian", rows.into_pyarray(py).reshape([j.nrows(), j.ncols()])?)?;
+                d.set_item(
+                    "jacobian",
+                    rows.into_pyarray(py).reshape([j.nrows(), j.ncols()])?,
+                )?;
             }
             Inner::Golden(l) => d.set_item("bracket", l.bracket())?,
             Inner::Root(l) => d.set_item("bracket", l.bracket())?,
-            Inner::PolicyGradient(l) => d.set_item("center", l.center().to_vec().into_pyarray(py))?,
+            Inner::PolicyGradient(l) => {
+                d.set_item("center", l.center().to_vec().into_pyarray(py))?
+            }
             Inner::Power(l) => {
                 d.set_item("mean", l.mean().to_vec().into_pyarray(py))?;
                 d.set_item("variance", l.variance().to_vec().into_pyarray(py))?;
