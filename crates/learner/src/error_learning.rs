@@ -171,8 +171,8 @@ impl ErrorLearning {
         &self.jac
     }
 
-    /// The eq. 16/17 step from q with error eps, clipped to the limits.
-    fn step(&self, q: &DVector<f64>, eps: &DVector<f64>) -> DVector<f64> {
+    /// The eq. 16/17 step w K J^-1 eps (before clipping to the limits).
+    fn step(&self, eps: &DVector<f64>) -> DVector<f64> {
         let w = if self.weighted {
             (-(eps / self.scale).norm_squared()).exp()
         } else {
@@ -185,11 +185,14 @@ impl ErrorLearning {
             .lu()
             .solve(eps)
             .unwrap_or_else(|| eps.clone());
-        let mut next = q + w * (&self.gain * newton);
+        w * (&self.gain * newton)
+    }
+
+    fn clipped(&self, mut q: DVector<f64>) -> DVector<f64> {
         if let Some(b) = &self.bounds {
-            b.clip(next.as_mut_slice());
+            b.clip(q.as_mut_slice());
         }
-        next
+        q
     }
 
     /// The finite-difference probe after `k` told trials (k = 1..=n), or None when done.
@@ -275,7 +278,7 @@ impl AskTell for ErrorLearning {
                         self.jac = DMatrix::identity(self.n, self.n);
                     }
                     let e0 = self.eps_at_q0.clone().unwrap_or_else(|| ev.clone());
-                    self.next = self.step(&self.q0, &e0);
+                    self.next = self.clipped(&self.q0 + self.step(&e0));
                 }
             }
         } else {
@@ -294,9 +297,11 @@ impl AskTell for ErrorLearning {
                     self.jac = DMatrix::identity(self.n, self.n);
                 }
             }
-            self.next = self.step(&qv, &ev);
+            let step = self.step(&ev);
+            self.next = self.clipped(&qv + &step);
+            // Pinned: q sits on a limit and the step (not eps: K and J may rotate it) points past it.
             if let Some(b) = &mut self.bounds {
-                stop = b.observe(q, eps);
+                stop = b.observe(q, step.as_slice());
             }
         }
         self.prev = Some((qv, ev));

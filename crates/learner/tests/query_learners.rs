@@ -190,6 +190,25 @@ fn wrong_sign_convention_runs_into_a_bound_and_says_so() {
     );
 }
 
+#[test]
+fn a_bound_is_detected_along_the_step_not_along_eps() {
+    // A negative gain walks away from the root at 0.6 although eps > 0: the step, not eps,
+    // points past the lower limit.
+    let mut l = el(&[0.5], |c| {
+        c.gain = DMatrix::from_element(1, 1, -1.0);
+        c.low = Some(vec![0.0]);
+        c.high = Some(vec![1.0]);
+        c.max_trials = 100;
+    });
+    let n = run(&mut l, eps1(0.5, |q| q - 0.1));
+    assert!(
+        matches!(l.status(), Status::HitBound { high: false, value } if value == 0.0),
+        "{:?}",
+        l.status()
+    );
+    assert!(n < 10, "{n}");
+}
+
 // ---- golden section -------------------------------------------------------------------------
 
 fn sine_map(q: f64) -> f64 {
