@@ -4,17 +4,20 @@ trials (Nemec, Vuga, Ude, "Efficient sensorimotor learning from multiple demonst
 The numerical core is Rust (``dmprs._core``); this package is the API users import.
 """
 
+from dmprs import learners
 from dmprs._core import __version__
 from dmprs.dmp import DMP, rollout_batch
-from dmprs.errors import DmprsError, InvalidInputError, NumericalError
+from dmprs.errors import DmprsError, InvalidInputError, LearnerStateError, NumericalError
 from dmprs.trajectory import Trajectory
 
 __all__ = [
     "DMP",
     "DmprsError",
     "InvalidInputError",
+    "LearnerStateError",
     "NumericalError",
     "Trajectory",
     "__version__",
+    "learners",
     "rollout_batch",
 ]

@@ -1,5 +1,7 @@
 # Type stubs for the Rust extension dmprs._core (crates/py-bindings). The documented API is in
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -73,3 +75,87 @@ def rollout_batch(
     until_rest: bool = False,
     rest_tol: float = 1e-4,
 ) -> list[_TrajectoryArrays]: ...
+
+class Learner:
+    """Every ask/tell learner of crates/learner; built and documented by dmprs.learners."""
+
+    @staticmethod
+    def error_learning(
+        q0: NDArray[np.float64],
+        gain: NDArray[np.float64],
+        weighted: bool,
+        scale: float,
+        jacobian: str,
+        jacobian_matrix: NDArray[np.float64] | None,
+        delta: float,
+        low: NDArray[np.float64] | None,
+        high: NDArray[np.float64] | None,
+        tol: float,
+        max_trials: int,
+        pin_limit: int,
+    ) -> Learner: ...
+    @staticmethod
+    def golden(
+        q0: float, low: float, high: float, mode: str, tol: float, q_tol: float, max_trials: int, max_expansions: int
+    ) -> Learner: ...
+    @staticmethod
+    def root_finder(q0: float, low: float, high: float, tol: float, q_tol: float, max_trials: int) -> Learner: ...
+    @staticmethod
+    def policy_gradient(
+        q0: NDArray[np.float64],
+        alpha0: float,
+        decay: float,
+        delta: float,
+        scale: float,
+        evaluate_center: bool,
+        low: NDArray[np.float64] | None,
+        high: NDArray[np.float64] | None,
+        tol: float,
+        max_trials: int,
+        pin_limit: int,
+    ) -> Learner: ...
+    @staticmethod
+    def power(
+        theta0: NDArray[np.float64],
+        sigma: NDArray[np.float64],
+        n_best: int,
+        adapt_variance: bool,
+        variance_window: int,
+        target_return: float | None,
+        max_trials: int,
+        seed: int,
+    ) -> Learner: ...
+    @staticmethod
+    def pi2(
+        theta0: NDArray[np.float64],
+        sigma: NDArray[np.float64],
+        n_rollouts: int,
+        n_reuse: int,
+        h: float,
+        n_updates: int,
+        n_dof: int,
+        n_steps: int,
+        alpha_x: float,
+        width_factor: float,
+        projection: bool,
+        cost_tol: float | None,
+        max_trials: int,
+        seed: int,
+    ) -> Learner: ...
+    def ask(self) -> NDArray[np.float64]: ...
+    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def n_told(self) -> int: ...
+    @property
+    def best(self) -> tuple[NDArray[np.float64], NDArray[np.float64], float] | None: ...
+    @property
+    def history(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], float]]: ...
+    def state(self) -> dict[str, Any]: ...

@@ -7,7 +7,7 @@ The Rust core raises these same classes (``crates/py-bindings/src/errors.rs``).
 
 from __future__ import annotations
 
-__all__ = ["DmprsError", "InvalidInputError", "NumericalError"]
+__all__ = ["DmprsError", "InvalidInputError", "LearnerStateError", "NumericalError"]
 
 
 class DmprsError(Exception):
@@ -22,3 +22,9 @@ class InvalidInputError(DmprsError, ValueError):
 class NumericalError(DmprsError, ArithmeticError):
     """The input was valid but a computation failed (e.g. a matrix that is not positive
     definite, a rollout that does not come to rest)."""
+
+
+class LearnerStateError(DmprsError, RuntimeError):
+    """A learner was driven out of order: ``tell`` without a pending ``ask``, ``tell`` of a query
+    other than the one ``ask`` returned, or ``ask`` after the learner stopped (see its
+    ``status``)."""

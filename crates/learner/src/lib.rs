@@ -1,9 +1,29 @@
 //! # learner
 //!
-//! Learners in the query space of Nemec, Vuga and Ude (2013) — error learning (eqs. 16, 17),
-//! golden-section error learning, constrained-domain policy gradient (eq. 12) — the full-parameter
-//! baselines PoWER and PI², and the Rapier matchbox flip-up simulation. Filled in by the learners
-//! and matchbox issues; for now it only re-exports the DMP types it will build on.
+//! Learners of Nemec, Vuga and Ude (2013) in the query space — error learning (eqs. 16, 17),
+//! golden-section error learning, a superlinear bracketing root finder (beyond the paper),
+//! constrained-domain policy gradient (eq. 12) — and the full-parameter baselines PoWER and PI²,
+//! all behind one ask/tell interface (`AskTell`); and the Rapier matchbox flip-up simulation
+//! (`matchbox`, the only module with physics). Pure Rust; no Python.
 
+pub mod ask_tell;
+pub mod bounds;
+pub mod error;
+pub mod error_learning;
+pub mod golden;
+pub mod pi2;
+pub mod policy_gradient;
+pub mod power;
+pub mod root;
+
+pub use ask_tell::{AskTell, Record, Status, Trial};
 pub use dmp_core::{Dmp, DmpConfig, Trajectory};
+pub use error::{LearnerError, Result};
+pub use error_learning::{ErrorLearning, ErrorLearningConfig, Jacobian};
+pub use golden::{GoldenConfig, GoldenMode, GoldenSection};
+pub use pi2::{Pi2, Pi2Config};
+pub use policy_gradient::{PolicyGradient, PolicyGradientConfig};
+pub use power::{Power, PowerConfig};
+pub use root::{IllinoisRootFinder, RootFinderConfig};
+
 pub mod matchbox;

@@ -35,3 +35,22 @@ impl<T> IntoPyResult<T> for Result<T, dmp_core::Error> {
         self.map_err(core_error)
     }
 }
+
+/// Bad input becomes `InvalidInputError`, calls in the wrong order (tell without ask, tell of
+/// another query, ask after the stop) `LearnerStateError`, a failed computation `NumericalError`.
+pub fn learner_error(err: learner::LearnerError) -> PyErr {
+    let class = if err.is_input_error() {
+        "InvalidInputError"
+    } else if err.is_state_error() {
+        "LearnerStateError"
+    } else {
+        "NumericalError"
+    };
+    raise(class, err.to_string())
+}
+
+impl<T> IntoPyResult<T> for Result<T, learner::LearnerError> {
+    fn py_err(self) -> PyResult<T> {
+        self.map_err(learner_error)
+    }
+}

@@ -3,6 +3,7 @@
 
 mod dmp;
 mod errors;
+mod learners;
 
 use pyo3::prelude::*;
 
@@ -12,6 +13,8 @@ mod _core {
     use super::dmp::PyDmp;
     #[pymodule_export]
     use super::dmp::py_rollout_batch;
+    #[pymodule_export]
+    use super::learners::PyLearner;
 
     #[pymodule_init]
     fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {

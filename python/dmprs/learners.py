@@ -1,0 +1,525 @@
+r"""Ask/tell learners: in the query space (Nemec, Vuga, Ude 2013) and, as baselines, in the full
+DMP weight space.
+
+Every learner has the shape of cma, optuna and nevergrad::
+
+    learner = dmprs.learners.GoldenSection(q0=0.5, low=0.3, high=1.0)
+    while not learner.done:
+        q = learner.ask()                 # 1-D float64 array: the query to execute next
+        eps = run_trial(q)                # one physical trial
+        learner.tell(q, eps)              # q must be the array ask() returned
+    learner.best.q                        # the best executed query
+
+Query learners (:class:`ErrorLearning`, :class:`GoldenSection`, :class:`IllinoisRootFinder`,
+:class:`PolicyGradient`) are told the signed error ``eps = q0 - q_a`` (paper eq. 13), one
+entry per query dimension, with the sign convention of method.md §5.3:
+
+    **eps > 0 means the query must increase.**
+
+For a task outcome ``y`` with target ``y*`` that is ``eps = s * (y* - y)`` with
+``s = sign(dy/dq)``: ``+1`` for the matchbox (the query is the outcome-angle label, so
+``eps = pi/2 - phi``, the negative of the paper's eq. 18), ``-1`` for pouring (a larger assumed
+bottle volume pours less: ``eps = V_poured - V*``). With the wrong sign every learner walks away
+from the root; with search limits it stops with ``status == "hit-bound"`` instead of looping.
+
+The baselines are told per rollout: :class:`PoWER` a return ``R > 0`` (maximized), :class:`PI2`
+a cost (minimized), one terminal cost or one per time step.
+
+All learners: ``ask()`` twice without ``tell`` returns the same query; ``tell`` without a pending
+``ask``, or of another query, raises :class:`~dmprs.errors.LearnerStateError`; so does ``ask``
+after the learner stopped. NaN, inf or a wrong number of entries raise
+:class:`~dmprs.errors.InvalidInputError`. Queries come back as 1-D float64 arrays, also for the
+scalar learners (so that one learn loop serves all of them); a Python float is accepted wherever
+a one-entry query or error is expected.
+
+Common properties: ``status`` (``"running"``, ``"converged"``, ``"bracketed"``,
+``"trial-cap"``, ``"hit-bound"``, ``"diverged"``), ``status_detail``, ``done``, ``converged``,
+``best`` and ``history`` (:class:`Trial` tuples), ``n_trials``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dmprs import _core
+from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs.errors import InvalidInputError
+
+__all__ = [
+    "PI2",
+    "ErrorLearning",
+    "GoldenSection",
+    "IllinoisRootFinder",
+    "PoWER",
+    "PolicyGradient",
+    "Trial",
+]
+
+
+class Trial(NamedTuple):
+    """One executed trial: the query (or weight vector), what was told about it, and the
+    learner's figure of merit (lower is better: max |eps_i| for query learners, the total cost for
+    PI², ``-R`` for PoWER)."""
+
+    q: NDArray[np.float64]
+    feedback: NDArray[np.float64]
+    score: float
+
+
+def _vector(value: Any, name: str) -> NDArray[np.float64]:
+    """A scalar or 1-D array as a 1-D float64 array (finiteness is checked by the core)."""
+    return np.atleast_1d(as_float_array(value, name, (0, 1)))
+
+
+def _optional_limit(value: Any, name: str, n: int) -> NDArray[np.float64] | None:
+    if value is None:
+        return None
+    v = _vector(value, name)
+    if v.shape == (1,) and n > 1:
+        v = np.full(n, v[0])
+    return v
+
+
+def _square(value: Any, name: str, n: int) -> NDArray[np.float64]:
+    """A scalar (times I), a diagonal (n,) or an (n, n) matrix."""
+    m = as_float_array(value, name, (0, 1, 2))
+    if np.ndim(value) == 0:  # as_float_array returns at least 1-D
+        return np.ascontiguousarray(float(m.reshape(-1)[0]) * np.eye(n))
+    if m.ndim == 1:
+        if m.shape != (n,):
+            raise InvalidInputError(f"{name} has shape {m.shape}; expected a scalar, ({n},) or ({n}, {n})")
+        return np.ascontiguousarray(np.diag(m))
+    if m.shape != (n, n):
+        raise InvalidInputError(f"{name} has shape {m.shape}; expected a scalar, ({n},) or ({n}, {n})")
+    return m
+
+
+def _seed(value: Any) -> int:
+    seed = as_count(value, "seed", 0)
+    if seed >= 2**64:
+        raise InvalidInputError(f"seed = {seed} is invalid: must be < 2**64")
+    return seed
+
+
+def _flag(value: Any, name: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidInputError(f"{name} must be True or False; got {value!r}")
+    return bool(value)
+
+
+class _Learner:
+    """The ask/tell interface shared by every learner (see the module docs)."""
+
+    __slots__ = ("_core",)
+    _core: _core.Learner
+
+    def ask(self) -> NDArray[np.float64]:
+        """The next query (1-D float64) to execute. Asking again before :meth:`tell` returns
+        the same query."""
+        return self._core.ask()
+
+    def tell(self, q: ArrayLike, feedback: ArrayLike) -> None:
+        """Reports the outcome of executing ``q``, the query :meth:`ask` returned."""
+        self._core.tell(_vector(q, "q"), _vector(feedback, self._feedback_name))
+
+    _feedback_name = "eps"
+
+    @property
+    def status(self) -> str:
+        """``"running"``, ``"converged"``, ``"bracketed"``, ``"trial-cap"``, ``"hit-bound"`` or
+        ``"diverged"``."""
+        return self._core.status
+
+    @property
+    def status_detail(self) -> str:
+        """The status with its detail, e.g. which limit was hit."""
+        return self._core.status_detail
+
+    @property
+    def done(self) -> bool:
+        """True once the learner has stopped (any status but ``"running"``)."""
+        return self._core.status != "running"
+
+    @property
+    def converged(self) -> bool:
+        """True when a trial met the tolerance (``status == "converged"``)."""
+        return self._core.converged
+
+    @property
+    def best(self) -> Trial | None:
+        """The executed trial with the lowest score (None before the first tell). When
+        converged it is the last executed trial (method.md §6.2 fix 2)."""
+        b = self._core.best
+        return None if b is None else Trial(*b)
+
+    @property
+    def history(self) -> list[Trial]:
+        """Every told trial, in order."""
+        return [Trial(*t) for t in self._core.history]
+
+    @property
+    def n_trials(self) -> int:
+        """Trials told so far (every executed trial counts, probes and perturbations too)."""
+        return self._core.n_told
+
+    @property
+    def dim(self) -> int:
+        """The length of the query vectors."""
+        return self._core.dim
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(dim={self.dim}, status={self.status!r}, n_trials={self.n_trials})"
+
+
+class ErrorLearning(_Learner):
+    r"""Error learning in the query space, paper eqs. 16 and 17 (method.md §5).
+
+    ::
+
+        q_{m+1} = q_m + w_m K J^{-1} eps_m
+        w_m = 1                       (eq. 16, weighted=False)
+        w_m = exp(-||eps_m/scale||^2) (eq. 17, weighted=True; scale in units of eps)
+
+    ``gain`` is eq. 16's K: a scalar (times I), a diagonal ``(n,)`` or an ``(n, n)`` matrix.
+    ``jacobian`` is the estimate J of dq_a/dq that turns the step into a Newton step:
+
+    * ``"identity"`` — J = I: the paper's matchbox setting (K = I).
+    * ``"secant"`` — secant slope (n = 1) / Broyden update (n > 1), starting from I.
+    * ``"finite-difference"`` — J from trials at q0 + delta e_j after the first trial at q0
+      (n extra trials, method.md §5.2 item 4).
+    * an ``(n, n)`` array (a scalar for n = 1) — a fixed J.
+
+    Estimated J's must have a positive symmetric part and singular values in [0.1, 10], else I
+    is used (the §5.2 safeguard). ``low``/``high`` (scalars or ``(n,)``) clip the queries; after
+    ``pin_limit`` trials pinned at a limit with eps pointing past it the learner stops with
+    ``"hit-bound"``. Without limits a run whose |eps| keeps growing stops with ``"diverged"``.
+    Converged when every ``|eps_i| < tol``. The first trial is q0 (the pure generalization).
+    """
+
+    __slots__ = ()
+
+    def __init__(
+        self,
+        q0: ArrayLike,
+        gain: ArrayLike = 1.0,
+        weighted: bool = False,
+        scale: float = 1.0,
+        jacobian: str | ArrayLike = "identity",
+        low: ArrayLike | None = None,
+        high: ArrayLike | None = None,
+        *,
+        tol: float = 1e-3,
+        max_trials: int = 50,
+        delta: float = 0.01,
+        pin_limit: int = 3,
+    ) -> None:
+        q = _vector(q0, "q0")
+        n = q.shape[0]
+        if isinstance(jacobian, str):
+            mode, matrix = jacobian, None
+        else:
+            mode, matrix = "matrix", _square(jacobian, "jacobian", n)
+        self._core = _core.Learner.error_learning(
+            q,
+            _square(gain, "gain", n),
+            _flag(weighted, "weighted"),
+            as_scalar(scale, "scale", positive=True),
+            mode,
+            matrix,
+            as_scalar(delta, "delta", positive=True),
+            _optional_limit(low, "low", n),
+            _optional_limit(high, "high", n),
+            as_scalar(tol, "tol", positive=True),
+            as_count(max_trials, "max_trials", 1),
+            as_count(pin_limit, "pin_limit", 1),
+        )
+
+    @property
+    def jacobian(self) -> NDArray[np.float64]:
+        """The current estimate J of dq_a/dq, ``(n, n)``."""
+        return self._core.state()["jacobian"]
+
+
+def _bracket_tol(q_tol: Any, low: float, high: float) -> float:
+    if q_tol is None:
+        return 1e-4 * abs(high - low) if high != low else 1e-12
+    return as_scalar(q_tol, "q_tol", positive=True)
+
+
+class GoldenSection(_Learner):
+    r"""Golden-section error learning for a scalar query (the paper's algorithm box,
+    method.md §6).
+
+    Each trial moves 61.8 % of the way from q towards the limit sign(eps) points to::
+
+        if eps > 0: q_l = q; q = q_l + 0.618 (q_h - q_l)
+        else:       q_h = q; q = q_l + 0.382 (q_h - q_l)
+
+    ``mode="paper"``: the box plus the fixes of §6.2 — stop on ``|eps| < tol``, the answer is the
+    last *executed* query (``best``), ``max_trials``. q0 outside [low, high] is kept as the paper
+    has it (the bracket can invert). ``mode="robust"``: also widens [low, high] to contain q0,
+    expands a limit no trial has confirmed when a trial lands within 5 % (of the initial width)
+    of it (the k-th expansion adds 1.618**k times the initial width; at most ``max_expansions``
+    per side, then ``"hit-bound"``), and stops with ``"bracketed"`` when the bracket is narrower
+    than ``q_tol`` (default 1e-4 (high - low)), e.g. when eps jumps across zero (paper
+    Fig. 2c). Both modes stop with ``"hit-bound"`` once the bracket has collapsed onto a limit no
+    trial confirmed (wrong sign convention, or a root outside the limits).
+    """
+
+    __slots__ = ()
+
+    def __init__(
+        self,
+        q0: float,
+        low: float,
+        high: float,
+        mode: str = "paper",
+        *,
+        tol: float = 1e-3,
+        q_tol: float | None = None,
+        max_trials: int = 50,
+        max_expansions: int = 4,
+    ) -> None:
+        lo, hi = as_scalar(low, "low"), as_scalar(high, "high")
+        self._core = _core.Learner.golden(
+            as_scalar(q0, "q0"),
+            lo,
+            hi,
+            mode,
+            as_scalar(tol, "tol", positive=True),
+            _bracket_tol(q_tol, lo, hi),
+            as_count(max_trials, "max_trials", 1),
+            as_count(max_expansions, "max_expansions", 0),
+        )
+
+    @property
+    def bracket(self) -> tuple[float, float]:
+        """The current search limits (q_l, q_h)."""
+        return self._core.state()["bracket"]
+
+
+class IllinoisRootFinder(_Learner):
+    r"""A superlinear bracketing root finder for a scalar query, beyond the paper: a drop-in
+    replacement for :class:`GoldenSection` (same first trial q0, same limits, same eps).
+
+    With both ends of the bracket tried it takes the regula-falsi point with the Illinois
+    modification; while one end is still an untried limit it takes the eq. 16 step with K = I
+    (a secant slope once two trials give one). Every candidate is projected so that the bracket
+    after the m-th trial is no wider than ``W1 * 0.618**(m-1)``, golden section's worst case from
+    the same first trial: it never needs more trials than golden section does in the worst case
+    (a property test checks this on random monotone maps), and far fewer on smooth maps.
+    Stops on ``|eps| < tol``, a bracket narrower than ``q_tol`` (``"bracketed"``, or
+    ``"hit-bound"`` when an end is an untried limit), or ``max_trials``. [low, high] is widened
+    to contain q0.
+    """
+
+    __slots__ = ()
+
+    def __init__(
+        self,
+        q0: float,
+        low: float,
+        high: float,
+        *,
+        tol: float = 1e-3,
+        q_tol: float | None = None,
+        max_trials: int = 50,
+    ) -> None:
+        lo, hi = as_scalar(low, "low"), as_scalar(high, "high")
+        self._core = _core.Learner.root_finder(
+            as_scalar(q0, "q0"),
+            lo,
+            hi,
+            as_scalar(tol, "tol", positive=True),
+            _bracket_tol(q_tol, lo, hi),
+            as_count(max_trials, "max_trials", 1),
+        )
+
+    @property
+    def bracket(self) -> tuple[float, float]:
+        """The current bracket (a, b)."""
+        return self._core.state()["bracket"]
+
+
+class PolicyGradient(_Learner):
+    r"""Constrained-domain policy gradient, paper eq. 12 (method.md §4), with central finite
+    differences::
+
+        J(q)    = ||eps(q) / scale||^2                       (the cost of reward (1), eq. 14)
+        g_i     = (J(q + delta e_i) - J(q - delta e_i)) / (2 delta)
+        q_{m+1} = q_m - alpha_m g,  alpha_m = alpha0 / (m + 1)**decay    (Robbins-Monro)
+
+    Each update executes the centre q_m (if ``evaluate_center``; the first is q0) and the 2n
+    perturbed queries; **every one is a trial** and is asked and told like any other. ``tell``
+    takes eps, as for the other query learners, and the learner forms J itself, so it drops into
+    the same loop. ``alpha0`` defaults to ``scale**2 / 2`` (a Newton step on q_a = q), ``delta``
+    to ``0.05 * scale``. Converged when a told query has every ``|eps_i| < tol``.
+    """
+
+    __slots__ = ()
+
+    def __init__(
+        self,
+        q0: ArrayLike,
+        *,
+        alpha0: float | None = None,
+        delta: float | None = None,
+        scale: float = 1.0,
+        decay: float = 0.602,
+        evaluate_center: bool = True,
+        low: ArrayLike | None = None,
+        high: ArrayLike | None = None,
+        tol: float = 1e-3,
+        max_trials: int = 100,
+        pin_limit: int = 3,
+    ) -> None:
+        q = _vector(q0, "q0")
+        s = as_scalar(scale, "scale", positive=True)
+        self._core = _core.Learner.policy_gradient(
+            q,
+            0.5 * s * s if alpha0 is None else as_scalar(alpha0, "alpha0", positive=True),
+            as_scalar(decay, "decay", positive=True),
+            0.05 * s if delta is None else as_scalar(delta, "delta", positive=True),
+            s,
+            _flag(evaluate_center, "evaluate_center"),
+            _optional_limit(low, "low", q.shape[0]),
+            _optional_limit(high, "high", q.shape[0]),
+            as_scalar(tol, "tol", positive=True),
+            as_count(max_trials, "max_trials", 1),
+            as_count(pin_limit, "pin_limit", 1),
+        )
+
+    @property
+    def center(self) -> NDArray[np.float64]:
+        """The current iterate q_m."""
+        return self._core.state()["center"]
+
+
+def _weights(theta0: Any) -> tuple[NDArray[np.float64], int | None]:
+    """A flat weight vector; a (D, N) array is flattened in C order (theta[d*N + j])."""
+    t = as_float_array(theta0, "theta0", (1, 2))
+    if t.ndim == 2:
+        return np.ascontiguousarray(t.reshape(-1)), t.shape[0]
+    return t, None
+
+
+class PoWER(_Learner):
+    r"""PoWER over a flat DMP weight vector (Kober & Peters; method.md §7.1), a baseline the
+    paper cites but does not report numbers for.
+
+    ``ask()`` returns ``theta_i = mean + N(0, diag(sigma**2))``; ``tell(theta, R)`` takes the
+    rollout's return ``R > 0`` (maximized; e.g. ``R = exp(-(eps/s)**2)``). After every rollout
+    the mean moves to the return-weighted average of the ``n_best`` best rollouts so far
+    (importance sampling, each weighted by its inverse sampling variance); with
+    ``adapt_variance`` the exploration variance follows the best ``variance_window`` rollouts,
+    clipped to [0.1, 10] x sigma**2. Converged when a return reaches ``target_return``.
+    Deterministic for a ``seed``. ``theta0`` may be the ``(D, N)`` weights of a DMP; queries are
+    always flat (C order).
+    """
+
+    __slots__ = ()
+    _feedback_name = "return"
+
+    def __init__(
+        self,
+        theta0: ArrayLike,
+        sigma: ArrayLike,
+        *,
+        seed: int = 0,
+        n_best: int = 10,
+        adapt_variance: bool = False,
+        variance_window: int = 100,
+        target_return: float | None = None,
+        max_trials: int = 200,
+    ) -> None:
+        t, _ = _weights(theta0)
+        self._core = _core.Learner.power(
+            t,
+            _vector(sigma, "sigma"),
+            as_count(n_best, "n_best", 1),
+            _flag(adapt_variance, "adapt_variance"),
+            as_count(variance_window, "variance_window", 1),
+            None if target_return is None else as_scalar(target_return, "target_return", positive=True),
+            as_count(max_trials, "max_trials", 1),
+            _seed(seed),
+        )
+
+    @property
+    def mean(self) -> NDArray[np.float64]:
+        """The current mean weight vector."""
+        return self._core.state()["mean"]
+
+    @property
+    def variance(self) -> NDArray[np.float64]:
+        """The current exploration variance per weight."""
+        return self._core.state()["variance"]
+
+
+class PI2(_Learner):
+    r"""PI² over a flat DMP weight vector (Theodorou, Buchli, Schaal 2010; method.md §7.2), a
+    baseline the paper cites but does not report numbers for.
+
+    Each update asks one noiseless evaluation rollout (theta itself) and then ``n_rollouts``
+    noisy ones (``n_rollouts - n_reuse`` after the first update: the ``n_reuse`` cheapest of the
+    previous batch are reused). The noise is constant during a rollout and annealed linearly,
+    ``sigma * max(0.1, (n_updates - u) / n_updates)``. ``tell(theta, costs)`` takes one terminal
+    cost or ``n_steps`` costs r_0..r_{T-1} per time step (minimized). The update weights the
+    rollouts by ``exp(-h * normalized cost-to-go)`` per time step, projects the noise on the
+    basis vector g_i of paper eq. 4 (``projection=True``) and averages over time with weights
+    ``(T - i) * Psi_j``; the basis is that of an ``n_dof`` x N DMP (``alpha_x``,
+    ``width_factor``) sampled at T phases from 1 to exp(-alpha_x). With a terminal-only cost and
+    ``projection=False`` this is exactly PI^BB, ``theta += sum_k P_k eps_k``. Converged when an
+    evaluation rollout's total cost is <= ``cost_tol``. Deterministic for a ``seed``.
+    ``theta0`` may be ``(D, N)`` weights (then ``n_dof = D``); queries are always flat (C order).
+    """
+
+    __slots__ = ()
+    _feedback_name = "costs"
+
+    def __init__(
+        self,
+        theta0: ArrayLike,
+        sigma: ArrayLike,
+        *,
+        seed: int = 0,
+        n_rollouts: int = 10,
+        n_reuse: int = 5,
+        h: float = 10.0,
+        n_updates: int = 20,
+        n_dof: int | None = None,
+        n_steps: int = 100,
+        alpha_x: float = 2.0,
+        width_factor: float = 2.0,
+        projection: bool = True,
+        cost_tol: float | None = None,
+        max_trials: int = 200,
+    ) -> None:
+        t, d = _weights(theta0)
+        if n_dof is None:
+            n_dof = 1 if d is None else d
+        elif d is not None and n_dof != d:
+            raise InvalidInputError(f"n_dof = {n_dof} does not match theta0 of shape ({d}, {t.size // d})")
+        self._core = _core.Learner.pi2(
+            t,
+            _vector(sigma, "sigma"),
+            as_count(n_rollouts, "n_rollouts", 2),
+            as_count(n_reuse, "n_reuse", 0),
+            as_scalar(h, "h", positive=True),
+            as_count(n_updates, "n_updates", 1),
+            as_count(n_dof, "n_dof", 1),
+            as_count(n_steps, "n_steps", 2),
+            as_scalar(alpha_x, "alpha_x", positive=True),
+            as_scalar(width_factor, "width_factor", positive=True),
+            _flag(projection, "projection"),
+            None if cost_tol is None else as_scalar(cost_tol, "cost_tol"),
+            as_count(max_trials, "max_trials", 1),
+            _seed(seed),
+        )
+
+    @property
+    def theta(self) -> NDArray[np.float64]:
+        """The current weight vector."""
+        return self._core.state()["theta"]
