@@ -59,7 +59,7 @@ def query_learners(low: float | None, high: float | None, scale: float = 1.0,
         "secant": lambda q0, **kw: L.ErrorLearning(q0, jacobian="secant", max_trials=max_trials, **kw),
         "golden": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="paper", max_trials=max_trials, **kw),
         "golden-robust": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="robust", max_trials=max_trials, **kw),
-        "root": lambda q0, **kw: L.RootFinder(float(q0[0]), *bracket(), max_trials=max_trials, **kw),
+        "root": lambda q0, **kw: L.IllinoisRootFinder(float(q0[0]), *bracket(), max_trials=max_trials, **kw),
     }
 
 
