@@ -159,3 +159,34 @@ class Learner:
     @property
     def history(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], float]]: ...
     def state(self) -> dict[str, Any]: ...
+
+class MatchboxConfig:
+    def __new__(
+        cls,
+        *,
+        box_size: tuple[float, float, float] | None = None,
+        box_mass: float | None = None,
+        overhang: float | None = None,
+        friction: float | None = None,
+        restitution: float | None = None,
+        finger_radius: float | None = None,
+        dt: float | None = None,
+        solver_iterations: int | None = None,
+        settle_time: float | None = None,
+        delta_t: float | None = None,
+        upright_tolerance: float | None = None,
+        upright_hold: float | None = None,
+    ) -> MatchboxConfig: ...
+    def to_dict(self) -> dict[str, object]: ...
+    def default_strike(self) -> tuple[tuple[float, float], tuple[float, float]]: ...
+
+def matchbox_check(
+    t: NDArray[np.float64], x: NDArray[np.float64], z: NDArray[np.float64], config: MatchboxConfig
+) -> list[str]: ...
+def matchbox_simulate(
+    t: NDArray[np.float64], x: NDArray[np.float64], z: NDArray[np.float64], config: MatchboxConfig
+) -> dict[str, object]: ...
+def matchbox_simulate_batch(
+    paths: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]],
+    config: MatchboxConfig,
+) -> list[dict[str, object]]: ...

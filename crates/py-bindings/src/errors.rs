@@ -54,3 +54,10 @@ impl<T> IntoPyResult<T> for Result<T, learner::LearnerError> {
         self.map_err(learner_error)
     }
 }
+
+/// Every matchbox error is bad input (a bad configuration or fingertip trajectory).
+impl<T> IntoPyResult<T> for Result<T, learner::matchbox::Error> {
+    fn py_err(self) -> PyResult<T> {
+        self.map_err(|e| raise("InvalidInputError", e.to_string()))
+    }
+}

@@ -4,6 +4,7 @@
 mod dmp;
 mod errors;
 mod learners;
+mod matchbox;
 
 use pyo3::prelude::*;
 
@@ -15,6 +16,10 @@ mod _core {
     use super::dmp::py_rollout_batch;
     #[pymodule_export]
     use super::learners::PyLearner;
+    #[pymodule_export]
+    use super::matchbox::{
+        PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
+    };
 
     #[pymodule_init]
     fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {
