@@ -145,7 +145,45 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
     )
 
 
-SETUPS: dict[str, Callable[..., ExperimentSetup]] = {"analytic": analytic_setup, "pouring": pouring_setup}
+# --- matchbox flip-up --------------------------------------------------------------------------
+
+def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
+    """Stand the matchbox upright (method.md §8): two scripted strikes labelled with their
+    measured outcome angles, linear generalization with N = 25 kernels (the paper's matchbox
+    setting), desired query pi/2.
+
+    ``demos="default"``: one strike that flips back and one that flips over (paper Fig. 4);
+    ``"both_flipped_back"``: two that flip back, so pi/2 lies outside the demos and the
+    generalizer extrapolates (Fig. 7). Learners: ``error`` (default; eq. 16, K = I, the paper's),
+    ``weighted`` (eq. 17 with scale 1 rad, recommended for extrapolation), ``secant``, and the
+    bracketing ones between the demos' labels. ``config`` overrides simulation parameters.
+    """
+    from dmprs import Database, Generalizer
+    from dmprs.tasks.matchbox import DEMO_SETS, MatchboxFlip
+
+    if demos not in DEMO_SETS:
+        raise InvalidInputError(f"unknown demonstration set {demos!r}; choose from {', '.join(DEMO_SETS)}")
+    task = MatchboxFlip(**config)
+    db = Database(query_names=task.query_names, query_units=task.query_units)
+    labels = []
+    for duration in DEMO_SETS[demos]:
+        label, traj = task.demonstration(duration)
+        db.add(label, traj)
+        labels.append(float(label[0]))
+    gen = Generalizer(db, method="linear", n_basis=25)
+    low, high = min(labels), max(labels)
+    return ExperimentSetup(
+        task=task, database=db, generalizer=gen,
+        desired_query=task.validate_query(np.pi / 2), default_learner="error",
+        learners=query_learners(low, high, scale=1.0), low=low, high=high,
+    )
+
+
+SETUPS: dict[str, Callable[..., ExperimentSetup]] = {
+    "analytic": analytic_setup,
+    "matchbox": matchbox_setup,
+    "pouring": pouring_setup,
+}
 
 
 def run(name: str, *, learner: str | None = None, learner_options: dict[str, Any] | None = None,
@@ -169,6 +207,13 @@ def analytic(desired: float = 1.5, learner: str = "error", max_trials: int = 20,
     """The analytic task end to end (see :mod:`dmprs.tasks.analytic`)."""
     return run("analytic", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
                noise=noise, desired=desired)
+
+
+def matchbox(demos: str = "default", learner: str = "error", max_trials: int = 20,
+             log_dir: str | Path | None = None, seed: int = 0, **config: float) -> LearningResult:
+    """The matchbox flip-up end to end (see :mod:`dmprs.tasks.matchbox`)."""
+    return run("matchbox", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
+               demos=demos, **config)
 
 
 def pouring(bottle_volume: float = 0.5, learner: str = "golden", max_trials: int = 20,
