@@ -5,6 +5,7 @@
 //! from demonstrations and their rollout. Pure Rust on nalgebra; no Python, no learners.
 
 pub mod basis;
+pub mod design;
 pub mod diff;
 pub mod dmp;
 pub mod error;
