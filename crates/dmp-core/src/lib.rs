@@ -9,9 +9,13 @@ pub mod design;
 pub mod diff;
 pub mod dmp;
 pub mod error;
+pub mod gp;
+pub mod linalg;
+pub mod optimize;
 pub mod rollout;
 
 pub use basis::Basis;
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
+pub use gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};
