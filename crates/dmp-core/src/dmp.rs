@@ -21,7 +21,7 @@ use crate::error::{Error, Result, check_scalar};
 /// Relative ridge added to the normal equations of the fit. It keeps a kernel that no sample
 /// activates at weight 0 instead of making the system singular, and changes well-posed fits by
 /// about 1e-10 relative.
-const FIT_RIDGE: f64 = 1e-10;
+pub(crate) const FIT_RIDGE: f64 = 1e-10;
 
 /// The meta-parameters of a DMP: its constants and the size of its basis.
 #[derive(Debug, Clone, Copy, PartialEq)]
