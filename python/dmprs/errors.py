@@ -7,7 +7,13 @@ The Rust core raises these same classes (``crates/py-bindings/src/errors.rs``).
 
 from __future__ import annotations
 
-__all__ = ["DmprsError", "InvalidInputError", "NumericalError"]
+__all__ = [
+    "DatabaseError",
+    "DmprsError",
+    "ExtrapolationError",
+    "InvalidInputError",
+    "NumericalError",
+]
 
 
 class DmprsError(Exception):
@@ -22,3 +28,14 @@ class InvalidInputError(DmprsError, ValueError):
 class NumericalError(DmprsError, ArithmeticError):
     """The input was valid but a computation failed (e.g. a matrix that is not positive
     definite, a rollout that does not come to rest)."""
+
+
+class ExtrapolationError(InvalidInputError):
+    """A query too far from the demonstrations: its generalized DMP would be invalid (e.g. tau
+    would leave (0.2 x the shortest, 5 x the longest demonstration's duration); method.md §3.3).
+    The message names the query and the tau it would get."""
+
+
+class DatabaseError(DmprsError):
+    """A movement database on disk that cannot be read or written: a missing, corrupted,
+    truncated or foreign file, or one written by a newer dmprs. The message names the file."""

@@ -196,6 +196,45 @@ pub fn default_bounds(x: &DMatrixView<'_, f64>, y: &[f64]) -> Result<HyperBounds
     })
 }
 
+/// The start of a fit: given values where the caller has them, [`default_hyperparameters`] for
+/// the rest.
+pub fn resolve_hyperparameters(
+    x: &DMatrixView<'_, f64>,
+    y: &[f64],
+    length_scales: Option<Vec<f64>>,
+    signal_var: Option<f64>,
+    noise_var: Option<f64>,
+) -> Result<Hyperparameters> {
+    let d = default_hyperparameters(x, y)?;
+    let h = Hyperparameters {
+        length_scales: length_scales.unwrap_or(d.length_scales),
+        signal_var: signal_var.unwrap_or(d.signal_var),
+        noise_var: noise_var.unwrap_or(d.noise_var),
+    };
+    h.validate(x.nrows())?;
+    Ok(h)
+}
+
+/// Bounds for a fit: given ones where the caller has them, else [`default_bounds`] widened to
+/// contain the start.
+pub fn resolve_bounds(
+    x: &DMatrixView<'_, f64>,
+    y: &[f64],
+    start: &Hyperparameters,
+    length_scales: Option<Vec<(f64, f64)>>,
+    signal_var: Option<(f64, f64)>,
+    noise_var: Option<(f64, f64)>,
+) -> Result<HyperBounds> {
+    let d = default_bounds(x, y)?.containing(start);
+    let b = HyperBounds {
+        length_scales: length_scales.unwrap_or(d.length_scales),
+        signal_var: signal_var.unwrap_or(d.signal_var),
+        noise_var: noise_var.unwrap_or(d.noise_var),
+    };
+    b.validate(x.nrows())?;
+    Ok(b)
+}
+
 /// Scratch buffers of one likelihood evaluation, reused across the optimizer's calls.
 struct Workspace {
     m: usize,
@@ -310,6 +349,9 @@ pub fn log_marginal_likelihood(x: &[f64], n_dim: usize, r: &[f64], theta: &[f64]
 pub struct GaussianProcess {
     n_dim: usize,
     m: usize,
+    /// Raw training inputs (sample-major) and centred outputs, for [`Self::log_marginal_likelihood_at`].
+    x: Vec<f64>,
+    r: Vec<f64>,
     /// Training inputs divided by the length scales, sample-major.
     xs: Vec<f64>,
     y_mean: f64,
@@ -350,7 +392,13 @@ impl GaussianProcess {
                 }
                 None => default_bounds(x, y)?.containing(&initial),
             };
-            optimize_hyperparameters(&xv, n_dim, &r, &initial, &bounds, options)?
+            let (ranges, var) = data_scales(x, y);
+            let plausible = HyperBounds {
+                length_scales: ranges.iter().map(|r| (0.1 * r, 10.0 * r)).collect(),
+                signal_var: (0.1 * var, 100.0 * var),
+                noise_var: (1e-6 * var, var),
+            };
+            optimize_hyperparameters(&xv, n_dim, &r, &initial, &bounds, &plausible, options)?
         } else {
             initial
         };
@@ -363,7 +411,7 @@ impl GaussianProcess {
             ),
         })?;
         let alpha_scaled = ws.alpha.iter().map(|a| a * hyper.signal_var).collect();
-        Ok(Self { n_dim, m, xs: ws.xs, y_mean, hyper, l: ws.l, alpha_scaled, lml })
+        Ok(Self { n_dim, m, x: xv, r, xs: ws.xs, y_mean, hyper, l: ws.l, alpha_scaled, lml })
     }
 
     pub fn hyperparameters(&self) -> &Hyperparameters {
@@ -372,6 +420,25 @@ impl GaussianProcess {
     pub fn log_marginal_likelihood(&self) -> f64 {
         self.lml
     }
+    /// The log marginal likelihood of the training data and its gradient at other log
+    /// hyperparameters `theta = [ln l_1 .. ln l_n, ln signal_var, ln noise_var]`.
+    pub fn log_marginal_likelihood_at(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
+        if theta.len() != self.n_dim + 2 {
+            return Err(Error::Shape {
+                name: "theta",
+                expected: format!("({},): n length scales, signal_var, noise_var (logs)", self.n_dim + 2),
+                got: format!("({},)", theta.len()),
+            });
+        }
+        if let Some((i, &v)) = theta.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite { name: "theta", location: format!("[{i}]"), value: v });
+        }
+        log_marginal_likelihood(&self.x, self.n_dim, &self.r, theta).ok_or_else(|| Error::Numerical {
+            context: "log marginal likelihood",
+            detail: "the kernel matrix is not positive definite at these hyperparameters".into(),
+        })
+    }
+
     pub fn prior_mean(&self) -> f64 {
         self.y_mean
     }
@@ -444,16 +511,30 @@ impl GaussianProcess {
 }
 
 /// ML-II: minimizes the negative log marginal likelihood from the initial hyperparameters and
-/// from `n_restarts` Halton points of the log box; keeps the best (the earliest on ties).
+/// from `n_restarts` Halton points; keeps the best (the earliest on ties).
+///
+/// The restarts are spread over the part of the bounds where optima of typical data lie
+/// (`plausible`: length scales 0.1-10 x the input range, signal 0.1-100 x var(y), noise
+/// 1e-6-1 x var(y)) rather than over the whole box: the log marginal likelihood is often
+/// multimodal, and starts at extreme corners (length scales of 1e-3 x range, say) mostly fall into
+/// degenerate optima. In a dimension where that region misses the bounds, the bounds are used.
 fn optimize_hyperparameters(
     x: &[f64],
     n_dim: usize,
     r: &[f64],
     initial: &Hyperparameters,
     bounds: &HyperBounds,
+    plausible: &HyperBounds,
     options: &GpOptions,
 ) -> Result<Hyperparameters> {
     let (lo, hi) = bounds.log_box();
+    let (plo, phi) = plausible.log_box();
+    let (slo, shi): (Vec<f64>, Vec<f64>) = (0..lo.len())
+        .map(|i| {
+            let (a, b) = (plo[i].max(lo[i]), phi[i].min(hi[i]));
+            if a <= b { (a, b) } else { (lo[i], hi[i]) }
+        })
+        .unzip();
     let mut ws = Workspace::new(r.len(), n_dim);
     let mut objective = |theta: &[f64]| {
         let h = Hyperparameters::from_log(theta);
@@ -468,7 +549,7 @@ fn optimize_hyperparameters(
             initial.to_log()
         } else {
             let u = halton(start as u64, dim);
-            (0..dim).map(|i| lo[i] + u[i] * (hi[i] - lo[i])).collect()
+            (0..dim).map(|i| slo[i] + u[i] * (shi[i] - slo[i])).collect()
         };
         if let Some(min) = minimize_box(&mut objective, &x0, &lo, &hi, &options.minimize) {
             if best.as_ref().is_none_or(|(f, _)| min.f < *f) {

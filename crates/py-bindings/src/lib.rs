@@ -3,6 +3,8 @@
 
 mod dmp;
 mod errors;
+mod generalize;
+mod gp;
 
 use pyo3::prelude::*;
 
@@ -12,6 +14,10 @@ mod _core {
     use super::dmp::PyDmp;
     #[pymodule_export]
     use super::dmp::py_rollout_batch;
+    #[pymodule_export]
+    use super::generalize::PyGeneralizer;
+    #[pymodule_export]
+    use super::gp::PyGaussianProcess;
 
     #[pymodule_init]
     fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {
