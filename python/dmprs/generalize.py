@@ -63,9 +63,9 @@ class Generalizer:
         width_factor: float = 2.0,
         kernel: str = "tricube",
         bandwidth: float = 1.5,
-        ridge: float = 1e-8,
+        ridge: float = 1e-10,
         interpolate: bool = True,
-        gp_noise: float = 1e-3,
+        gp_noise: float = 1e-4,
         gp_optimize: bool | None = None,
         gp_restarts: int = 4,
     ) -> None:

@@ -59,7 +59,11 @@ pub struct LwrOptions {
     pub kernel: Kernel,
     /// `b = bandwidth x` distance to the farthest of the `n + 1` nearest demos; must be > 1.
     pub bandwidth: f64,
-    /// `lambda = ridge x trace(sum kappa A^T A) / N` (method.md §3.2 suggests about 1e-6).
+    /// `lambda = ridge x trace(sum kappa A^T A) / N`. Default 1e-10, the relative ridge of
+    /// [`crate::Dmp::fit`], so that at a demo's query the regression is that demo's own fit bit for
+    /// bit. (method.md §3.2 suggests about 1e-6 for fear of a singular normal matrix; that cannot
+    /// happen here, because every demo covers the whole phase interval and so activates every
+    /// kernel.)
     pub ridge: f64,
     /// Multiply the kernel weights by `(d_min / d_k)^2` so that demos are reproduced.
     pub interpolate: bool,
@@ -67,7 +71,7 @@ pub struct LwrOptions {
 
 impl Default for LwrOptions {
     fn default() -> Self {
-        Self { kernel: Kernel::Tricube, bandwidth: 1.5, ridge: 1e-8, interpolate: true }
+        Self { kernel: Kernel::Tricube, bandwidth: 1.5, ridge: crate::dmp::FIT_RIDGE, interpolate: true }
     }
 }
 
