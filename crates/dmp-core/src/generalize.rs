@@ -66,10 +66,13 @@ impl Method {
     }
 }
 
+/// `(weights N x D, tau, goal, y0)`.
+type Parameters = (DMatrix<f64>, f64, DVector<f64>, DVector<f64>);
+
 #[derive(Debug, Clone)]
 enum Model {
     Linear(Linear),
-    LwrGp(LwrGp),
+    LwrGp(Box<LwrGp>),
 }
 
 /// Affine interpolation: `theta(q) = sum_k lambda_k(q) theta_k` with barycentric coordinates
@@ -180,7 +183,7 @@ impl Generalizer {
         let tau_valid = (TAU_LOW * tau_min, TAU_HIGH * tau_max);
         let model = match method {
             Method::Linear => Model::Linear(Self::linear_model(queries, &demo_dmps)?),
-            Method::LwrGp(opts) => Model::LwrGp(Self::lwr_gp_model(queries, normal, &demo_dmps, &opts)?),
+            Method::LwrGp(opts) => Model::LwrGp(Box::new(Self::lwr_gp_model(queries, normal, &demo_dmps, &opts)?)),
         };
         Ok(Self { config, method: name, n_dim, n_dof, queries: queries.to_vec(), demo_dmps, tau_valid, model })
     }
@@ -200,7 +203,7 @@ impl Generalizer {
         let delta = DMatrix::from_fn(n, m - 1, |d, k| queries[k + 1][d] - queries[0][d]);
         let svd = delta.clone().svd(true, true);
         let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
-        if !(smin > 1e-10 * smax) {
+        if smin.is_nan() || smin <= 1e-10 * smax {
             return Err(Error::DegenerateQueries {
                 detail: format!(
                     "method 'linear' needs affinely independent demo queries (a segment, triangle, ...), \
@@ -303,7 +306,7 @@ impl Generalizer {
     }
 
     /// Parameters at `q` without the validity check of tau.
-    fn raw_parameters(&self, q: &[f64]) -> Result<(DMatrix<f64>, f64, DVector<f64>, DVector<f64>)> {
+    fn raw_parameters(&self, q: &[f64]) -> Result<Parameters> {
         let (n_basis, n_dof) = (self.config.n_basis, self.n_dof);
         match &self.model {
             Model::Linear(lin) => {

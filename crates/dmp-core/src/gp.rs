@@ -322,9 +322,9 @@ impl Workspace {
                 let w = self.alpha[a] * self.alpha[b] - inverse_entry(&self.linv, m, a, b);
                 let t = 2.0 * w * self.kf[b * m + a];
                 g_sig += t;
-                for d in 0..n {
-                    let diff = self.xs[a * n + d] - self.xs[b * n + d];
-                    g_len[d] += t * diff * diff;
+                let (xa, xb) = (&self.xs[a * n..(a + 1) * n], &self.xs[b * n..(b + 1) * n]);
+                for ((g, u), v) in g_len.iter_mut().zip(xa).zip(xb) {
+                    *g += t * (u - v) * (u - v);
                 }
             }
         }

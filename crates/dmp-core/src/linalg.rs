@@ -16,7 +16,7 @@ pub fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
         let (head, tail) = a.split_at_mut((j + 1) * m);
         let col_j = &mut head[j * m..];
         let d = col_j[j];
-        if !(d > 0.0) || !d.is_finite() {
+        if !d.is_finite() || d <= 0.0 {
             return false;
         }
         let d = d.sqrt();

@@ -119,7 +119,8 @@ where
             }
             mask(&q).iter().map(|v| -v).collect::<Vec<f64>>()
         };
-        if !(dot(&d, &pg) < 0.0) || d.iter().any(|v| !v.is_finite()) {
+        let slope = dot(&d, &pg);
+        if slope.is_nan() || slope >= 0.0 || d.iter().any(|v| !v.is_finite()) {
             d = pg.iter().map(|v| -v).collect();
             s_hist.clear();
             y_hist.clear();

@@ -20,6 +20,8 @@ fn pairs(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<(f64, f64)>>
     Ok(s.chunks(2).map(|c| (c[0], c[1])).collect())
 }
 
+type MeanStd<'py> = (Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray1<f64>>>);
+
 #[pyclass(name = "GaussianProcess", module = "dmprs._core", frozen)]
 pub struct PyGaussianProcess {
     inner: GaussianProcess,
@@ -69,7 +71,7 @@ impl PyGaussianProcess {
         py: Python<'py>,
         x: PyReadonlyArray2<'_, f64>,
         return_std: bool,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray1<f64>>>)> {
+    ) -> PyResult<MeanStd<'py>> {
         let xv = time_major("X", &x)?;
         let (mean, std) = self.inner.predict(&xv, return_std).py_err()?;
         Ok((mean.into_pyarray(py), std.map(|s| s.into_pyarray(py))))
