@@ -21,8 +21,10 @@ pub struct MinimizeOptions {
 }
 
 impl Default for MinimizeOptions {
+    /// The stopping rules of SciPy's L-BFGS-B defaults (`pgtol = 1e-5`, `factr = 1e7`, i.e.
+    /// `ftol = 1e7 x eps = 2.2e-9`), which scikit-learn's GP uses; memory as its `m = 10`.
     fn default() -> Self {
-        Self { max_iter: 200, gtol: 1e-6, ftol: 1e-10, memory: 8 }
+        Self { max_iter: 200, gtol: 1e-5, ftol: 1e7 * f64::EPSILON, memory: 10 }
     }
 }
 
