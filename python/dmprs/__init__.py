@@ -6,13 +6,29 @@ The numerical core is Rust (``dmprs._core``); this package is the API users impo
 
 from dmprs import learners
 from dmprs._core import __version__
+from dmprs.database import Database, Demo
 from dmprs.dmp import DMP, rollout_batch
-from dmprs.errors import DmprsError, InvalidInputError, LearnerStateError, NumericalError
+from dmprs.errors import (
+    DatabaseError,
+    DmprsError,
+    ExtrapolationError,
+    InvalidInputError,
+    LearnerStateError,
+    NumericalError,
+)
+from dmprs.generalize import Generalizer
+from dmprs.gp import GaussianProcess
 from dmprs.trajectory import Trajectory
 
 __all__ = [
     "DMP",
+    "Database",
+    "DatabaseError",
+    "Demo",
     "DmprsError",
+    "ExtrapolationError",
+    "GaussianProcess",
+    "Generalizer",
     "InvalidInputError",
     "LearnerStateError",
     "NumericalError",

@@ -190,3 +190,83 @@ def matchbox_simulate_batch(
     paths: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]],
     config: MatchboxConfig,
 ) -> list[dict[str, object]]: ...
+class GaussianProcess:
+    @staticmethod
+    def fit(
+        x: NDArray[np.float64],
+        y: NDArray[np.float64],
+        *,
+        length_scale: NDArray[np.float64] | None,
+        signal_var: float | None,
+        noise_var: float | None,
+        optimize: bool,
+        n_restarts: int,
+        length_scale_bounds: NDArray[np.float64] | None,
+        signal_var_bounds: tuple[float, float] | None,
+        noise_var_bounds: tuple[float, float] | None,
+        max_iter: int,
+    ) -> GaussianProcess: ...
+    def predict(
+        self, x: NDArray[np.float64], return_std: bool = False
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]: ...
+    def log_marginal_likelihood_at(
+        self, theta: NDArray[np.float64]
+    ) -> tuple[float, NDArray[np.float64]]: ...
+    @property
+    def log_marginal_likelihood(self) -> float: ...
+    @property
+    def length_scale(self) -> NDArray[np.float64]: ...
+    @property
+    def signal_var(self) -> float: ...
+    @property
+    def noise_var(self) -> float: ...
+    @property
+    def prior_mean(self) -> float: ...
+    @property
+    def n_dim(self) -> int: ...
+    @property
+    def n_train(self) -> int: ...
+
+_DemoArrays = tuple[
+    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None
+]
+
+class Generalizer:
+    def __new__(
+        cls,
+        queries: NDArray[np.float64],
+        demos: list[_DemoArrays],
+        method: str,
+        *,
+        n_basis: int,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+        kernel: str,
+        bandwidth: float,
+        ridge: float,
+        interpolate: bool,
+        gp_noise: float,
+        gp_optimize: bool | None,
+        gp_restarts: int,
+    ) -> Generalizer: ...
+    def predict(self, q: NDArray[np.float64]) -> Dmp: ...
+    def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]: ...
+    def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]: ...
+    @property
+    def demo_dmps(self) -> list[Dmp]: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def n_query(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_demos(self) -> int: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def n_parameters(self) -> int: ...
+    @property
+    def tau_bounds(self) -> tuple[float, float]: ...

@@ -7,7 +7,14 @@ The Rust core raises these same classes (``crates/py-bindings/src/errors.rs``).
 
 from __future__ import annotations
 
-__all__ = ["DmprsError", "InvalidInputError", "LearnerStateError", "NumericalError"]
+__all__ = [
+    "DatabaseError",
+    "DmprsError",
+    "ExtrapolationError",
+    "InvalidInputError",
+    "LearnerStateError",
+    "NumericalError",
+]
 
 
 class DmprsError(Exception):
@@ -28,3 +35,14 @@ class LearnerStateError(DmprsError, RuntimeError):
     """A learner was driven out of order: ``tell`` without a pending ``ask``, ``tell`` of a query
     other than the one ``ask`` returned, or ``ask`` after the learner stopped (see its
     ``status``)."""
+
+
+class ExtrapolationError(InvalidInputError):
+    """A query too far from the demonstrations: its generalized DMP would be invalid (e.g. tau
+    would leave (0.2 x the shortest, 5 x the longest demonstration's duration); method.md §3.3).
+    The message names the query and the tau it would get."""
+
+
+class DatabaseError(DmprsError):
+    """A movement database on disk that cannot be read or written: a missing, corrupted,
+    truncated or foreign file, or one written by a newer dmprs. The message names the file."""

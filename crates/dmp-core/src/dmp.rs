@@ -14,16 +14,14 @@
 
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
-use crate::basis::{Basis, phase};
-use crate::diff;
-use crate::error::{Error, Result, check_finite_matrix, check_increasing, check_scalar};
+use crate::basis::Basis;
+use crate::design::{PreparedDemo, normal_equations, solve_ridge};
+use crate::error::{Error, Result, check_scalar};
 
-/// Design-matrix entries below this are set to zero, as in the lab's fitting code.
-const DESIGN_CUTOFF: f64 = 1e-8;
 /// Relative ridge added to the normal equations of the fit. It keeps a kernel that no sample
 /// activates at weight 0 instead of making the system singular, and changes well-posed fits by
 /// about 1e-10 relative.
-const FIT_RIDGE: f64 = 1e-10;
+pub(crate) const FIT_RIDGE: f64 = 1e-10;
 
 /// The meta-parameters of a DMP: its constants and the size of its basis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,113 +125,14 @@ impl Dmp {
     /// `F_j = tau^2 ydd_j - alpha_z (beta_z (g - y_j) - tau yd_j)`, and `w = argmin |A w - F|`
     /// with `A_jk = Psi_k(x_j) x_j / sum_i Psi_i(x_j)`.
     ///
-    /// Missing derivatives are computed with [`diff::gradient`] (second order, non-uniform grid).
+    /// Missing derivatives are computed with [`crate::diff::gradient`] (second order, non-uniform grid).
     pub fn fit(demo: &Demonstration<'_>, config: DmpConfig) -> Result<Self> {
         config.validate()?;
-        let (t, y) = (demo.t, &demo.y);
-        let n_dof = y.nrows();
-        if n_dof == 0 {
-            return Err(Error::Shape { name: "y", expected: "at least one column".into(), got: format!("({}, 0)", t.len()) });
-        }
-        if y.ncols() != t.len() {
-            return Err(Error::Shape {
-                name: "y",
-                expected: format!("({}, {n_dof}) with one row per entry of t", t.len()),
-                got: format!("({}, {n_dof})", y.ncols()),
-            });
-        }
-        if t.len() < diff::MIN_SAMPLES {
-            return Err(Error::TooFewSamples {
-                name: "t",
-                got: t.len(),
-                needed: diff::MIN_SAMPLES,
-                why: "second-order finite differences need 3",
-            });
-        }
-        check_increasing("t", t)?;
-        check_finite_matrix("y", y)?;
-        for (name, d) in [("yd", &demo.yd), ("ydd", &demo.ydd)] {
-            if let Some(d) = d {
-                if d.shape() != y.shape() {
-                    return Err(Error::Shape {
-                        name,
-                        expected: format!("({}, {n_dof}) like y", t.len()),
-                        got: format!("({}, {})", d.ncols(), d.nrows()),
-                    });
-                }
-                check_finite_matrix(name, d)?;
-            }
-        }
-        let yd = match demo.yd {
-            Some(v) => v.into_owned(),
-            None => diff::gradient(t, y),
-        };
-        let ydd = match demo.ydd {
-            Some(v) => v.into_owned(),
-            None => diff::gradient(t, &yd.as_view()),
-        };
-
+        let prepared = PreparedDemo::new(demo)?;
         let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
-        let n = config.n_basis;
-        let t0 = t[0];
-        let tau = t[t.len() - 1] - t0;
-        let goal: DVector<f64> = y.column(t.len() - 1).into_owned();
-        let y0: DVector<f64> = y.column(0).into_owned();
-
-        // Normal equations A^T A w = A^T F, accumulated row by row: each row of A has only a
-        // handful of entries above the cut-off, so this costs O(T) instead of O(T N^2).
-        let mut ata = DMatrix::<f64>::zeros(n, n);
-        let mut atf = DMatrix::<f64>::zeros(n, n_dof);
-        let mut psi = vec![0.0; n];
-        let mut force = vec![0.0; n_dof];
-        for j in 0..t.len() {
-            let x = phase(t[j] - t0, tau, config.alpha_x);
-            let range = basis.normalized_activations(x, &mut psi);
-            // Row j of the design matrix, with the lab code's cut-off; only its non-zero span
-            // (about six kernels) enters the normal equations.
-            let mut nz = range.end..range.start;
-            for k in range {
-                psi[k] *= x;
-                if psi[k] < DESIGN_CUTOFF {
-                    psi[k] = 0.0;
-                } else {
-                    nz.start = nz.start.min(k);
-                    nz.end = k + 1;
-                }
-            }
-            let yj = y.column(j);
-            for d in 0..n_dof {
-                force[d] = tau * tau * ydd[(d, j)]
-                    - config.alpha_z * (config.beta_z * (goal[d] - yj[d]) - tau * yd[(d, j)]);
-            }
-            // Column-major slices of the rows nz of A^T A and A^T F: contiguous, so vectorized.
-            let row = &psi[nz.clone()];
-            for l in nz.clone() {
-                let col = &mut ata.as_mut_slice()[l * n + nz.start..l * n + nz.end];
-                for (c, a) in col.iter_mut().zip(row) {
-                    *c += a * psi[l];
-                }
-            }
-            for (d, &f) in force.iter().enumerate() {
-                let col = &mut atf.as_mut_slice()[d * n + nz.start..d * n + nz.end];
-                for (c, a) in col.iter_mut().zip(row) {
-                    *c += a * f;
-                }
-            }
-        }
-        let ridge = FIT_RIDGE * ata.trace() / n as f64;
-        let ridge = if ridge > 0.0 { ridge } else { FIT_RIDGE };
-        for k in 0..n {
-            ata[(k, k)] += ridge;
-        }
-        let chol = ata.cholesky().ok_or_else(|| Error::Numerical {
-            context: "DMP fit",
-            detail: "the normal equations are not positive definite".into(),
-        })?;
-        let weights = chol.solve(&atf);
-        if weights.iter().any(|w| !w.is_finite()) {
-            return Err(Error::Numerical { context: "DMP fit", detail: "non-finite weights".into() });
-        }
+        let normal = normal_equations(&prepared, &basis, &config);
+        let weights = solve_ridge(normal.ata, &normal.atf, FIT_RIDGE, "DMP fit")?;
+        let PreparedDemo { goal, y0, tau, .. } = prepared;
         Ok(Self { config, basis, weights, goal, y0, tau })
     }
 

@@ -47,6 +47,24 @@ pub enum Error {
         value: String,
         requirement: &'static str,
     },
+    /// A generalizer given a number of demonstrations its method cannot use.
+    #[error("method '{method}' {requirement}, but there are {got} demonstrations")]
+    DemoCount { method: &'static str, got: usize, requirement: String },
+    /// Two demonstrations at the same query: the generalization would be ill-defined there.
+    #[error("demonstrations {first} and {second} have the same query {query}; a generalizer cannot tell them apart")]
+    DuplicateQuery { first: usize, second: usize, query: String },
+    /// Demonstrations with different numbers of degrees of freedom.
+    #[error("demonstration {index} has {got} degrees of freedom, but demonstration 0 has {expected}")]
+    DofMismatch { index: usize, got: usize, expected: usize },
+    /// Demonstration queries whose geometry the method cannot use (e.g. collinear for "linear").
+    #[error("the demonstration queries are degenerate: {detail}")]
+    DegenerateQueries { detail: String },
+    /// A query whose generalization would be invalid (e.g. tau <= 0 by extrapolation).
+    #[error("cannot generalize to query {query}: {reason}")]
+    Extrapolation { query: String, reason: String },
+    /// An error in the data of one demonstration.
+    #[error("demonstration {index}: {source}")]
+    InDemo { index: usize, source: Box<Error> },
     /// The input was valid but the computation failed (e.g. a matrix that is not positive definite).
     #[error("numerical failure in {context}: {detail}")]
     Numerical { context: &'static str, detail: String },
@@ -55,7 +73,11 @@ pub enum Error {
 impl Error {
     /// True when the caller's input was wrong (Python maps these to `ValueError` subclasses).
     pub fn is_input_error(&self) -> bool {
-        !matches!(self, Error::Numerical { .. })
+        match self {
+            Error::Numerical { .. } => false,
+            Error::InDemo { source, .. } => source.is_input_error(),
+            _ => true,
+        }
     }
 }
 

@@ -2,15 +2,26 @@
 //!
 //! The numerical core of dmprs: the Dynamic Movement Primitives of Nemec, Vuga and Ude,
 //! "Efficient sensorimotor learning from multiple demonstrations" (2013), eqs. 1-4, their fit
-//! from demonstrations and their rollout. Pure Rust on nalgebra; no Python, no learners.
+//! from demonstrations and their rollout, and their generalization over a database of
+//! demonstrations (paper eq. 6: Gaussian processes, locally weighted regression, linear
+//! interpolation). Pure Rust on nalgebra; no Python, no learners.
 
 pub mod basis;
+pub mod design;
 pub mod diff;
 pub mod dmp;
 pub mod error;
+pub mod generalize;
+pub mod gp;
+pub mod linalg;
+pub mod lwr;
+pub mod optimize;
 pub mod rollout;
 
 pub use basis::Basis;
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
+pub use generalize::{Generalizer, LwrGpOptions, Method};
+pub use lwr::{Kernel, LwrOptions};
+pub use gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};

@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use crate::errors::{IntoPyResult, raise};
 
 /// A C-ordered `(T, D)` array viewed as the `D x T` matrix the core expects (no copy).
-fn time_major<'a>(name: &str, a: &'a PyReadonlyArray2<'_, f64>) -> PyResult<DMatrixView<'a, f64>> {
+pub(crate) fn time_major<'a>(name: &str, a: &'a PyReadonlyArray2<'_, f64>) -> PyResult<DMatrixView<'a, f64>> {
     let (t, d) = (a.shape()[0], a.shape()[1]);
     let slice = a
         .as_slice()
@@ -20,7 +20,7 @@ fn time_major<'a>(name: &str, a: &'a PyReadonlyArray2<'_, f64>) -> PyResult<DMat
     Ok(DMatrixView::from_slice(slice, d, t))
 }
 
-fn vector(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<DVector<f64>> {
+pub(crate) fn vector(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<DVector<f64>> {
     let slice = a
         .as_slice()
         .map_err(|_| raise("InvalidInputError", format!("{name} must be a contiguous array")))?;

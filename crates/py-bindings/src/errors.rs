@@ -20,9 +20,14 @@ pub fn raise(class_name: &str, message: String) -> PyErr {
     })
 }
 
-/// Bad input becomes `InvalidInputError` (a `ValueError`), a failed computation `NumericalError`.
+/// Bad input becomes `InvalidInputError` (a `ValueError`), a query the generalizer cannot reach
+/// `ExtrapolationError` (an `InvalidInputError`), a failed computation `NumericalError`.
 pub fn core_error(err: dmp_core::Error) -> PyErr {
-    let class = if err.is_input_error() { "InvalidInputError" } else { "NumericalError" };
+    let class = match &err {
+        dmp_core::Error::Extrapolation { .. } => "ExtrapolationError",
+        e if e.is_input_error() => "InvalidInputError",
+        _ => "NumericalError",
+    };
     raise(class, err.to_string())
 }
 

@@ -3,6 +3,8 @@
 
 mod dmp;
 mod errors;
+mod generalize;
+mod gp;
 mod learners;
 mod matchbox;
 
@@ -14,6 +16,10 @@ mod _core {
     use super::dmp::PyDmp;
     #[pymodule_export]
     use super::dmp::py_rollout_batch;
+    #[pymodule_export]
+    use super::generalize::PyGeneralizer;
+    #[pymodule_export]
+    use super::gp::PyGaussianProcess;
     #[pymodule_export]
     use super::learners::PyLearner;
     #[pymodule_export]

@@ -1,0 +1,489 @@
+//! The generalizer `G(q; Z) -> [w, tau, g, y0]` of the paper (eq. 6; method.md §3): from M
+//! demonstrations, each with a task query `q_k` in R^n, to a DMP for any query.
+//!
+//! * [`Method::Linear`] (method.md §3.3, the paper's matchbox setting): affine interpolation and
+//!   extrapolation of every parameter. For two demos and a scalar query this is the paper's
+//!   `theta(q) = (1 - a) theta_1 + a theta_2`, `a = (q - q_1)/(q_2 - q_1)`. For n-D queries it
+//!   uses the barycentric coordinates of `q` with respect to the demo queries, which must be
+//!   affinely independent (at most n + 1 of them): exact at every demo, affine in `q`, and, when
+//!   M < n + 1, constant along directions orthogonal to the demos' affine hull (the least-squares
+//!   projection onto it). More than n + 1 demos would make "linear" a regression that no longer
+//!   reproduces its demos, so it is refused: use `LwrGp`.
+//! * [`Method::LwrGp`] (Ude et al. 2010, method.md §3.2): shape weights by locally weighted
+//!   regression over all demo data ([`crate::lwr`]), and tau, goal and start by one Gaussian
+//!   process per scalar ([`crate::gp`]). The start y0 is not in the paper's theta = [w, tau, g];
+//!   we generalize it like g so that the result is a complete DMP that reproduces each demo.
+//!
+//! Either way tau must stay positive: a query whose tau falls outside
+//! `(0.2 min tau_k, 5 max tau_k)` (method.md §3.3) is refused with [`Error::Extrapolation`].
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::basis::Basis;
+use crate::design::{PreparedDemo, normal_equations, solve_ridge};
+use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
+use crate::error::{Error, Result, check_scalar};
+use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
+use crate::lwr::{Lwr, LwrOptions};
+
+/// tau(q) must lie strictly inside `(TAU_LOW x min tau_k, TAU_HIGH x max tau_k)` (method.md §3.3).
+pub const TAU_LOW: f64 = 0.2;
+pub const TAU_HIGH: f64 = 5.0;
+
+/// Options of the Ude-2010 generalizer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LwrGpOptions {
+    pub lwr: LwrOptions,
+    /// Noise standard deviation of each GP relative to the standard deviation of its outputs.
+    /// Held fixed: a small value makes the GP reproduce the demos (method.md §10). Default 1e-4
+    /// (method.md §3.2 suggests 1e-3; 1e-4 reproduces demos about 100 x more closely and still
+    /// keeps the kernel matrix well conditioned for distinct queries).
+    pub gp_noise: f64,
+    /// Fit length scales and signal variances by ML-II. `None`: only with at least 4 demos
+    /// (method.md §3.2: with M <= 3, ML-II is ill-posed; then l = query range, signal = var).
+    pub gp_optimize: Option<bool>,
+    pub gp_restarts: usize,
+}
+
+impl Default for LwrGpOptions {
+    fn default() -> Self {
+        Self { lwr: LwrOptions::default(), gp_noise: 1e-4, gp_optimize: None, gp_restarts: 4 }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Method {
+    Linear,
+    LwrGp(LwrGpOptions),
+}
+
+impl Method {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Linear => "linear",
+            Method::LwrGp(_) => "lwr-gp",
+        }
+    }
+}
+
+/// `(weights N x D, tau, goal, y0)`.
+type Parameters = (DMatrix<f64>, f64, DVector<f64>, DVector<f64>);
+
+#[derive(Debug, Clone)]
+enum Model {
+    Linear(Linear),
+    LwrGp(Box<LwrGp>),
+}
+
+/// Affine interpolation: `theta(q) = sum_k lambda_k(q) theta_k` with barycentric coordinates
+/// `lambda_{2..M} = pinv(Delta) (q - q_1)`, `lambda_1 = 1 - sum`, `Delta = [q_k - q_1]`.
+#[derive(Debug, Clone)]
+struct Linear {
+    /// `(M-1) x n`.
+    pinv: DMatrix<f64>,
+    /// Flattened parameters of each demo.
+    thetas: Vec<DVector<f64>>,
+}
+
+#[derive(Debug, Clone)]
+struct LwrGp {
+    lwr: Lwr,
+    tau: GaussianProcess,
+    goal: Vec<GaussianProcess>,
+    y0: Vec<GaussianProcess>,
+}
+
+/// A generalizer over M demonstrations.
+#[derive(Debug, Clone)]
+pub struct Generalizer {
+    config: DmpConfig,
+    method: &'static str,
+    n_dim: usize,
+    n_dof: usize,
+    queries: Vec<Vec<f64>>,
+    demo_dmps: Vec<Dmp>,
+    tau_valid: (f64, f64),
+    model: Model,
+}
+
+fn format_query(q: &[f64]) -> String {
+    let parts: Vec<String> = q.iter().map(|v| format!("{v}")).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// Flattened parameters `[w (D x N, DOF-major), tau, g (D), y0 (D)]`.
+fn flatten(dmp: &Dmp) -> DVector<f64> {
+    // The weights are N x D column-major, i.e. already DOF-major.
+    let w = dmp.weights().as_slice();
+    let mut v = Vec::with_capacity(w.len() + 1 + 2 * dmp.n_dof());
+    v.extend_from_slice(w);
+    v.push(dmp.tau());
+    v.extend(dmp.goal().iter());
+    v.extend(dmp.y0().iter());
+    DVector::from_vec(v)
+}
+
+impl Generalizer {
+    /// Fits one DMP per demonstration (method.md §2.3, each on its own tau and goal) and
+    /// precomputes what `method` needs for fast queries.
+    pub fn new(queries: &[Vec<f64>], demos: &[Demonstration<'_>], config: DmpConfig, method: Method) -> Result<Self> {
+        config.validate()?;
+        let name = method.name();
+        let m = demos.len();
+        if queries.len() != m {
+            return Err(Error::Shape {
+                name: "queries",
+                expected: format!("one per demonstration ({m})"),
+                got: queries.len().to_string(),
+            });
+        }
+        if m < 2 {
+            return Err(Error::DemoCount { method: name, got: m, requirement: "needs at least 2 demonstrations".into() });
+        }
+        let n_dim = queries[0].len();
+        if n_dim == 0 {
+            return Err(Error::Shape { name: "queries", expected: "(M, n) with n >= 1".into(), got: format!("({m}, 0)") });
+        }
+        for (k, q) in queries.iter().enumerate() {
+            if q.len() != n_dim {
+                return Err(Error::Shape {
+                    name: "queries",
+                    expected: format!("query {k} of length {n_dim} like query 0"),
+                    got: q.len().to_string(),
+                });
+            }
+            if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(Error::NonFinite { name: "queries", location: format!("[{k}, {d}]"), value: v });
+            }
+            if let Some(j) = queries[..k].iter().position(|p| p == q) {
+                return Err(Error::DuplicateQuery { first: j, second: k, query: format_query(q) });
+            }
+        }
+        let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
+        let mut normal = Vec::with_capacity(m);
+        let mut demo_dmps = Vec::with_capacity(m);
+        let mut n_dof = 0;
+        for (k, demo) in demos.iter().enumerate() {
+            let in_demo = |e: Error| Error::InDemo { index: k, source: Box::new(e) };
+            let prepared = PreparedDemo::new(demo).map_err(in_demo)?;
+            if k == 0 {
+                n_dof = prepared.n_dof();
+            } else if prepared.n_dof() != n_dof {
+                return Err(Error::DofMismatch { index: k, got: prepared.n_dof(), expected: n_dof });
+            }
+            let ne = normal_equations(&prepared, &basis, &config);
+            // Exactly what Dmp::fit computes: the demo's own DMP, bit for bit.
+            let w = solve_ridge(ne.ata.clone(), &ne.atf, FIT_RIDGE, "DMP fit").map_err(in_demo)?;
+            demo_dmps.push(Dmp::new(config, w, prepared.goal.clone(), prepared.y0.clone(), prepared.tau).map_err(in_demo)?);
+            normal.push(ne);
+        }
+        let taus: Vec<f64> = demo_dmps.iter().map(|d| d.tau()).collect();
+        let tau_min = taus.iter().cloned().fold(f64::INFINITY, f64::min);
+        let tau_max = taus.iter().cloned().fold(0.0, f64::max);
+        let tau_valid = (TAU_LOW * tau_min, TAU_HIGH * tau_max);
+        let model = match method {
+            Method::Linear => Model::Linear(Self::linear_model(queries, &demo_dmps)?),
+            Method::LwrGp(opts) => Model::LwrGp(Box::new(Self::lwr_gp_model(queries, normal, &demo_dmps, &opts)?)),
+        };
+        Ok(Self { config, method: name, n_dim, n_dof, queries: queries.to_vec(), demo_dmps, tau_valid, model })
+    }
+
+    fn linear_model(queries: &[Vec<f64>], dmps: &[Dmp]) -> Result<Linear> {
+        let (m, n) = (queries.len(), queries[0].len());
+        if m > n + 1 {
+            return Err(Error::DemoCount {
+                method: "linear",
+                got: m,
+                requirement: format!(
+                    "interpolates between at most n + 1 = {} demonstrations for a {n}-D query (use method 'lwr-gp' for more)",
+                    n + 1
+                ),
+            });
+        }
+        let delta = DMatrix::from_fn(n, m - 1, |d, k| queries[k + 1][d] - queries[0][d]);
+        let svd = delta.clone().svd(true, true);
+        let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
+        if smin.is_nan() || smin <= 1e-10 * smax {
+            return Err(Error::DegenerateQueries {
+                detail: format!(
+                    "method 'linear' needs affinely independent demo queries (a segment, triangle, ...), \
+                     but {} lie in a lower-dimensional subspace",
+                    queries.iter().map(|q| format_query(q)).collect::<Vec<_>>().join(", ")
+                ),
+            });
+        }
+        let pinv = svd.pseudo_inverse(0.0).map_err(|e| Error::Numerical { context: "linear generalizer", detail: e.to_string() })?;
+        Ok(Linear { pinv, thetas: dmps.iter().map(flatten).collect() })
+    }
+
+    fn lwr_gp_model(
+        queries: &[Vec<f64>],
+        normal: Vec<crate::design::NormalEquations>,
+        dmps: &[Dmp],
+        opts: &LwrGpOptions,
+    ) -> Result<LwrGp> {
+        check_scalar("gp_noise", opts.gp_noise, true)?;
+        let lwr = Lwr::new(queries, normal, opts.lwr)?;
+        let (m, n) = (queries.len(), queries[0].len());
+        let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
+        let optimize = opts.gp_optimize.unwrap_or(m >= 4);
+        let ranges: Vec<f64> = x
+            .row_iter()
+            .map(|r| {
+                let s = r.max() - r.min();
+                if s > 0.0 { s } else { 1.0 }
+            })
+            .collect();
+        let fit = |y: Vec<f64>| -> Result<GaussianProcess> {
+            let mean = y.iter().sum::<f64>() / m as f64;
+            let var = y.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / m as f64;
+            let var = if var > 0.0 { var } else { 1.0 };
+            let noise = opts.gp_noise * opts.gp_noise * var;
+            let initial = Hyperparameters { length_scales: ranges.clone(), signal_var: var, noise_var: noise };
+            let bounds = HyperBounds {
+                length_scales: ranges.iter().map(|r| (1e-2 * r, 1e2 * r)).collect(),
+                signal_var: (1e-4 * var, 1e4 * var),
+                noise_var: (noise, noise),
+            };
+            let gp_opts = GpOptions {
+                optimize,
+                n_restarts: opts.gp_restarts,
+                bounds: Some(bounds),
+                ..GpOptions::default()
+            };
+            GaussianProcess::fit(&x.as_view(), &y, Some(initial), &gp_opts)
+        };
+        let n_dof = dmps[0].n_dof();
+        let tau = fit(dmps.iter().map(|d| d.tau()).collect())?;
+        let goal = (0..n_dof).map(|i| fit(dmps.iter().map(|d| d.goal()[i]).collect())).collect::<Result<_>>()?;
+        let y0 = (0..n_dof).map(|i| fit(dmps.iter().map(|d| d.y0()[i]).collect())).collect::<Result<_>>()?;
+        Ok(LwrGp { lwr, tau, goal, y0 })
+    }
+
+    pub fn method(&self) -> &'static str {
+        self.method
+    }
+    pub fn n_query(&self) -> usize {
+        self.n_dim
+    }
+    pub fn n_dof(&self) -> usize {
+        self.n_dof
+    }
+    pub fn n_demos(&self) -> usize {
+        self.demo_dmps.len()
+    }
+    pub fn config(&self) -> &DmpConfig {
+        &self.config
+    }
+    /// The DMP fitted to each demonstration.
+    pub fn demo_dmps(&self) -> &[Dmp] {
+        &self.demo_dmps
+    }
+    pub fn queries(&self) -> &[Vec<f64>] {
+        &self.queries
+    }
+    /// Length of the flattened parameter vector: `D N + 1 + 2 D`.
+    pub fn n_parameters(&self) -> usize {
+        self.n_dof * self.config.n_basis + 1 + 2 * self.n_dof
+    }
+    /// The interval tau(q) must lie strictly inside.
+    pub fn tau_bounds(&self) -> (f64, f64) {
+        self.tau_valid
+    }
+
+    fn check_query(&self, q: &[f64]) -> Result<()> {
+        if q.len() != self.n_dim {
+            return Err(Error::Shape {
+                name: "q",
+                expected: format!("({},), the dimension of the demonstration queries", self.n_dim),
+                got: format!("({},)", q.len()),
+            });
+        }
+        if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite { name: "q", location: format!("[{d}]"), value: v });
+        }
+        Ok(())
+    }
+
+    /// Parameters at `q` without the validity check of tau.
+    fn raw_parameters(&self, q: &[f64]) -> Result<Parameters> {
+        let (n_basis, n_dof) = (self.config.n_basis, self.n_dof);
+        match &self.model {
+            Model::Linear(lin) => {
+                let theta = if let Some(k) = self.queries.iter().position(|qk| qk.as_slice() == q) {
+                    // At a vertex the barycentric coordinates are exactly e_k; take them so,
+                    // rather than through the rounding of the pseudo-inverse.
+                    lin.thetas[k].clone()
+                } else {
+                    let dq = DVector::from_fn(self.n_dim, |d, _| q[d] - self.queries[0][d]);
+                    let lam = &lin.pinv * dq;
+                    let lam0 = 1.0 - lam.sum();
+                    let mut theta = &lin.thetas[0] * lam0;
+                    for (k, l) in lam.iter().enumerate() {
+                        theta.axpy(*l, &lin.thetas[k + 1], 1.0);
+                    }
+                    theta
+                };
+                let nw = n_basis * n_dof;
+                let w = DMatrix::from_column_slice(n_basis, n_dof, &theta.as_slice()[..nw]);
+                let goal = DVector::from_column_slice(&theta.as_slice()[nw + 1..nw + 1 + n_dof]);
+                let y0 = DVector::from_column_slice(&theta.as_slice()[nw + 1 + n_dof..]);
+                Ok((w, theta[nw], goal, y0))
+            }
+            Model::LwrGp(model) => {
+                let w = model.lwr.weights_at(q)?;
+                let tau = model.tau.predict_mean_at(q);
+                let goal = DVector::from_iterator(n_dof, model.goal.iter().map(|g| g.predict_mean_at(q)));
+                let y0 = DVector::from_iterator(n_dof, model.y0.iter().map(|g| g.predict_mean_at(q)));
+                Ok((w, tau, goal, y0))
+            }
+        }
+    }
+
+    /// The DMP for query `q` (paper eq. 6). Fails with [`Error::Extrapolation`] if its tau would
+    /// leave `(0.2 min tau_k, 5 max tau_k)`.
+    pub fn predict(&self, q: &[f64]) -> Result<Dmp> {
+        self.check_query(q)?;
+        let (w, tau, goal, y0) = self.raw_parameters(q)?;
+        let (lo, hi) = self.tau_valid;
+        if !(tau > lo && tau < hi) {
+            return Err(Error::Extrapolation {
+                query: format_query(q),
+                reason: format!(
+                    "the '{}' generalization gives tau = {tau} s, outside the valid range ({lo}, {hi}) s \
+                     (0.2 x the shortest and 5 x the longest demonstration); the query is too far from the demonstrations",
+                    self.method
+                ),
+            });
+        }
+        Dmp::new(self.config, w, goal, y0, tau)
+    }
+
+    /// Flattened parameters `[w (D x N, DOF-major), tau, g (D), y0 (D)]` at `q`, without the
+    /// tau check.
+    pub fn parameters(&self, q: &[f64]) -> Result<DVector<f64>> {
+        self.check_query(q)?;
+        let (w, tau, goal, y0) = self.raw_parameters(q)?;
+        let mut v = Vec::with_capacity(self.n_parameters());
+        v.extend_from_slice(w.as_slice());
+        v.push(tau);
+        v.extend(goal.iter());
+        v.extend(y0.iter());
+        Ok(DVector::from_vec(v))
+    }
+
+    /// Central-difference Jacobian of [`Self::parameters`] with respect to `q`
+    /// (`n_parameters x n`), for learners that need a gain (method.md §5.2). The step in
+    /// dimension d is `rel_step x` the range of the demo queries in d (or `max(|q_d|, 1)` where
+    /// they do not vary). Exact up to rounding for the linear generalizer, which is affine.
+    pub fn jacobian(&self, q: &[f64], rel_step: f64) -> Result<DMatrix<f64>> {
+        self.check_query(q)?;
+        check_scalar("rel_step", rel_step, true)?;
+        let mut jac = DMatrix::zeros(self.n_parameters(), self.n_dim);
+        let mut qp = q.to_vec();
+        for d in 0..self.n_dim {
+            let (lo, hi) = self.queries.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v[d]), b.max(v[d])));
+            let scale = if hi > lo { hi - lo } else { q[d].abs().max(1.0) };
+            let h = rel_step * scale;
+            qp[d] = q[d] + h;
+            let plus = self.parameters(&qp)?;
+            qp[d] = q[d] - h;
+            let minus = self.parameters(&qp)?;
+            qp[d] = q[d];
+            jac.set_column(d, &((plus - minus) / (2.0 * h)));
+        }
+        Ok(jac)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 2-DOF demo whose amplitude, goal and duration depend on the query.
+    fn demo(q: f64) -> (Vec<f64>, DMatrix<f64>) {
+        let tau = 1.0 + 0.3 * q;
+        let t: Vec<f64> = (0..300).map(|j| tau * j as f64 / 299.0).collect();
+        let y = DMatrix::from_fn(2, 300, |d, j| {
+            let s = j as f64 / 299.0;
+            let mj = 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5);
+            if d == 0 { (1.0 + q) * mj } else { 0.2 * q + (0.5 - q) * mj + 0.1 * (3.0 * s).sin() * q }
+        });
+        (t, y)
+    }
+
+    fn build(qs: &[f64], method: Method) -> Result<Generalizer> {
+        let data: Vec<_> = qs.iter().map(|&q| demo(q)).collect();
+        let demos: Vec<Demonstration> =
+            data.iter().map(|(t, y)| Demonstration { t, y: y.as_view(), yd: None, ydd: None }).collect();
+        let queries: Vec<Vec<f64>> = qs.iter().map(|&q| vec![q]).collect();
+        Generalizer::new(&queries, &demos, DmpConfig { n_basis: 15, ..DmpConfig::default() }, method)
+    }
+
+    #[test]
+    fn linear_is_exact_at_both_demos_and_affine_in_q() {
+        let g = build(&[0.0, 1.0], Method::Linear).unwrap();
+        for k in 0..2 {
+            assert_eq!(&g.predict(&[k as f64]).unwrap(), &g.demo_dmps()[k]);
+        }
+        let p = |q: f64| g.parameters(&[q]).unwrap();
+        for (a, b) in [(0.2, 0.7), (-0.5, 1.5), (1.2, 2.0)] {
+            let mid = p(0.5 * (a + b));
+            let avg = (p(a) + p(b)) * 0.5;
+            assert!((mid - avg).amax() < 1e-9);
+        }
+        // The paper's formula at a = 0.25.
+        let expect = g.demo_dmps().iter().map(flatten).collect::<Vec<_>>();
+        assert!((p(0.25) - (&expect[0] * 0.75 + &expect[1] * 0.25)).amax() < 1e-12);
+    }
+
+    #[test]
+    fn both_methods_agree_at_the_demo_queries() {
+        let lin = build(&[0.0, 1.0], Method::Linear).unwrap();
+        let ude = build(&[0.0, 1.0], Method::LwrGp(LwrGpOptions::default())).unwrap();
+        for q in [0.0, 1.0] {
+            let (a, b) = (lin.parameters(&[q]).unwrap(), ude.parameters(&[q]).unwrap());
+            let scale = a.amax();
+            assert!((a - b).amax() < 1e-5 * scale, "q={q}");
+        }
+    }
+
+    #[test]
+    fn lwr_gp_reproduces_each_of_several_demos() {
+        let qs = [0.0, 0.4, 1.0, 1.5, 2.2];
+        let g = build(&qs, Method::LwrGp(LwrGpOptions::default())).unwrap();
+        for (k, &q) in qs.iter().enumerate() {
+            let got = g.parameters(&[q]).unwrap();
+            let want = flatten(&g.demo_dmps()[k]);
+            assert!((&got - &want).amax() < 1e-5 * want.amax(), "k={k}: {}", (&got - &want).amax());
+        }
+    }
+
+    #[test]
+    fn the_jacobian_of_linear_is_the_demo_difference() {
+        let g = build(&[0.0, 2.0], Method::Linear).unwrap();
+        let jac = g.jacobian(&[0.7], 1e-3).unwrap();
+        let want = (flatten(&g.demo_dmps()[1]) - flatten(&g.demo_dmps()[0])) / 2.0;
+        assert!((jac.column(0) - want).amax() < 1e-8);
+    }
+
+    #[test]
+    fn extrapolating_tau_below_its_floor_is_refused() {
+        // tau = 1 + 0.3 q: tau(q) <= 0.2 for q <= -2.67.
+        let g = build(&[0.0, 1.0], Method::Linear).unwrap();
+        assert!(g.predict(&[-2.0]).is_ok());
+        let err = g.predict(&[-3.0]).unwrap_err();
+        assert!(matches!(err, Error::Extrapolation { .. }), "{err}");
+        assert!(err.to_string().contains("[-3]"), "{err}");
+    }
+
+    #[test]
+    fn bad_demo_sets_are_errors() {
+        assert!(matches!(build(&[0.0], Method::Linear), Err(Error::DemoCount { .. })));
+        assert!(matches!(build(&[0.0, 1.0, 2.0], Method::Linear), Err(Error::DemoCount { .. })));
+        assert!(matches!(build(&[0.0, 1.0, 0.0], Method::LwrGp(LwrGpOptions::default())), Err(Error::DuplicateQuery { first: 0, second: 2, .. })));
+        let g = build(&[0.0, 1.0], Method::Linear).unwrap();
+        assert!(matches!(g.predict(&[0.0, 1.0]), Err(Error::Shape { .. })));
+        assert!(matches!(g.predict(&[f64::NAN]), Err(Error::NonFinite { .. })));
+    }
+}

@@ -1,0 +1,361 @@
+"""The movement database: demonstrations, each a trajectory labelled with its task query
+(the Z of paper eq. 5: ``{y_d^k, yd_d^k, ydd_d^k; q_k}``).
+
+On disk a database is a directory::
+
+    manifest.json          format, schema version, query names and units, and per demo its
+                           file, sha256, label and metadata
+    demo_<sha256[:16]>.npz one per demo: query, t, y and optionally yd, ydd (float64)
+
+Saving never leaves a half-written database (design.md §5, "nothing is lost"): every file is
+written to a temporary file in the same directory, flushed, fsync'ed and renamed into place; the
+demo files are named by their content, so they never overwrite the files of the previous version;
+the manifest is replaced last, atomically, and only then are files no manifest refers to removed.
+A crash at any point leaves either the old or the new database, both loadable.
+
+Loading trusts nothing: the manifest must be a dmprs database of a schema this version can
+read; every demo file must match its sha256 and is read with ``allow_pickle=False``. Any failure
+raises :class:`~dmprs.errors.DatabaseError` naming the file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import re
+import tempfile
+import zipfile
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dmprs._arrays import as_float_array, check_finite
+from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
+from dmprs.trajectory import Trajectory
+
+__all__ = ["Database", "Demo", "SCHEMA_VERSION"]
+
+#: The schema this version writes and the newest it reads.
+SCHEMA_VERSION = 1
+_FORMAT = "dmprs.Database"
+_MANIFEST = "manifest.json"
+_DEMO_FILE = re.compile(r"^demo_[0-9a-f]{16}\.npz$")
+_ARRAY_KEYS = {"query", "t", "y", "yd", "ydd"}
+
+
+@dataclass(frozen=True, eq=False)
+class Demo:
+    """One demonstration: its task ``query`` (n,), its ``trajectory``, an optional ``label`` and
+    JSON-safe ``metadata``."""
+
+    query: NDArray[np.float64]
+    trajectory: Trajectory
+    label: str | None = None
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+
+
+def _query_tuple(value: Any, name: str) -> tuple[str, ...]:
+    if isinstance(value, str):
+        return (value,)
+    try:
+        items = tuple(value)
+    except TypeError:
+        raise InvalidInputError(f"{name} must be a sequence of strings; got {value!r}") from None
+    for i, v in enumerate(items):
+        if not isinstance(v, str):
+            raise InvalidInputError(f"{name}[{i}] must be a string; got {v!r}")
+    return items
+
+
+class Database:
+    """Demonstrations ``(query, trajectory)`` with named, unit-labelled query dimensions.
+
+    ``Database(query_names=("bottle_volume",), query_units=("l",))``: the query of every demo has
+    ``len(query_names)`` entries. All demos must have the same number of DOFs and distinct
+    queries (a generalizer could not tell two demos at the same query apart).
+    """
+
+    def __init__(self, query_names: Sequence[str], query_units: Sequence[str] | None = None) -> None:
+        names = _query_tuple(query_names, "query_names")
+        if not names:
+            raise InvalidInputError("query_names is empty: a query needs at least one dimension")
+        if len(set(names)) != len(names):
+            raise InvalidInputError(f"query_names has duplicates: {names}")
+        units = ("",) * len(names) if query_units is None else _query_tuple(query_units, "query_units")
+        if len(units) != len(names):
+            raise InvalidInputError(
+                f"query_units has {len(units)} entries but query_names has {len(names)}"
+            )
+        self._names = names
+        self._units = units
+        self._demos: list[Demo] = []
+
+    @property
+    def query_names(self) -> tuple[str, ...]:
+        return self._names
+
+    @property
+    def query_units(self) -> tuple[str, ...]:
+        return self._units
+
+    @property
+    def n_query(self) -> int:
+        """Dimension n of the queries."""
+        return len(self._names)
+
+    @property
+    def n_dof(self) -> int | None:
+        """DOFs of the trajectories (None while empty)."""
+        return self._demos[0].trajectory.n_dof if self._demos else None
+
+    def _check_query(self, query: ArrayLike) -> NDArray[np.float64]:
+        q = np.atleast_1d(as_float_array(query, "query", (0, 1)))
+        if q.shape != (self.n_query,):
+            raise InvalidInputError(
+                f"query has shape {q.shape}, expected ({self.n_query},): one value per query "
+                f"dimension {self._names}"
+            )
+        check_finite(q, "query")
+        return q
+
+    def add(
+        self,
+        query: ArrayLike,
+        trajectory: Trajectory,
+        *,
+        label: str | None = None,
+        metadata: Mapping[str, Any] | None = None,
+    ) -> Demo:
+        """Appends a demonstration and returns its record. ``metadata`` must be JSON-serializable."""
+        q = self._check_query(query)
+        if not isinstance(trajectory, Trajectory):
+            raise InvalidInputError(
+                f"trajectory is a {type(trajectory).__name__}; expected a dmprs.Trajectory"
+            )
+        if self._demos and trajectory.n_dof != self.n_dof:
+            raise InvalidInputError(
+                f"the trajectory has {trajectory.n_dof} DOFs, but the demonstrations in this "
+                f"database have {self.n_dof}"
+            )
+        for k, d in enumerate(self._demos):
+            if np.array_equal(d.query, q):
+                raise InvalidInputError(
+                    f"demonstration {k} already has the query {q.tolist()}; two demonstrations at "
+                    "the same query cannot be generalized"
+                )
+        if label is not None and not isinstance(label, str):
+            raise InvalidInputError(f"label must be a string or None; got {label!r}")
+        meta = dict(metadata or {})
+        try:
+            json.dumps(meta, allow_nan=False)
+        except (TypeError, ValueError) as exc:
+            raise InvalidInputError(f"metadata must be JSON-serializable: {exc}") from None
+        q.setflags(write=False)
+        demo = Demo(q, trajectory, label, meta)
+        self._demos.append(demo)
+        return demo
+
+    def __len__(self) -> int:
+        return len(self._demos)
+
+    def __iter__(self) -> Iterator[Demo]:
+        return iter(list(self._demos))
+
+    def __getitem__(self, index: int) -> Demo:
+        return self._demos[index]
+
+    @property
+    def queries(self) -> NDArray[np.float64]:
+        """All queries, (M, n)."""
+        return np.array([d.query for d in self._demos], dtype=np.float64).reshape(len(self), self.n_query)
+
+    def __repr__(self) -> str:
+        dims = ", ".join(f"{n} [{u}]" if u else n for n, u in zip(self._names, self._units))
+        return f"Database({len(self)} demos, query=({dims}), n_dof={self.n_dof})"
+
+    # --- persistence ------------------------------------------------------------------------
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Writes the database to the directory ``path`` (created if missing) atomically; see the
+        module docs. Refuses a non-empty directory that is not a dmprs database."""
+        root = Path(path)
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise DatabaseError(f"cannot create the database directory {root}: {exc}") from None
+        existing = [p.name for p in root.iterdir()] if root.is_dir() else []
+        if existing and _MANIFEST not in existing and not all(_DEMO_FILE.match(n) for n in existing):
+            raise DatabaseError(
+                f"{root} is a non-empty directory without a {_MANIFEST}; refusing to write a "
+                "database into it"
+            )
+        entries = []
+        for k, demo in enumerate(self._demos):
+            data = _npz_bytes(demo)
+            digest = hashlib.sha256(data).hexdigest()
+            name = f"demo_{digest[:16]}.npz"
+            target = root / name
+            if not (target.is_file() and _sha256_file(target) == digest):
+                _atomic_write(target, data)
+            entries.append({"file": name, "sha256": digest, "label": demo.label, "metadata": dict(demo.metadata)})
+        manifest = {
+            "format": _FORMAT,
+            "schema_version": SCHEMA_VERSION,
+            "query_names": list(self._names),
+            "query_units": list(self._units),
+            "demos": entries,
+        }
+        text = json.dumps(manifest, indent=2, allow_nan=False) + "\n"
+        _atomic_write(root / _MANIFEST, text.encode("utf-8"))
+        # The new manifest is durable: files only the old one referred to can go.
+        keep = {e["file"] for e in entries}
+        for name in existing:
+            if _DEMO_FILE.match(name) and name not in keep:
+                try:
+                    (root / name).unlink()
+                except OSError:
+                    pass  # a stale file is harmless: no manifest refers to it
+        # Temporary files of an interrupted earlier save.
+        for p in root.glob(".*.tmp"):
+            try:
+                p.unlink()
+            except OSError:
+                pass
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Database:
+        """Reads a database written by :meth:`save`, verifying every file."""
+        root = Path(path)
+        mpath = root / _MANIFEST
+        try:
+            raw = mpath.read_bytes()
+        except OSError as exc:
+            raise DatabaseError(f"{mpath}: cannot read the manifest ({exc.strerror or exc})") from None
+        try:
+            manifest = json.loads(raw.decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise DatabaseError(f"{mpath}: not valid JSON, the file is corrupted or truncated ({exc})") from None
+        if not isinstance(manifest, dict) or manifest.get("format") != _FORMAT:
+            raise DatabaseError(f"{mpath}: not a dmprs database manifest (no \"format\": \"{_FORMAT}\")")
+        version = manifest.get("schema_version")
+        if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+            raise DatabaseError(f"{mpath}: invalid schema_version {version!r}")
+        if version > SCHEMA_VERSION:
+            raise DatabaseError(
+                f"{mpath}: schema version {version} was written by a newer dmprs; this version "
+                f"reads up to schema version {SCHEMA_VERSION}. Upgrade dmprs to load it."
+            )
+        try:
+            db = cls(manifest["query_names"], manifest["query_units"])
+            entries = manifest["demos"]
+            if not isinstance(entries, list):
+                raise TypeError("'demos' is not a list")
+        except (KeyError, TypeError, DmprsError) as exc:
+            raise DatabaseError(f"{mpath}: malformed manifest ({exc})") from None
+        for k, entry in enumerate(entries):
+            demo = _read_demo(root, mpath, k, entry, db.n_query)
+            try:
+                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata)
+            except DmprsError as exc:
+                raise DatabaseError(f"{root / entry['file']}: {exc}") from None
+        return db
+
+
+def _npz_bytes(demo: Demo) -> bytes:
+    tr = demo.trajectory
+    arrays = {"query": demo.query, "t": tr.t, "y": tr.y}
+    if tr.yd is not None:
+        arrays["yd"] = tr.yd
+    if tr.ydd is not None:
+        arrays["ydd"] = tr.ydd
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+def _sha256_file(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _fsync_dir(directory: Path) -> None:
+    # Makes the rename durable; not possible (nor needed) on every platform.
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _atomic_write(target: Path, data: bytes) -> None:
+    """Writes ``data`` to a temporary file beside ``target``, fsyncs it and renames it over
+    ``target``: readers see the old file or the new one, never a partial one."""
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, target)
+    except BaseException as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(exc, OSError):
+            raise DatabaseError(f"{target}: cannot write ({exc.strerror or exc})") from None
+        raise
+    _fsync_dir(target.parent)
+
+
+def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Demo:
+    if not isinstance(entry, dict) or not isinstance(entry.get("file"), str) or not isinstance(entry.get("sha256"), str):
+        raise DatabaseError(f"{mpath}: demos[{k}] must have string 'file' and 'sha256' entries")
+    name = entry["file"]
+    if not _DEMO_FILE.match(name):
+        raise DatabaseError(f"{mpath}: demos[{k}] names {name!r}, which is not a demo file of a dmprs database")
+    fpath = root / name
+    try:
+        data = fpath.read_bytes()
+    except OSError as exc:
+        raise DatabaseError(f"{fpath}: cannot read demonstration {k} ({exc.strerror or exc})") from None
+    digest = hashlib.sha256(data).hexdigest()
+    if digest != entry["sha256"]:
+        raise DatabaseError(
+            f"{fpath}: checksum mismatch (sha256 {digest[:16]}..., the manifest expects "
+            f"{entry['sha256'][:16]}...): the file is corrupted, truncated or was replaced"
+        )
+    try:
+        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
+            keys = set(npz.files)
+            missing = {"query", "t", "y"} - keys
+            extra = keys - _ARRAY_KEYS
+            if missing or extra:
+                raise ValueError(f"arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd")
+            arrays = {key: npz[key] for key in keys}
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+        raise DatabaseError(f"{fpath}: not a readable demonstration file ({exc})") from None
+    for key, arr in arrays.items():
+        if arr.dtype != np.float64:
+            raise DatabaseError(f"{fpath}: array {key!r} has dtype {arr.dtype}, expected float64")
+    q = arrays["query"]
+    if q.shape != (n_query,):
+        raise DatabaseError(f"{fpath}: query has shape {q.shape}, expected ({n_query},)")
+    try:
+        traj = Trajectory(arrays["t"], arrays["y"], arrays.get("yd"), arrays.get("ydd"))
+    except DmprsError as exc:
+        raise DatabaseError(f"{fpath}: invalid trajectory ({exc})") from None
+    label = entry.get("label")
+    metadata = entry.get("metadata", {})
+    if (label is not None and not isinstance(label, str)) or not isinstance(metadata, dict):
+        raise DatabaseError(f"{mpath}: demos[{k}] has a malformed label or metadata")
+    return Demo(q, traj, label, metadata)

@@ -1,0 +1,172 @@
+"""Generalization from several demonstrations: the paper's G(q; Z) -> DMP (eq. 6, method.md §3),
+computed by the Rust core."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dmprs import _core
+from dmprs._arrays import as_count, as_float_array, as_scalar, check_finite
+from dmprs.database import Database
+from dmprs.dmp import DMP, _constants
+from dmprs.errors import InvalidInputError
+
+__all__ = ["Generalizer"]
+
+_METHODS = ("linear", "lwr-gp")
+_KERNELS = ("tricube", "gaussian")
+
+
+class Generalizer:
+    r"""Maps a task query q (n,) to a DMP, learned from the demonstrations of a :class:`Database`.
+
+    Each demonstration is first fitted as a DMP (:meth:`dmprs.DMP.fit`, with its own tau = its
+    duration, its own goal and start, and its measured yd/ydd if the trajectory has them). Then:
+
+    ``method="linear"`` (method.md §3.3; the paper's matchbox setting): every parameter
+    (weights, tau, goal, start) is interpolated and extrapolated affinely in q. For two demos
+    and a scalar query this is ``theta(q) = (1 - a) theta_1 + a theta_2`` with
+    ``a = (q - q_1) / (q_2 - q_1)``. For an n-D query it uses barycentric coordinates, so it
+    needs 2 to n + 1 demos with affinely independent queries (a segment, a triangle, ...); with
+    fewer than n + 1 it is constant across the demos' affine hull. It reproduces each demo exactly.
+
+    ``method="lwr-gp"`` (Ude et al. 2010, method.md §3.2): the weights by locally weighted
+    regression, one weighted least-squares problem over the data of all demos with one
+    ``kernel`` weight per demo (tricube or Gaussian in the query distance scaled by the demos'
+    query range; bandwidth ``bandwidth x`` the distance to the farthest of the n + 1 nearest
+    demos; ridge ``ridge x trace / N``); tau, goal and start each by a Gaussian process (SE-ARD,
+    prior mean = the demos' mean, noise std ``gp_noise x`` the outputs' std, length scales and
+    signal variance by ML-II when there are at least 4 demos, else the query range and the
+    outputs' variance). With ``interpolate=True`` (default) the kernel weights are multiplied
+    by ``(d_min / d_k)^2`` so that a demo's own query returns that demo (to ridge precision);
+    ``interpolate=False`` gives the plain locally constant blend, which does not. It cannot
+    extrapolate the weights: far from the demos they tend to those of the nearest ones.
+
+    Either way, tau(q) must stay within ``(0.2 x`` the shortest, ``5 x`` the longest demo
+    duration); a query outside raises :class:`~dmprs.errors.ExtrapolationError`.
+    """
+
+    __slots__ = ("_core", "_db_names")
+
+    def __init__(
+        self,
+        db: Database,
+        method: str = "linear",
+        n_basis: int = 25,
+        *,
+        alpha_z: float = 48.0,
+        beta_z: float | None = None,
+        alpha_x: float = 2.0,
+        width_factor: float = 2.0,
+        kernel: str = "tricube",
+        bandwidth: float = 1.5,
+        ridge: float = 1e-10,
+        interpolate: bool = True,
+        gp_noise: float = 1e-4,
+        gp_optimize: bool | None = None,
+        gp_restarts: int = 4,
+    ) -> None:
+        if not isinstance(db, Database):
+            raise InvalidInputError(f"db is a {type(db).__name__}; expected a dmprs.Database")
+        if method not in _METHODS:
+            raise InvalidInputError(f"method = {method!r} is invalid: use one of {_METHODS}")
+        if kernel not in _KERNELS:
+            raise InvalidInputError(f"kernel = {kernel!r} is invalid: use one of {_KERNELS}")
+        if len(db) == 0:
+            raise InvalidInputError("the database is empty: a generalizer needs at least 2 demonstrations")
+        if len(db) < 2:
+            raise InvalidInputError(
+                f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
+            )
+        demos = [
+            (d.trajectory.t, d.trajectory.y, d.trajectory.yd, d.trajectory.ydd) for d in db
+        ]
+        self._core = _core.Generalizer(
+            db.queries, demos, method,
+            n_basis=as_count(n_basis, "n_basis", 2),
+            **_constants(alpha_z, beta_z, alpha_x, width_factor),
+            kernel=kernel,
+            bandwidth=as_scalar(bandwidth, "bandwidth", positive=True),
+            ridge=as_scalar(ridge, "ridge", positive=True),
+            interpolate=bool(interpolate),
+            gp_noise=as_scalar(gp_noise, "gp_noise", positive=True),
+            gp_optimize=None if gp_optimize is None else bool(gp_optimize),
+            gp_restarts=as_count(gp_restarts, "gp_restarts", 0),
+        )
+        self._db_names = db.query_names
+
+    def _query(self, q: ArrayLike) -> NDArray[np.float64]:
+        arr = np.atleast_1d(as_float_array(q, "q", (0, 1)))
+        if arr.shape != (self.n_query,):
+            raise InvalidInputError(
+                f"q has shape {arr.shape}, expected ({self.n_query},): one value per query "
+                f"dimension {self._db_names}"
+            )
+        check_finite(arr, "q")
+        return arr
+
+    def predict(self, q: ArrayLike) -> DMP:
+        """The DMP for query ``q`` (n,) (a scalar for n = 1)."""
+        return DMP._wrap(self._core.predict(self._query(q)))
+
+    def parameters(self, q: ArrayLike) -> NDArray[np.float64]:
+        """The generalized parameters flattened as ``[w.ravel() (D*N, row d = DOF d), tau,
+        goal (D), y0 (D)]``, without the tau validity check."""
+        return self._core.parameters(self._query(q))
+
+    def jacobian(self, q: ArrayLike, rel_step: float = 1e-4) -> NDArray[np.float64]:
+        """d :meth:`parameters` / dq at ``q``, shape ``(n_parameters, n)``, by central
+        differences with step ``rel_step x`` the demos' query range per dimension. Exact up to
+        rounding for ``"linear"`` (affine).
+
+        This is the "numerical derivative of the generalization function" of paper §3 / method.md
+        §5.2; the learner's gain K = d(achieved query)/dq further needs the task's outcome map.
+        """
+        return self._core.jacobian(self._query(q), as_scalar(rel_step, "rel_step", positive=True))
+
+    @property
+    def demo_dmps(self) -> list[DMP]:
+        """The DMP fitted to each demonstration, in database order."""
+        return [DMP._wrap(d) for d in self._core.demo_dmps]
+
+    @property
+    def method(self) -> str:
+        return self._core.method
+
+    @property
+    def n_query(self) -> int:
+        return self._core.n_query
+
+    @property
+    def n_dof(self) -> int:
+        return self._core.n_dof
+
+    @property
+    def n_basis(self) -> int:
+        return self._core.n_basis
+
+    @property
+    def n_demos(self) -> int:
+        return self._core.n_demos
+
+    @property
+    def n_parameters(self) -> int:
+        """``D * N + 1 + 2 * D``."""
+        return self._core.n_parameters
+
+    @property
+    def tau_bounds(self) -> tuple[float, float]:
+        """tau(q) must lie strictly inside this interval (s)."""
+        return self._core.tau_bounds
+
+    def __repr__(self) -> str:
+        return (
+            f"Generalizer(method={self.method!r}, n_demos={self.n_demos}, n_query={self.n_query}, "
+            f"n_dof={self.n_dof}, n_basis={self.n_basis})"
+        )
+
+    def __reduce__(self) -> Any:
+        raise TypeError("Generalizer is not picklable; pickle its Database and rebuild it")

@@ -1,0 +1,256 @@
+"""dmprs.Database: records, the on-disk format, integrity checks and crash safety."""
+
+import io
+import json
+import zipfile
+
+import numpy as np
+import pytest
+
+import dmprs
+from dmprs import database as dbmod
+from dmprs.errors import DatabaseError, InvalidInputError
+
+
+def traj(k: int, n_dof: int = 3, derivatives: bool = False) -> dmprs.Trajectory:
+    rng = np.random.default_rng(k)
+    t = np.cumsum(rng.uniform(0.005, 0.015, 80))  # non-uniform sampling
+    y = np.cumsum(rng.standard_normal((80, n_dof)), axis=0)
+    if derivatives:
+        return dmprs.Trajectory(t, y, rng.standard_normal((80, n_dof)), rng.standard_normal((80, n_dof)))
+    return dmprs.Trajectory(t, y)
+
+
+@pytest.fixture
+def db() -> dmprs.Database:
+    d = dmprs.Database(("bottle_volume", "fill"), ("l", "1"))
+    d.add([0.3, 0.5], traj(0), label="small", metadata={"operator": "kinesthetic", "trial": 1})
+    d.add([1.0, 0.5], traj(1, derivatives=True))
+    d.add([0.7, 0.2], traj(2))
+    return d
+
+
+def assert_same(a: dmprs.Database, b: dmprs.Database) -> None:
+    assert (a.query_names, a.query_units, len(a)) == (b.query_names, b.query_units, len(b))
+    for x, y in zip(a, b):
+        assert x.query.tobytes() == y.query.tobytes()
+        assert x.trajectory == y.trajectory  # bit-exact arrays, same optional fields
+        assert (x.label, dict(x.metadata)) == (y.label, dict(y.metadata))
+
+
+def test_records(db):
+    assert len(db) == 3 and db.n_query == 2 and db.n_dof == 3
+    demos = list(db)
+    assert demos[0].label == "small" and demos[0].metadata["trial"] == 1
+    np.testing.assert_array_equal(db.queries, [[0.3, 0.5], [1.0, 0.5], [0.7, 0.2]])
+    assert db[1].trajectory.yd is not None
+    assert "bottle_volume [l]" in repr(db)
+
+
+def test_round_trip_is_bit_exact(db, tmp_path):
+    db.save(tmp_path / "db")
+    back = dmprs.Database.load(tmp_path / "db")
+    assert_same(db, back)
+    manifest = json.loads((tmp_path / "db" / "manifest.json").read_text())
+    assert manifest["schema_version"] == dbmod.SCHEMA_VERSION
+    assert manifest["query_units"] == ["l", "1"]
+    assert all(len(e["sha256"]) == 64 for e in manifest["demos"])
+
+
+def test_saving_again_replaces_and_cleans_up(db, tmp_path):
+    path = tmp_path / "db"
+    db.save(path)
+    smaller = dmprs.Database(("bottle_volume", "fill"), ("l", "1"))
+    smaller.add([0.4, 0.4], traj(7))
+    smaller.save(path)
+    assert_same(smaller, dmprs.Database.load(path))
+    assert sorted(p.name for p in path.iterdir()) == sorted(
+        ["manifest.json"] + [e["file"] for e in json.loads((path / "manifest.json").read_text())["demos"]]
+    )
+
+
+def test_an_empty_database_round_trips(tmp_path):
+    empty = dmprs.Database(("q",))
+    empty.save(tmp_path / "e")
+    back = dmprs.Database.load(tmp_path / "e")
+    assert len(back) == 0 and back.query_names == ("q",) and back.query_units == ("",)
+
+
+def demo_files(path):
+    return [path / e["file"] for e in json.loads((path / "manifest.json").read_text())["demos"]]
+
+
+def test_a_corrupted_demo_file_is_named(db, tmp_path):
+    db.save(tmp_path / "db")
+    f = demo_files(tmp_path / "db")[1]
+    data = bytearray(f.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    f.write_bytes(bytes(data))
+    with pytest.raises(DatabaseError, match=rf"{f.name}: checksum mismatch"):
+        dmprs.Database.load(tmp_path / "db")
+
+
+def test_a_truncated_demo_file_is_named(db, tmp_path):
+    db.save(tmp_path / "db")
+    f = demo_files(tmp_path / "db")[0]
+    f.write_bytes(f.read_bytes()[:100])
+    with pytest.raises(DatabaseError, match=rf"{f.name}: checksum mismatch"):
+        dmprs.Database.load(tmp_path / "db")
+
+
+def test_a_missing_demo_file_is_named(db, tmp_path):
+    db.save(tmp_path / "db")
+    f = demo_files(tmp_path / "db")[2]
+    f.unlink()
+    with pytest.raises(DatabaseError, match=rf"{f.name}: cannot read demonstration 2"):
+        dmprs.Database.load(tmp_path / "db")
+
+
+def rewrite_demo(path, index, data: bytes):
+    """Replaces a demo file and updates its checksum, as a malicious or buggy writer would."""
+    import hashlib
+
+    mpath = path / "manifest.json"
+    manifest = json.loads(mpath.read_text())
+    f = path / manifest["demos"][index]["file"]
+    f.write_bytes(data)
+    manifest["demos"][index]["sha256"] = hashlib.sha256(data).hexdigest()
+    mpath.write_text(json.dumps(manifest))
+    return f
+
+
+def npz(**arrays) -> bytes:
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize(
+    "payload, message",
+    [
+        (b"this is not a zip file", "not a readable demonstration file"),
+        (npz(query=np.zeros(2), t=np.arange(5.0)), "expected query, t, y"),
+        (npz(query=np.zeros(2), t=np.arange(5.0), y=np.zeros((5, 3)), evil=np.zeros(1)), "expected query, t, y"),
+        (npz(query=np.zeros(3), t=np.arange(5.0), y=np.zeros((5, 3))), r"query has shape \(3,\)"),
+        (npz(query=np.zeros(2), t=np.arange(5), y=np.zeros((5, 3))), "dtype int64, expected float64"),
+        (npz(query=np.zeros(2), t=np.zeros(5), y=np.zeros((5, 3))), "invalid trajectory.*strictly increasing"),
+        (npz(query=np.zeros(2), t=np.arange(5.0), y=np.array([object()] * 5)), "not a readable demonstration file"),
+    ],
+)
+def test_a_foreign_or_malformed_demo_file_is_named(db, tmp_path, payload, message):
+    db.save(tmp_path / "db")
+    f = rewrite_demo(tmp_path / "db", 0, payload)
+    with pytest.raises(DatabaseError, match=rf"{f.name}: .*{message}"):
+        dmprs.Database.load(tmp_path / "db")
+
+
+def test_pickles_are_never_loaded(db, tmp_path):
+    db.save(tmp_path / "db")
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:  # an object array: np.load would need allow_pickle=True
+        with z.open("y.npy", "w") as fh:
+            np.lib.format.write_array(fh, np.array([{"a": 1}] * 3, dtype=object), allow_pickle=True)
+    f = rewrite_demo(tmp_path / "db", 0, buf.getvalue())
+    with pytest.raises(DatabaseError, match=f.name):
+        dmprs.Database.load(tmp_path / "db")
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("{not json", "not valid JSON"),
+        ('{"format": "something.else", "schema_version": 1}', "not a dmprs database manifest"),
+        ('[1, 2, 3]', "not a dmprs database manifest"),
+        ('{"format": "dmprs.Database", "schema_version": 1}', "malformed manifest"),
+        ('{"format": "dmprs.Database", "schema_version": "1"}', "invalid schema_version"),
+        ('{"format": "dmprs.Database", "schema_version": 1, "query_names": ["q"], "query_units": [""], '
+         '"demos": [{"file": "../../etc/passwd", "sha256": "00"}]}', "not a demo file"),
+    ],
+)
+def test_a_bad_manifest_is_named(tmp_path, text, message):
+    (tmp_path / "db").mkdir()
+    (tmp_path / "db" / "manifest.json").write_text(text)
+    with pytest.raises(DatabaseError, match=rf"manifest\.json: .*{message}"):
+        dmprs.Database.load(tmp_path / "db")
+
+
+def test_a_truncated_manifest_is_named(db, tmp_path):
+    db.save(tmp_path / "db")
+    m = tmp_path / "db" / "manifest.json"
+    m.write_bytes(m.read_bytes()[:-40])
+    with pytest.raises(DatabaseError, match=r"manifest\.json: not valid JSON"):
+        dmprs.Database.load(tmp_path / "db")
+
+
+def test_a_newer_schema_fails_clearly(db, tmp_path):
+    db.save(tmp_path / "db")
+    m = tmp_path / "db" / "manifest.json"
+    manifest = json.loads(m.read_text())
+    manifest["schema_version"] = dbmod.SCHEMA_VERSION + 1
+    m.write_text(json.dumps(manifest))
+    with pytest.raises(DatabaseError, match=r"schema version 2 was written by a newer dmprs.*Upgrade"):
+        dmprs.Database.load(tmp_path / "db")
+
+
+def test_a_missing_database_is_named(tmp_path):
+    with pytest.raises(DatabaseError, match=r"manifest\.json: cannot read the manifest"):
+        dmprs.Database.load(tmp_path / "nowhere")
+
+
+def test_refuses_to_write_into_a_foreign_directory(db, tmp_path):
+    (tmp_path / "notes.txt").write_text("mine")
+    with pytest.raises(DatabaseError, match="refusing"):
+        db.save(tmp_path)
+    assert (tmp_path / "notes.txt").read_text() == "mine"
+
+
+@pytest.mark.parametrize("fail_at", [0, 1, 2, 3])  # 3 demo files, then the manifest
+def test_a_failed_save_leaves_the_previous_database_loadable(db, tmp_path, monkeypatch, fail_at):
+    path = tmp_path / "db"
+    db.save(path)
+    newer = dmprs.Database(("bottle_volume", "fill"), ("l", "1"))
+    for k in range(3):
+        newer.add([k, 9.0], traj(10 + k))
+    calls = {"n": 0}
+    real_replace = dbmod.os.replace
+
+    def crashing_replace(src, dst):
+        if calls["n"] == fail_at:
+            raise OSError(28, "No space left on device")
+        calls["n"] += 1
+        real_replace(src, dst)
+
+    monkeypatch.setattr(dbmod.os, "replace", crashing_replace)
+    with pytest.raises(DatabaseError, match="No space left on device"):
+        newer.save(path)
+    monkeypatch.undo()
+    assert_same(db, dmprs.Database.load(path))
+    assert not list(path.glob(".*.tmp"))  # no temporary file left behind
+    newer.save(path)  # and the next save succeeds
+    assert_same(newer, dmprs.Database.load(path))
+
+
+def test_bad_records():
+    d = dmprs.Database(("q",), ("m",))
+    with pytest.raises(InvalidInputError, match="expected a dmprs.Trajectory"):
+        d.add([0.0], np.zeros((10, 2)))
+    with pytest.raises(InvalidInputError, match="JSON-serializable"):
+        d.add([0.0], traj(0), metadata={"x": object()})
+    with pytest.raises(InvalidInputError, match="query_units has 2 entries"):
+        dmprs.Database(("q",), ("m", "s"))
+    with pytest.raises(InvalidInputError, match="query_names is empty"):
+        dmprs.Database(())
+    with pytest.raises(InvalidInputError, match="duplicates"):
+        dmprs.Database(("q", "q"))
+    assert len(d) == 0  # nothing half-added
+
+
+def test_a_saved_database_generalizes_identically(tmp_path):
+    d = dmprs.Database(("q",))
+    for k, q in enumerate([0.0, 1.0]):
+        t = np.linspace(0, 1 + 0.2 * q, 200)
+        d.add(q, dmprs.Trajectory(t, np.stack([np.sin(t) * (1 + q), t**2], axis=1)))
+    d.save(tmp_path / "db")
+    a = dmprs.Generalizer(d, "linear", n_basis=10)
+    b = dmprs.Generalizer(dmprs.Database.load(tmp_path / "db"), "linear", n_basis=10)
+    assert a.predict(0.3) == b.predict(0.3)

@@ -1,0 +1,276 @@
+"""dmprs.Generalizer: the paper's G(q; Z) -> DMP (eq. 6, method.md §3)."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import dmprs
+from dmprs import _core
+from dmprs.errors import ExtrapolationError, InvalidInputError
+
+
+def min_jerk(s):
+    return 10 * s**3 - 15 * s**4 + 6 * s**5
+
+
+def trajectory(q, n_dof=2, samples=400, derivatives=False):
+    """A demo whose goal, amplitude, shape and duration all depend on the (scalar or vector)
+    query."""
+    q = np.atleast_1d(np.asarray(q, dtype=float))
+    tau = 1.0 + 0.3 * q[0] + (0.1 * q[1] if q.size > 1 else 0.0)
+    t = np.linspace(0.0, tau, samples)
+    s = t / tau
+    cols = [(1.0 + q.sum() + 0.2 * d) * min_jerk(s) + 0.1 * d * q[0] * np.sin(np.pi * s) ** 2 for d in range(n_dof)]
+    y = np.stack(cols, axis=1)
+    if not derivatives:
+        return dmprs.Trajectory(t, y)
+    yd = np.gradient(y, t, axis=0, edge_order=2)
+    return dmprs.Trajectory(t, y, yd, np.gradient(yd, t, axis=0, edge_order=2))
+
+
+def database(queries, **kw):
+    queries = [np.atleast_1d(q) for q in queries]
+    n = queries[0].size
+    db = dmprs.Database(tuple(f"q{i}" for i in range(n)), ("m",) * n)
+    for q in queries:
+        db.add(q, trajectory(q, **kw))
+    return db
+
+
+def flat(dmp):
+    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, dmp.y0])
+
+
+# --- linear (method.md §3.3) ------------------------------------------------------------------
+def test_linear_reproduces_each_demo_exactly():
+    db = database([0.0, 1.0])
+    gen = dmprs.Generalizer(db, "linear", n_basis=20)
+    for demo in db:
+        tr = demo.trajectory
+        assert gen.predict(demo.query) == dmprs.DMP.fit(tr.t, tr.y, 20)  # bit for bit
+
+
+def test_linear_is_the_papers_interpolation_formula():
+    db = database([0.5, 2.0])
+    gen = dmprs.Generalizer(db, "linear", n_basis=15)
+    th1, th2 = (flat(dmprs.DMP.fit(d.trajectory.t, d.trajectory.y, 15)) for d in db)
+    for q in [0.8, 1.7, -0.3, 3.1]:  # inside and outside the demos (extrapolation, Fig. 7)
+        a = (q - 0.5) / (2.0 - 0.5)
+        np.testing.assert_allclose(flat(gen.predict(q)), (1 - a) * th1 + a * th2, rtol=1e-12, atol=1e-12)
+
+
+def test_linear_uses_measured_derivatives():
+    db = database([0.0, 1.0], derivatives=True)
+    gen = dmprs.Generalizer(db, "linear", n_basis=10)
+    tr = db[1].trajectory
+    assert gen.demo_dmps[1] == dmprs.DMP.fit(tr.t, tr.y, 10, yd=tr.yd, ydd=tr.ydd)
+
+
+def test_linear_on_a_triangle_of_2d_queries():
+    queries = [np.array([0.0, 0.0]), np.array([1.0, 0.0]), np.array([0.0, 2.0])]
+    gen = dmprs.Generalizer(database(queries), "linear", n_basis=10)
+    for q, d in zip(queries, gen.demo_dmps):
+        assert gen.predict(q) == d
+    # Barycentric coordinates of (0.25, 0.5): 0.5, 0.25, 0.25.
+    want = 0.5 * flat(gen.demo_dmps[0]) + 0.25 * flat(gen.demo_dmps[1]) + 0.25 * flat(gen.demo_dmps[2])
+    np.testing.assert_allclose(gen.parameters([0.25, 0.5]), want, rtol=1e-12, atol=1e-12)
+
+
+def test_linear_with_two_demos_in_2d_projects_onto_their_line():
+    gen = dmprs.Generalizer(database([[0.0, 0.0], [2.0, 0.0]]), "linear", n_basis=10)
+    np.testing.assert_allclose(gen.parameters([1.0, 5.0]), gen.parameters([1.0, 0.0]), rtol=1e-13)
+
+
+@settings(max_examples=25, deadline=None)
+@given(a=st.floats(-1.0, 2.0), b=st.floats(-1.0, 2.0))
+def test_linear_is_affine_in_q(a, b):
+    gen = _LINEAR
+    mid = gen.parameters(0.5 * (a + b))
+    avg = 0.5 * (gen.parameters(a) + gen.parameters(b))
+    np.testing.assert_allclose(mid, avg, rtol=1e-10, atol=1e-10)
+
+
+_LINEAR = dmprs.Generalizer(database([0.0, 1.0]), "linear", n_basis=10)
+
+
+def test_linear_jacobian_is_the_demo_difference():
+    gen = dmprs.Generalizer(database([0.0, 2.0]), "linear", n_basis=10)
+    jac = gen.jacobian(0.7)
+    assert jac.shape == (gen.n_parameters, 1) == (2 * 10 + 1 + 2 * 2, 1)
+    want = (flat(gen.demo_dmps[1]) - flat(gen.demo_dmps[0])) / 2.0
+    np.testing.assert_allclose(jac[:, 0], want, rtol=1e-7, atol=1e-7)
+
+
+# --- tau must stay valid ---------------------------------------------------------------------
+def test_extrapolating_too_far_is_an_extrapolation_error():
+    gen = dmprs.Generalizer(database([0.0, 1.0]), "linear", n_basis=10)
+    lo, hi = gen.tau_bounds
+    assert (lo, hi) == pytest.approx((0.2 * 1.0, 5 * 1.3))
+    gen.predict(-2.0)  # tau = 0.4: still valid
+    with pytest.raises(ExtrapolationError, match=r"query \[-3\].*tau = 0\.0999") as info:
+        gen.predict(-3.0)  # tau = 0.1 < 0.2
+    assert isinstance(info.value, InvalidInputError) and isinstance(info.value, ValueError)
+    with pytest.raises(ExtrapolationError, match=r"tau = .* outside the valid range"):
+        gen.predict(-10.0)  # tau < 0
+    with pytest.raises(ExtrapolationError):
+        gen.predict(20.0)  # tau = 7 > 6.5
+
+
+# --- lwr-gp (Ude 2010, method.md §3.2) -------------------------------------------------------
+@pytest.mark.parametrize("kernel", ["tricube", "gaussian"])
+def test_lwr_gp_reproduces_its_demos_to_ridge_precision(kernel):
+    queries = [0.0, 0.3, 0.9, 1.4, 2.0]  # 5 demos: ML-II for the GPs
+    db = database(queries)
+    gen = dmprs.Generalizer(db, "lwr-gp", n_basis=20, kernel=kernel)
+    for demo, own in zip(db, gen.demo_dmps):
+        got, want = flat(gen.predict(demo.query)), flat(own)
+        # Weights: the demo's own fit (same ridge), exactly. tau, g, y0: to GP-noise precision.
+        assert np.array_equal(gen.predict(demo.query).weights, own.weights)
+        assert np.abs(got - want).max() < 1e-5 * np.abs(want).max()
+        # ... and so does the motion.
+        a, b = gen.predict(demo.query).rollout(0.002, own.tau), own.rollout(0.002, own.tau)
+        assert np.abs(a.y - b.y).max() < 1e-4 * np.ptp(b.y)
+
+
+def test_lwr_gp_and_linear_agree_at_the_demo_queries():
+    db = database([0.0, 1.0])
+    lin = dmprs.Generalizer(db, "linear", n_basis=15)
+    ude = dmprs.Generalizer(db, "lwr-gp", n_basis=15)
+    for q in (0.0, 1.0):
+        a, b = lin.parameters(q), ude.parameters(q)
+        assert np.abs(a - b).max() < 1e-5 * np.abs(a).max()
+
+
+def test_lwr_gp_of_identical_motions_is_that_motion_everywhere():
+    db = dmprs.Database(("q",))
+    tr = trajectory(0.4)
+    for q in [0.0, 1.0, 2.5]:
+        db.add(q, tr)
+    gen = dmprs.Generalizer(db, "lwr-gp", n_basis=12)
+    want = flat(gen.demo_dmps[0])
+    for q in [-1.0, 0.5, 1.7, 4.0]:
+        assert np.abs(gen.parameters(q) - want).max() < 1e-6 * np.abs(want).max()
+
+
+def test_lwr_gp_in_2d_blends_between_demos():
+    rng = np.random.default_rng(0)
+    queries = [rng.uniform(0, 1, 2) for _ in range(7)]
+    gen = dmprs.Generalizer(database(queries), "lwr-gp", n_basis=15)
+    q = np.array([0.5, 0.5])
+    dmp = gen.predict(q)
+    taus = [d.tau for d in gen.demo_dmps]
+    assert min(taus) * 0.9 < dmp.tau < max(taus) * 1.1
+    # Weights stay within the range the demos span (a convex blend of similar design matrices).
+    w = np.stack([d.weights for d in gen.demo_dmps])
+    span = w.max(0) - w.min(0)
+    assert np.all(dmp.weights >= w.min(0) - 0.1 * span - 1e-9)
+    assert np.all(dmp.weights <= w.max(0) + 0.1 * span + 1e-9)
+    jac = gen.jacobian(q)
+    assert jac.shape == (gen.n_parameters, 2) and np.isfinite(jac).all()
+    # The Jacobian predicts a small step.
+    dq = np.array([1e-3, -2e-3])
+    np.testing.assert_allclose(
+        gen.parameters(q + dq) - gen.parameters(q), jac @ dq, atol=1e-4 * np.abs(jac).max()
+    )
+
+
+def test_predictions_are_bit_identical():
+    db = database([0.0, 0.5, 1.0, 1.5])
+    a = dmprs.Generalizer(db, "lwr-gp", n_basis=10)
+    b = dmprs.Generalizer(db, "lwr-gp", n_basis=10)
+    assert a.parameters(0.77).tobytes() == b.parameters(0.77).tobytes()
+
+
+# --- bad input: one test per case, each a DmprsError that says what -----------------------------
+def test_empty_database():
+    with pytest.raises(InvalidInputError, match="database is empty"):
+        dmprs.Generalizer(dmprs.Database(("q",)), "linear")
+
+
+@pytest.mark.parametrize("method", ["linear", "lwr-gp"])
+def test_too_few_demos(method):
+    with pytest.raises(InvalidInputError, match="needs at least 2 demonstrations"):
+        dmprs.Generalizer(database([0.0]), method)
+
+
+def test_too_many_demos_for_linear():
+    with pytest.raises(InvalidInputError, match=r"at most n \+ 1 = 2 demonstrations.*lwr-gp"):
+        dmprs.Generalizer(database([0.0, 1.0, 2.0]), "linear")
+
+
+def test_collinear_queries_for_linear():
+    with pytest.raises(InvalidInputError, match="affinely independent"):
+        dmprs.Generalizer(database([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]), "linear")
+
+
+def test_duplicate_queries():
+    db = database([0.0, 1.0])
+    with pytest.raises(InvalidInputError, match=r"demonstration 0 already has the query \[0\.0\]"):
+        db.add(0.0, trajectory(0.5))
+    # The core checks too (for callers that bypass Database).
+    tr = trajectory(0.0)
+    demo = (tr.t, tr.y, None, None)
+    with pytest.raises(InvalidInputError, match="demonstrations 0 and 1 have the same query"):
+        _core.Generalizer(
+            np.array([[0.0], [0.0]]), [demo, demo], "linear", n_basis=10, alpha_z=48.0, beta_z=12.0,
+            alpha_x=2.0, width_factor=2.0, kernel="tricube", bandwidth=1.5, ridge=1e-8,
+            interpolate=True, gp_noise=1e-3, gp_optimize=None, gp_restarts=0,
+        )
+
+
+def test_query_of_the_wrong_dimension():
+    db = database([0.0, 1.0])
+    with pytest.raises(InvalidInputError, match=r"query has shape \(2,\), expected \(1,\)"):
+        db.add([0.5, 0.5], trajectory(0.5))
+    gen = dmprs.Generalizer(db, "linear", n_basis=10)
+    with pytest.raises(InvalidInputError, match=r"q has shape \(2,\), expected \(1,\)"):
+        gen.predict([0.5, 0.5])
+
+
+def test_query_with_nan():
+    db = database([0.0, 1.0])
+    with pytest.raises(InvalidInputError, match=r"query\[0\] is nan"):
+        db.add([np.nan], trajectory(0.5))
+    gen = dmprs.Generalizer(db, "lwr-gp", n_basis=10)
+    with pytest.raises(InvalidInputError, match=r"q\[0\] is nan"):
+        gen.predict(np.nan)
+    with pytest.raises(InvalidInputError, match=r"q\[0\] is inf"):
+        gen.jacobian(np.inf)
+
+
+def test_demos_with_different_dof_counts():
+    db = database([0.0], n_dof=2)
+    with pytest.raises(InvalidInputError, match="has 3 DOFs, but the demonstrations in this database have 2"):
+        db.add(1.0, trajectory(1.0, n_dof=3))
+    a, b = trajectory(0.0, n_dof=2), trajectory(1.0, n_dof=3)
+    with pytest.raises(InvalidInputError, match="demonstration 1 has 3 degrees of freedom, but demonstration 0 has 2"):
+        _core.Generalizer(
+            np.array([[0.0], [1.0]]), [(a.t, a.y, None, None), (b.t, b.y, None, None)], "lwr-gp",
+            n_basis=10, alpha_z=48.0, beta_z=12.0, alpha_x=2.0, width_factor=2.0, kernel="tricube",
+            bandwidth=1.5, ridge=1e-8, interpolate=True, gp_noise=1e-3, gp_optimize=None, gp_restarts=0,
+        )
+
+
+def test_bad_options():
+    db = database([0.0, 1.0])
+    with pytest.raises(InvalidInputError, match="method = 'nearest' is invalid"):
+        dmprs.Generalizer(db, "nearest")
+    with pytest.raises(InvalidInputError, match="kernel = 'box' is invalid"):
+        dmprs.Generalizer(db, "lwr-gp", kernel="box")
+    with pytest.raises(InvalidInputError, match="bandwidth = 1 is invalid"):
+        dmprs.Generalizer(db, "lwr-gp", bandwidth=1.0)
+    with pytest.raises(InvalidInputError, match="expected a dmprs.Database"):
+        dmprs.Generalizer([(0.0, trajectory(0.0))], "linear")
+
+
+def test_a_bad_demo_is_named():
+    t = np.array([0.0, 0.5, 0.5, 1.0])
+    with pytest.raises(InvalidInputError, match=r"demonstration 1: t must be strictly increasing"):
+        tr = trajectory(0.0)
+        _core.Generalizer(
+            np.array([[0.0], [1.0]]), [(tr.t, tr.y, None, None), (t, np.zeros((4, 2)), None, None)],
+            "linear", n_basis=10, alpha_z=48.0, beta_z=12.0, alpha_x=2.0, width_factor=2.0,
+            kernel="tricube", bandwidth=1.5, ridge=1e-8, interpolate=True, gp_noise=1e-3,
+            gp_optimize=None, gp_restarts=0,
+        )
