@@ -254,3 +254,17 @@ def test_a_saved_database_generalizes_identically(tmp_path):
     a = dmprs.Generalizer(d, "linear", n_basis=10)
     b = dmprs.Generalizer(dmprs.Database.load(tmp_path / "db"), "linear", n_basis=10)
     assert a.predict(0.3) == b.predict(0.3)
+
+
+def test_nearest_selects_the_closest_demonstrations_in_order():
+    db = dmprs.Database(query_names=("v",), query_units=("l",))
+    t = np.linspace(0, 1, 5)
+    for q in (0.3, 1.0, 0.5, 0.7):
+        db.add([q], dmprs.Trajectory(t, q * t))
+    near = db.nearest([0.62], 2)
+    assert near.queries.ravel().tolist() == [0.5, 0.7]  # database order kept
+    assert near.query_names == db.query_names and len(db) == 4
+    with pytest.raises(dmprs.InvalidInputError, match="k = 5"):
+        db.nearest([0.6], 5)
+    with pytest.raises(dmprs.InvalidInputError, match="query"):
+        db.nearest([np.nan], 1)

@@ -35,7 +35,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmprs._arrays import as_float_array, check_finite
+from dmprs._arrays import as_count, as_float_array, check_finite
+from dmprs._io import write_atomic
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
 from dmprs.trajectory import Trajectory
 
@@ -175,6 +176,20 @@ class Database:
         """All queries, (M, n)."""
         return np.array([d.query for d in self._demos], dtype=np.float64).reshape(len(self), self.n_query)
 
+    def nearest(self, query: ArrayLike, k: int = 2) -> Database:
+        """A new database with the ``k`` demonstrations whose queries are nearest ``query``
+        (Euclidean distance in query units; ties keep database order). With ``"linear"``
+        generalization, which takes n + 1 demos, this gives piecewise-linear generalization
+        over a growing database."""
+        q = self._check_query(query)
+        k = as_count(k, "k", 1)
+        if k > len(self):
+            raise InvalidInputError(f"k = {k} but the database has {len(self)} demonstrations")
+        order = np.argsort(np.linalg.norm(self.queries - q, axis=1), kind="stable")[:k]
+        out = Database(self._names, self._units)
+        out._demos = [self._demos[i] for i in sorted(order)]
+        return out
+
     def __repr__(self) -> str:
         dims = ", ".join(f"{n} [{u}]" if u else n for n, u in zip(self._names, self._units))
         return f"Database({len(self)} demos, query=({dims}), n_dof={self.n_dof})"
@@ -282,39 +297,12 @@ def _sha256_file(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _fsync_dir(directory: Path) -> None:
-    # Makes the rename durable; not possible (nor needed) on every platform.
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
 def _atomic_write(target: Path, data: bytes) -> None:
-    """Writes ``data`` to a temporary file beside ``target``, fsyncs it and renames it over
-    ``target``: readers see the old file or the new one, never a partial one."""
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    """Readers see the old file or the new one, never a partial one (:func:`dmprs._io.write_atomic`)."""
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, target)
-    except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        if isinstance(exc, OSError):
-            raise DatabaseError(f"{target}: cannot write ({exc.strerror or exc})") from None
-        raise
-    _fsync_dir(target.parent)
+        write_atomic(target, data)
+    except OSError as exc:
+        raise DatabaseError(f"{target}: cannot write ({exc.strerror or exc})") from None
 
 
 def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Demo:

@@ -1,0 +1,207 @@
+"""The learning loop end to end on the analytic task: convergence, the trial log, crash safety,
+resume, faults, and the database growing with experience."""
+
+import json
+
+import numpy as np
+import pytest
+
+import dmprs
+from dmprs import experiments
+from dmprs.adapters import Outcome, Status
+from dmprs.learning import learn
+from dmprs.runlog import RunLog, RunLogError
+from dmprs.tasks.analytic import outcome_map
+
+
+def setup(**kw):
+    return experiments.analytic_setup(**kw)
+
+
+def test_error_learning_reaches_the_desired_outcome():
+    s = setup()
+    result = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=20)
+    assert result.converged
+    assert result.n_trials <= 6
+    last = result.trials[-1]
+    assert last.success and abs(last.eps[0]) < s.task.tol
+    # independent truth: the executed peak maps to the desired outcome through the true map
+    assert abs(outcome_map(last.signals["peak"]) - 1.5) < s.task.tol
+    np.testing.assert_array_equal(result.learned_query, last.query)
+
+
+def test_the_first_trial_is_the_plain_generalization():
+    s = setup()
+    result = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=20)
+    np.testing.assert_array_equal(result.trials[0].query, s.desired_query)
+
+
+@pytest.mark.parametrize("name", ["error", "weighted", "secant", "golden", "golden-robust", "root"])
+def test_every_query_learner_converges_on_the_analytic_task(name):
+    s = setup()
+    result = learn(s.task, s.generalizer, s.desired_query, s.make_learner(name), max_trials=30)
+    assert result.converged, (name, [t.eps for t in result.trials])
+
+
+def test_each_trial_is_on_disk_before_the_learner_sees_it(tmp_path):
+    s = setup()
+    inner = s.make_learner("error")
+    log_path = tmp_path / "trials.jsonl"
+
+    class Watching:
+        converged = False
+
+        def ask(self):
+            return inner.ask()
+
+        def tell(self, q, eps):
+            lines = log_path.read_text().splitlines()
+            assert json.loads(lines[-1])["query"] == list(np.atleast_1d(q))
+            inner.tell(q, eps)
+
+    result = learn(s.task, s.generalizer, s.desired_query, Watching(), log_dir=tmp_path)
+    assert len(log_path.read_text().splitlines()) == len(result.trials)
+
+
+def test_a_crash_loses_no_finished_trial_and_resume_continues_identically(tmp_path):
+    s = setup(noise=0.002, tol=0.004)
+    reference = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=20)
+    assert reference.n_trials >= 3
+
+    inner = s.make_learner("error")
+
+    class Crashing:
+        converged = False
+        told = 0
+
+        def ask(self):
+            return inner.ask()
+
+        def tell(self, q, eps):
+            self.told += 1
+            if self.told == 2:
+                raise KeyboardInterrupt
+            inner.tell(q, eps)
+
+    with pytest.raises(KeyboardInterrupt):
+        learn(s.task, s.generalizer, s.desired_query, Crashing(), log_dir=tmp_path)
+    trials, cut = RunLog(tmp_path).read()
+    assert len(trials) == 2 and cut is None
+
+    resumed = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"),
+                    max_trials=20, log_dir=tmp_path, resume=True)
+    assert [t.query.tolist() for t in resumed.trials] == [t.query.tolist() for t in reference.trials]
+    assert [t.eps.tolist() for t in resumed.trials] == [t.eps.tolist() for t in reference.trials]
+
+
+def test_a_line_cut_mid_write_is_reported_and_the_complete_trials_kept(tmp_path):
+    s = setup()
+    learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=2, log_dir=tmp_path)
+    with open(tmp_path / "trials.jsonl", "a") as f:
+        f.write('{"trial": 2, "query": [1.4')  # the crash
+    trials, cut = RunLog(tmp_path).read()
+    assert len(trials) == 2 and "cut mid-write" in cut
+    result = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"),
+                   max_trials=20, log_dir=tmp_path, resume=True)
+    assert result.converged and "cut mid-write" in result.cut_note
+    trials, cut = RunLog(tmp_path).read()
+    assert cut is None and len(trials) == len(result.trials)
+
+
+def test_resume_with_a_differently_configured_learner_is_refused(tmp_path):
+    s = setup(tol=1e-9)  # cannot converge in the 2 trials run
+    learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=2, log_dir=tmp_path)
+    with pytest.raises(RunLogError, match="the learner now asks"):
+        learn(s.task, s.generalizer, s.desired_query, s.make_learner("golden"),
+              max_trials=20, log_dir=tmp_path, resume=True)
+
+
+def test_an_unreadable_run_directory(tmp_path):
+    with pytest.raises(RunLogError, match="not a run directory"):
+        RunLog(tmp_path / "missing").read()
+    (tmp_path / "run.json").write_text("{not json")
+    with pytest.raises(RunLogError, match="run.json is not a readable run description"):
+        RunLog(tmp_path).meta()
+    (tmp_path / "run.json").write_text('{"schema_version": 99}')
+    with pytest.raises(RunLogError, match="schema version 99"):
+        RunLog(tmp_path).meta()
+
+
+def test_a_log_dir_that_already_holds_trials_is_not_overwritten(tmp_path):
+    s = setup()
+    learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=1, log_dir=tmp_path)
+    with pytest.raises(RunLogError, match="already holds trials"):
+        learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), log_dir=tmp_path)
+
+
+@pytest.mark.parametrize("fault, status", [("raise", "error"), ("slow", "timeout")])
+def test_an_adapter_that_fails_mid_trial_stops_the_run_cleanly(tmp_path, fault, status):
+    s = setup()
+    adapter = s.task.adapter
+    original = adapter._execute
+    calls = {"n": 0}
+
+    def faulty(trajectory):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            if fault == "raise":
+                raise ConnectionError("robot controller went away")
+            while not adapter._interrupted():
+                pass
+            return adapter._interrupted_outcome()
+        return original(trajectory)
+
+    adapter._execute = faulty
+    result = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"),
+                   log_dir=tmp_path, timeout_s=0.05)
+    assert not result.converged and status in result.stop_reason
+    trials, _ = RunLog(tmp_path).read()
+    assert [t.status for t in trials] == ["ok", status]
+    assert trials[0].eps is not None and trials[1].eps is None
+
+
+def test_a_non_ok_outcome_never_reaches_the_learner():
+    s = setup()
+    s.task.adapter._execute = lambda trajectory: Outcome(Status.ABORTED, message="safety stop")
+    inner = s.make_learner("error")
+
+    class Strict:
+        converged = False
+
+        def ask(self):
+            return inner.ask()
+
+        def tell(self, q, eps):
+            raise AssertionError("tell must not be called")
+
+    result = learn(s.task, s.generalizer, s.desired_query, Strict())
+    assert result.trials[0].status == "aborted" and result.n_trials == 0
+
+
+def test_bad_arguments():
+    s = setup()
+    lrn = s.make_learner("error")
+    with pytest.raises(dmprs.InvalidInputError, match="desired_query has 2 components"):
+        learn(s.task, s.generalizer, [1.0, 2.0], lrn)
+    with pytest.raises(dmprs.InvalidInputError, match="max_trials"):
+        learn(s.task, s.generalizer, s.desired_query, lrn, max_trials=0)
+    with pytest.raises(dmprs.InvalidInputError, match="unknown learner 'sgd'"):
+        s.make_learner("sgd")
+    with pytest.raises(dmprs.InvalidInputError, match="unknown task 'juggling'"):
+        experiments.run("juggling")
+
+
+def test_learned_movements_grow_the_database_and_speed_up_nearby_queries():
+    # The paper's conclusion: the richer the database, the fewer trials a new query needs.
+    s = setup(desired=1.5, tol=0.002)
+    first = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=20,
+                  database=s.database)
+    assert first.converged and len(s.database) == 3
+    nearby = np.array([1.62])
+    before = learn(s.task, s.generalizer, nearby, s.make_learner("error").__class__(nearby), max_trials=20)
+    # piecewise-linear generalization over the grown database: the two demos nearest the query
+    richer = dmprs.Generalizer(s.database.nearest(nearby, 2), method="linear", n_basis=25)
+    after = learn(s.task, richer, nearby, s.make_learner("error").__class__(nearby), max_trials=20)
+    assert before.converged and after.converged
+    assert abs(after.trials[0].eps[0]) < abs(before.trials[0].eps[0]) / 3
+    assert after.n_trials < before.n_trials, (before.n_trials, after.n_trials)
