@@ -112,3 +112,18 @@ def test_bad_configuration_is_a_clear_error():
         good = strike(0.1)
         cols = (good.t, np.ascontiguousarray(good.y[:, 0]), np.ascontiguousarray(good.y[:, 1]))
         _core.matchbox_simulate_batch([cols, (good.t, cols[1] - 0.05, cols[2])], _core.MatchboxConfig())
+
+
+def test_learning_stands_the_box_up_as_in_the_paper():
+    from dmprs import experiments
+
+    # Fig. 4: eq. 16 with K = I, one demo flipped back and one over: within 5 trials (paper: 4).
+    r = experiments.matchbox(demos="default", learner="error")
+    assert r.converged and r.n_trials <= 5
+    assert r.trials[-1].signals["regime"] == "upright"
+    assert r.trials[0].query[0] == pytest.approx(math.pi / 2)  # the first trial is Ĝ(pi/2)
+    # Fig. 7: both demos flipped back, pi/2 outside them (extrapolation), eq. 17: within 8.
+    r = experiments.matchbox(demos="both_flipped_back", learner="weighted")
+    assert r.converged and r.n_trials <= 8
+    s = experiments.matchbox_setup(demos="both_flipped_back")
+    assert (s.database.queries < math.pi / 2).all()
