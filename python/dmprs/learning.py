@@ -150,8 +150,9 @@ def learn(
             n_done = sum(1 for t in trials if t.status == Status.OK.value)
             if n_done >= max_trials:
                 return finish(f"trial cap of {max_trials} reached", False)
-            if getattr(learner, "converged", False):
-                return finish("the learner reports convergence without a successful trial", False)
+            if getattr(learner, "converged", False) or getattr(learner, "done", False):
+                detail = getattr(learner, "status_detail", "") or getattr(learner, "status", "")
+                return finish(f"the learner stopped without a successful trial ({detail})", False)
             index = len(trials)
             q_obj = learner.ask()
             q = _as_query(q_obj, task.n_query)
