@@ -129,6 +129,36 @@ def plot_cmd(run: Path, out: Path | None) -> None:
     click.echo(f"figure written to {path}")
 
 
+@main.command("reproduce")
+@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True,
+              help="folder for report.md, report.json and the figures")
+@click.option("--quick", is_flag=True, help="every part at small scale (about 20 s)")
+@click.option("--backend", type=click.Choice(["local", "ray", "serial"]), default="local", show_default=True,
+              help="local processes, a Ray cluster (RAY_ADDRESS or a local one), or in-process")
+@click.option("--workers", type=int, default=None, help="parallel workers (default: all cores)")
+def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None) -> None:
+    """Run the paper's experiments in simulation and the baselines; write the report."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from dmprs.reproduce import reproduce
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), transient=False) as bar:
+        job = bar.add_task("reproducing", total=None)
+
+        def progress(done: int, total: int, result: dict) -> None:
+            what = result.get("learner") or result.get("method")
+            bar.update(job, completed=done, total=total,
+                       description=f"{result['part']}: {what}".ljust(40)[:40])
+
+        try:
+            report = reproduce(out, quick=quick, backend=backend, workers=workers, progress=progress)
+        except DmprsError as exc:
+            raise click.ClickException(str(exc)) from None
+    click.echo((out / "report.md").read_text())
+    click.echo(f"finished in {report['seconds']} s; report and figures in {out}")
+
+
 @main.command("demo")
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 def demo_cmd(out: Path) -> None:

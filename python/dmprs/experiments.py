@@ -60,6 +60,8 @@ def query_learners(low: float | None, high: float | None, scale: float = 1.0,
         "golden": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="paper", max_trials=max_trials, **kw),
         "golden-robust": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="robust", max_trials=max_trials, **kw),
         "root": lambda q0, **kw: L.IllinoisRootFinder(float(q0[0]), *bracket(), max_trials=max_trials, **kw),
+        # constrained-domain policy gradient (eq. 12): finite differences in q, every trial counted
+        "pg": lambda q0, **kw: L.PolicyGradient(q0, scale=scale, max_trials=max_trials, **kw),
     }
 
 
