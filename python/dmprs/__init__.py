@@ -19,6 +19,8 @@ from dmprs.errors import (
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
 from dmprs.trajectory import Trajectory
+from dmprs.learning import LearningResult, learn
+from dmprs import adapters, tasks  # noqa: E402 - they build on the classes above
 
 __all__ = [
     "DMP",
@@ -30,10 +32,14 @@ __all__ = [
     "GaussianProcess",
     "Generalizer",
     "InvalidInputError",
+    "LearningResult",
     "LearnerStateError",
     "NumericalError",
     "Trajectory",
     "__version__",
+    "adapters",
+    "learn",
+    "tasks",
     "learners",
     "rollout_batch",
 ]
