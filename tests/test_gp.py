@@ -122,3 +122,25 @@ def test_bad_gp_input():
     gp = dmprs.GaussianProcess().fit(X, y, optimize=False)
     with pytest.raises(InvalidInputError, match="X has shape"):
         gp.predict(np.zeros((3, 5)))
+
+
+def test_fits_do_not_depend_on_the_thread_count():
+    """Restarts run in parallel for m >= 40; the best is picked in start order."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np, dmprs\n"
+        "rng = np.random.default_rng(11)\n"
+        "X = rng.uniform(-2, 2, (60, 2)); y = np.sin(X[:, 0]) + 0.1 * rng.standard_normal(60)\n"
+        "print(dmprs.GaussianProcess().fit(X, y).theta.tobytes().hex())\n"
+    )
+    runs = {
+        threads: subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True,
+            env={**os.environ, "RAYON_NUM_THREADS": threads},
+        ).stdout
+        for threads in ("1", "2")
+    }
+    assert runs["1"] == runs["2"] != ""

@@ -31,7 +31,8 @@ class Generalizer:
     and a scalar query this is ``theta(q) = (1 - a) theta_1 + a theta_2`` with
     ``a = (q - q_1) / (q_2 - q_1)``. For an n-D query it uses barycentric coordinates, so it
     needs 2 to n + 1 demos with affinely independent queries (a segment, a triangle, ...); with
-    fewer than n + 1 it is constant across the demos' affine hull. It reproduces each demo exactly.
+    fewer than n + 1 it is constant along directions orthogonal to the demos' affine hull (it uses
+    the projection of q onto it). It reproduces each demo exactly.
 
     ``method="lwr-gp"`` (Ude et al. 2010, method.md §3.2): the weights by locally weighted
     regression, one weighted least-squares problem over the data of all demos with one
@@ -41,9 +42,12 @@ class Generalizer:
     prior mean = the demos' mean, noise std ``gp_noise x`` the outputs' std, length scales and
     signal variance by ML-II when there are at least 4 demos, else the query range and the
     outputs' variance). With ``interpolate=True`` (default) the kernel weights are multiplied
-    by ``(d_min / d_k)^2`` so that a demo's own query returns that demo (to ridge precision);
-    ``interpolate=False`` gives the plain locally constant blend, which does not. It cannot
-    extrapolate the weights: far from the demos they tend to those of the nearest ones.
+    by ``(d_min / d_k)^2`` (a Shepard-type factor) so that a demo's own query returns that demo:
+    its weights exactly (the default ridge is the one :meth:`dmprs.DMP.fit` uses), tau, goal and
+    start to the GP noise (1e-5 relative or better in our tests). ``interpolate=False`` gives the plain locally
+    constant blend of method.md §3.2, which mixes a demo with its neighbours even at its own
+    query. LWR cannot extrapolate the weights: far from the demos they tend to those of the
+    nearest ones (use "linear" to extrapolate, as the paper's Fig. 7 experiment needs).
 
     Either way, tau(q) must stay within ``(0.2 x`` the shortest, ``5 x`` the longest demo
     duration); a query outside raises :class:`~dmprs.errors.ExtrapolationError`.
