@@ -1,6 +1,5 @@
 """The dmprs command line, run in-process with click's runner."""
 
-import numpy as np
 from click.testing import CliRunner
 
 import dmprs

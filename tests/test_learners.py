@@ -7,7 +7,6 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-import dmprs
 from dmprs import learners as L
 from dmprs.errors import InvalidInputError, LearnerStateError
 

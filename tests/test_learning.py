@@ -181,7 +181,7 @@ def test_a_non_ok_outcome_never_reaches_the_learner():
 def test_bad_arguments():
     s = setup()
     lrn = s.make_learner("error")
-    with pytest.raises(dmprs.InvalidInputError, match="desired_query has 2 components"):
+    with pytest.raises(dmprs.InvalidInputError, match=r"desired_query has shape \(2,\), expected \(1,\)"):
         learn(s.task, s.generalizer, [1.0, 2.0], lrn)
     with pytest.raises(dmprs.InvalidInputError, match="max_trials"):
         learn(s.task, s.generalizer, s.desired_query, lrn, max_trials=0)

@@ -82,3 +82,15 @@ def as_scalar(value: Any, name: str, *, positive: bool = False) -> float:
     if positive and x <= 0:
         raise InvalidInputError(f"{name} = {x} is invalid: must be > 0")
     return x
+
+
+def as_query(value: Any, name: str, query_names: tuple[str, ...]) -> NDArray[np.float64]:
+    """A task query: one finite value per query dimension (a scalar is fine for one)."""
+    q = np.atleast_1d(as_float_array(value, name, (0, 1)))
+    if q.shape != (len(query_names),):
+        raise InvalidInputError(
+            f"{name} has shape {q.shape}, expected ({len(query_names)},): one value per query "
+            f"dimension {tuple(query_names)}"
+        )
+    check_finite(q, name)
+    return q

@@ -25,7 +25,6 @@ import io
 import json
 import os
 import re
-import tempfile
 import zipfile
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -35,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmprs._arrays import as_count, as_float_array, check_finite
+from dmprs._arrays import as_count, as_query
 from dmprs._io import write_atomic
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
 from dmprs.trajectory import Trajectory
@@ -116,14 +115,7 @@ class Database:
         return self._demos[0].trajectory.n_dof if self._demos else None
 
     def _check_query(self, query: ArrayLike) -> NDArray[np.float64]:
-        q = np.atleast_1d(as_float_array(query, "query", (0, 1)))
-        if q.shape != (self.n_query,):
-            raise InvalidInputError(
-                f"query has shape {q.shape}, expected ({self.n_query},): one value per query "
-                f"dimension {self._names}"
-            )
-        check_finite(q, "query")
-        return q
+        return as_query(query, "query", self._names)
 
     def add(
         self,

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
-from dmprs._arrays import as_count, as_float_array, as_scalar, check_finite
+from dmprs._arrays import as_count, as_query, as_scalar
 from dmprs.database import Database
 from dmprs.dmp import DMP, _constants
 from dmprs.errors import InvalidInputError
@@ -103,14 +103,7 @@ class Generalizer:
         self._db_names = db.query_names
 
     def _query(self, q: ArrayLike) -> NDArray[np.float64]:
-        arr = np.atleast_1d(as_float_array(q, "q", (0, 1)))
-        if arr.shape != (self.n_query,):
-            raise InvalidInputError(
-                f"q has shape {arr.shape}, expected ({self.n_query},): one value per query "
-                f"dimension {self._db_names}"
-            )
-        check_finite(arr, "q")
-        return arr
+        return as_query(q, "q", self._db_names)
 
     def predict(self, q: ArrayLike) -> DMP:
         """The DMP for query ``q`` (n,) (a scalar for n = 1)."""

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmprs._arrays import as_float_array, check_finite
+from dmprs._arrays import as_query
 from dmprs.adapters import Adapter, Outcome
 from dmprs.errors import InvalidInputError
 
@@ -51,14 +51,7 @@ class Task(abc.ABC):
         return len(self.query_names)
 
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
-        q = np.atleast_1d(as_float_array(query, name, (0, 1)))
-        if q.shape != (self.n_query,):
-            raise InvalidInputError(
-                f"{name} has {q.shape[0]} components; {self.name} queries have {self.n_query} "
-                f"({', '.join(self.query_names)})"
-            )
-        check_finite(q, name)
-        return q
+        return as_query(query, name, self.query_names)
 
     def trajectory(self, dmp: DMP) -> Trajectory:
         """The trajectory to execute for a generalized DMP: by default its rollout at the
