@@ -123,10 +123,11 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
     out.mkdir(parents=True, exist_ok=True)
     cache = out / ".cache"
     cache.mkdir(exist_ok=True)
-    os.environ.setdefault("DMPRS_CACHE_DIR", str(cache.resolve()))
     specs = plan(quick)
     start = time.perf_counter()
-    _prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]))
+    # Workers inherit the environment: they read the pouring calibration from this disk cache.
+    saved = os.environ.get("DMPRS_CACHE_DIR")
+    os.environ["DMPRS_CACHE_DIR"] = saved or str(cache.resolve())
     done = [0]
 
     def on_result(i: int, r: dict[str, Any]) -> None:
@@ -134,7 +135,12 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
         if progress:
             progress(done[0], len(specs), r)
 
-    results = pmap(_dispatch, specs, backend=backend, workers=workers, on_result=on_result)
+    try:
+        _prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]))
+        results = pmap(_dispatch, specs, backend=backend, workers=workers, on_result=on_result)
+    finally:
+        if saved is None:
+            del os.environ["DMPRS_CACHE_DIR"]
     report = summarize(results)
     report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1))
     (out / "report.json").write_text(json.dumps({"summary": report, "runs": results}, indent=1, default=str))
