@@ -84,6 +84,8 @@ fn bad_trajectories_are_errors_with_a_reason() {
     let high: Vec<f64> = z.iter().map(|v| v + 0.2).collect();
     assert!(check(&t, &x, &high).contains("leaves the workspace"));
     assert!(simulate(&FingerPath { t: &t, x: &through, z: &z }, &cfg).is_err());
+    let long: Vec<f64> = t.iter().map(|v| v * 1e6).collect();
+    assert!(check(&long, &x, &z).contains("exceeds the 60 s"));
     let bad_cfg = MatchboxConfig { overhang: 0.03, ..cfg };
     assert!(simulate(&FingerPath { t: &t, x: &x, z: &z }, &bad_cfg).is_err());
     assert_eq!(regime(0.1), regime(0.1));

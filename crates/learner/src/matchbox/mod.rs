@@ -11,7 +11,7 @@ mod sim;
 
 pub use config::{Error, FLOOR_Z, MatchboxConfig, Result, TABLE_THICKNESS};
 pub use measure::{Measures, Regime, measure, unwrap};
-pub use sim::{Episode, FingerPath, simulate};
+pub use sim::{Episode, FingerPath, MAX_SIMULATED_TIME, simulate};
 
 use rayon::prelude::*;
 

@@ -10,6 +10,10 @@ use rapier3d::prelude::*;
 use super::config::{Error, FLOOR_Z, MatchboxConfig, Result, TABLE_THICKNESS};
 use super::measure::{Measures, measure, unwrap};
 
+/// The longest episode (trajectory plus settling) one call may simulate, s: a bound on memory and
+/// time for a mistyped input (a real strike lasts about 0.1 s).
+pub const MAX_SIMULATED_TIME: f64 = 60.0;
+
 /// A fingertip path: centre positions (x, z) in m at increasing times t in s (y is fixed at 0,
 /// the middle of the box). After the last sample the fingertip holds still.
 #[derive(Debug, Clone, Copy)]
@@ -70,8 +74,16 @@ impl FingerPath<'_> {
             out.push(format!("t must be strictly increasing: t[{j}] = {} after {}", t[j], t[j - 1]));
             return out;
         }
+        let duration = t[t.len() - 1] - t[0];
+        if duration + cfg.settle_time > MAX_SIMULATED_TIME {
+            out.push(format!(
+                "lasts {duration} s; with {} s of settling that exceeds the {MAX_SIMULATED_TIME} s an episode may simulate",
+                cfg.settle_time
+            ));
+            return out;
+        }
         let r = cfg.finger_radius;
-        let steps = ((t[t.len() - 1] - t[0]) / cfg.dt).ceil() as usize;
+        let steps = (duration / cfg.dt).ceil() as usize;
         let mut outside = None;
         let mut in_table = None;
         for k in 0..=steps.max(1) {
