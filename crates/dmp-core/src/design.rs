@@ -120,8 +120,8 @@ pub fn normal_equations(demo: &PreparedDemo<'_>, basis: &Basis, config: &DmpConf
     let mut atf = DMatrix::<f64>::zeros(n, n_dof);
     let mut psi = vec![0.0; n];
     let mut force = vec![0.0; n_dof];
-    for j in 0..t.len() {
-        let x = phase(t[j] - t0, tau, config.alpha_x);
+    for (j, &tj) in t.iter().enumerate() {
+        let x = phase(tj - t0, tau, config.alpha_x);
         let range = basis.normalized_activations(x, &mut psi);
         // Row j of the design matrix, with the lab code's cut-off; only its non-zero span
         // (about six kernels) enters the normal equations.

@@ -155,11 +155,13 @@ pub fn simulate(path: &FingerPath<'_>, cfg: &MatchboxConfig) -> Result<Episode> 
     let finger = bodies.insert(RigidBodyBuilder::kinematic_position_based().translation(v(fx, 0.0, fz)));
     colliders.insert_with_parent(surface(ColliderBuilder::ball(cfg.finger_radius as f32)), finger, &mut bodies);
 
-    let mut params = IntegrationParameters::default();
-    params.dt = cfg.dt as f32;
-    params.num_solver_iterations = cfg.solver_iterations;
-    // Centimetre-sized objects: scale Rapier's tolerances to the scene.
-    params.length_unit = 0.01;
+    let params = IntegrationParameters {
+        dt: cfg.dt as f32,
+        num_solver_iterations: cfg.solver_iterations,
+        // Centimetre-sized objects: scale Rapier's tolerances to the scene.
+        length_unit: 0.01,
+        ..IntegrationParameters::default()
+    };
     let mut pipeline = PhysicsPipeline::new();
     let mut islands = IslandManager::new();
     let mut broad_phase = DefaultBroadPhase::new();
