@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result, check_scalar};
 use crate::linalg::{
-    cholesky_in_place, dot, solve_lower_in_place, solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
+    Scratch, cholesky_in_place_with, dot, solve_lower_in_place, solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
 };
 use crate::optimize::{MinimizeOptions, halton, minimize_box};
 
@@ -257,6 +257,8 @@ struct Workspace {
     alpha: Vec<f64>,
     /// One column of scratch.
     col: Vec<f64>,
+    /// The faer kernels' temporary memory.
+    scratch: Scratch,
 }
 
 impl Workspace {
@@ -270,6 +272,7 @@ impl Workspace {
             kinv: Vec::new(),
             alpha: vec![0.0; m],
             col: vec![0.0; m],
+            scratch: Scratch::new(m),
         }
     }
 
@@ -304,7 +307,7 @@ impl Workspace {
         for i in 0..m {
             self.l[i * m + i] += h.noise_var;
         }
-        if !cholesky_in_place(&mut self.l, m) {
+        if !cholesky_in_place_with(&mut self.l, m, &mut self.scratch) {
             return None;
         }
         self.alpha.copy_from_slice(r);
@@ -325,7 +328,7 @@ impl Workspace {
         if self.kinv.len() != m * m {
             self.kinv = vec![0.0; m * m];
         }
-        spd_inverse_lower(&self.l, m, &mut self.kinv);
+        spd_inverse_lower(&self.l, m, &mut self.kinv, &mut self.scratch);
         let mut g_len = vec![0.0; n];
         let (mut g_sig, mut g_noise) = (0.0, 0.0);
         for b in 0..m {

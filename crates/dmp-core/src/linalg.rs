@@ -48,10 +48,35 @@ fn view(a: &[f64], m: usize) -> MatRef<'_, f64> {
 /// SIMD kernels every time on a given machine, so results are bit-identical run to run and do not
 /// depend on the number of threads.
 pub fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
+    cholesky_in_place_with(a, m, &mut Scratch::new(m))
+}
+
+/// Reusable scratch memory of the faer kernels for `m x m` matrices, so that an optimization
+/// loop does not allocate (and page-fault) a temporary matrix per call.
+pub struct Scratch {
+    m: usize,
+    buf: MemBuffer,
+}
+
+impl Scratch {
+    pub fn new(m: usize) -> Self {
+        let params: Spec<LltParams, f64> = Default::default();
+        let req = llt::factor::cholesky_in_place_scratch::<f64>(m, Par::Seq, params)
+            .or(llt::inverse::inverse_scratch::<f64>(m, Par::Seq));
+        Self { m, buf: MemBuffer::new(req) }
+    }
+
+    fn stack(&mut self, m: usize) -> &mut MemStack {
+        assert_eq!(m, self.m, "scratch sized for another dimension");
+        MemStack::new(&mut self.buf)
+    }
+}
+
+/// [`cholesky_in_place`] with caller-held scratch memory.
+pub fn cholesky_in_place_with(a: &mut [f64], m: usize, scratch: &mut Scratch) -> bool {
     debug_assert_eq!(a.len(), m * m);
     let params: Spec<LltParams, f64> = Default::default();
-    let mut buf = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(m, Par::Seq, params));
-    let stack = MemStack::new(&mut buf);
+    let stack = scratch.stack(m);
     let mat = MatMut::from_column_major_slice_mut(a, m, m);
     llt::factor::cholesky_in_place(mat, Default::default(), Par::Seq, stack, params).is_ok()
 }
@@ -60,10 +85,9 @@ pub fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
 /// the Cholesky factor `L` (lower triangle of `l`): a blocked triangular inverse and a
 /// triangular product that forms only the lower triangle (LAPACK's `potri`, about `2 m^3 / 3`
 /// flops). The strict upper triangle of `out` is unspecified.
-pub fn spd_inverse_lower(l: &[f64], m: usize, out: &mut [f64]) {
+pub fn spd_inverse_lower(l: &[f64], m: usize, out: &mut [f64], scratch: &mut Scratch) {
     debug_assert!(l.len() == m * m && out.len() == m * m);
-    let mut buf = MemBuffer::new(llt::inverse::inverse_scratch::<f64>(m, Par::Seq));
-    let stack = MemStack::new(&mut buf);
+    let stack = scratch.stack(m);
     let dst = MatMut::from_column_major_slice_mut(out, m, m);
     llt::inverse::inverse(dst, view(l, m), Par::Seq, stack);
 }
@@ -130,7 +154,7 @@ mod tests {
                 assert!((ax[i] - b[i]).abs() < 1e-10);
             }
             let mut kinv = vec![0.0; m * m];
-            spd_inverse_lower(&l, m, &mut kinv);
+            spd_inverse_lower(&l, m, &mut kinv, &mut Scratch::new(m));
             let inv = a.clone().try_inverse().unwrap();
             for bcol in 0..m {
                 for arow in bcol..m {
