@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result, check_scalar};
 use crate::linalg::{
-    Scratch, cholesky_in_place_with, dot, solve_lower_in_place, solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
+    Scratch, cholesky_in_place_with, dot, exp_in_place, solve_lower_in_place, solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
 };
 use crate::optimize::{MinimizeOptions, halton, minimize_box};
 
@@ -299,9 +299,9 @@ impl Workspace {
                     *s += (v - c) * (v - c);
                 }
             }
-            for v in below.iter_mut() {
-                *v = h.signal_var * (-0.5 * *v).exp();
-            }
+            below.iter_mut().for_each(|v| *v *= -0.5);
+            exp_in_place(below);
+            below.iter_mut().for_each(|v| *v *= h.signal_var);
         }
         self.l.copy_from_slice(&self.kf);
         for i in 0..m {
@@ -511,8 +511,9 @@ impl GaussianProcess {
         for (i, o) in out.iter_mut().enumerate() {
             let xi = &self.xs[i * n..(i + 1) * n];
             let s: f64 = xi.iter().zip(&qs).map(|(a, b)| (a - b) * (a - b)).sum();
-            *o = (-0.5 * s).exp();
+            *o = -0.5 * s;
         }
+        exp_in_place(out);
     }
 
     /// Posterior mean at one point `q` (`n_dim` values; the caller checks the length). Allocation
