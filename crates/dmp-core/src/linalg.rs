@@ -66,8 +66,9 @@ fn exp_in_place_generic<const FMA: bool>(v: &mut [f64]) {
     // a * b + c, fused only where the hardware has it (a software fma would be very slow).
     let madd = |a: f64, b: f64, c: f64| if FMA { a.mul_add(b, c) } else { a * b + c };
     const LOG2E: f64 = std::f64::consts::LOG2_E;
-    const LN2_HI: f64 = 6.931_471_803_691_238_164_90e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+    // ln 2 = LN2_HI + LN2_LO, LN2_HI with its low 21 bits zero (so k * LN2_HI is exact).
+    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
     const SHIFT: f64 = 6_755_399_441_055_744.0; // 1.5 * 2^52: rounds to an integer in the low bits
     // 1/j! for j = 12 down to 2.
     const C: [f64; 11] = [
