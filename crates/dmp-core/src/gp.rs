@@ -16,7 +16,9 @@ use nalgebra::DMatrixView;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result, check_scalar};
-use crate::linalg::{cholesky_in_place, dot, inverse_entry, lower_inverse, solve_lower_in_place, solve_upper_t_in_place};
+use crate::linalg::{
+    Scratch, cholesky_in_place_with, dot, exp_in_place, solve_lower_in_place, solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
+};
 use crate::optimize::{MinimizeOptions, halton, minimize_box};
 
 const LOG_2PI: f64 = 1.837_877_066_409_345_3;
@@ -250,11 +252,13 @@ struct Workspace {
     kf: Vec<f64>,
     /// Cholesky factor of `K_f + noise I`.
     l: Vec<f64>,
-    /// `L^{-1}` (gradient only).
-    linv: Vec<f64>,
+    /// Lower triangle of `K^{-1}` (gradient only).
+    kinv: Vec<f64>,
     alpha: Vec<f64>,
     /// One column of scratch.
     col: Vec<f64>,
+    /// The faer kernels' temporary memory.
+    scratch: Scratch,
 }
 
 impl Workspace {
@@ -265,9 +269,10 @@ impl Workspace {
             xd: vec![0.0; m * n_dim],
             kf: vec![0.0; m * m],
             l: vec![0.0; m * m],
-            linv: Vec::new(),
+            kinv: Vec::new(),
             alpha: vec![0.0; m],
             col: vec![0.0; m],
+            scratch: Scratch::new(m),
         }
     }
 
@@ -294,15 +299,15 @@ impl Workspace {
                     *s += (v - c) * (v - c);
                 }
             }
-            for v in below.iter_mut() {
-                *v = h.signal_var * (-0.5 * *v).exp();
-            }
+            below.iter_mut().for_each(|v| *v *= -0.5);
+            exp_in_place(below);
+            below.iter_mut().for_each(|v| *v *= h.signal_var);
         }
         self.l.copy_from_slice(&self.kf);
         for i in 0..m {
             self.l[i * m + i] += h.noise_var;
         }
-        if !cholesky_in_place(&mut self.l, m) {
+        if !cholesky_in_place_with(&mut self.l, m, &mut self.scratch) {
             return None;
         }
         self.alpha.copy_from_slice(r);
@@ -320,25 +325,21 @@ impl Workspace {
     /// `dK/d ln noise_var = noise_var I`. Call after a successful [`Self::factor`].
     fn gradient(&mut self, h: &Hyperparameters) -> Vec<f64> {
         let (m, n) = (self.m, self.n_dim);
-        if self.linv.len() != m * m {
-            self.linv = vec![0.0; m * m];
+        if self.kinv.len() != m * m {
+            self.kinv = vec![0.0; m * m];
         }
-        // K^{-1} entries as dot products of columns of L^{-1}: measured faster here than
-        // accumulating K^{-1} = L^{-T} L^{-1} by rank-1 updates or with nalgebra's product.
-        lower_inverse(&self.l, m, &mut self.linv);
+        spd_inverse_lower(&self.l, m, &mut self.kinv, &mut self.scratch);
         let mut g_len = vec![0.0; n];
         let (mut g_sig, mut g_noise) = (0.0, 0.0);
         for b in 0..m {
+            let kinv_b = &self.kinv[b * m..(b + 1) * m];
             // Diagonal: K_f = signal_var, no length-scale term.
-            let w = self.alpha[b] * self.alpha[b] - inverse_entry(&self.linv, m, b, b);
+            let w = self.alpha[b] * self.alpha[b] - kinv_b[b];
             g_sig += w * h.signal_var;
             g_noise += w * h.noise_var;
             // Pairs (a, b), a > b, each counted twice: t_a = 2 (alpha_a alpha_b - K^{-1}_ab) K_f,ab.
             let t = &mut self.col[b + 1..];
-            for (i, v) in t.iter_mut().enumerate() {
-                let a = b + 1 + i;
-                *v = inverse_entry(&self.linv, m, b, a);
-            }
+            t.copy_from_slice(&kinv_b[b + 1..]);
             let (ab, kf) = (self.alpha[b], &self.kf[b * m + b + 1..(b + 1) * m]);
             for ((v, &al), &k) in t.iter_mut().zip(&self.alpha[b + 1..]).zip(kf) {
                 *v = 2.0 * (al * ab - *v) * k;
@@ -510,8 +511,9 @@ impl GaussianProcess {
         for (i, o) in out.iter_mut().enumerate() {
             let xi = &self.xs[i * n..(i + 1) * n];
             let s: f64 = xi.iter().zip(&qs).map(|(a, b)| (a - b) * (a - b)).sum();
-            *o = (-0.5 * s).exp();
+            *o = -0.5 * s;
         }
+        exp_in_place(out);
     }
 
     /// Posterior mean at one point `q` (`n_dim` values; the caller checks the length). Allocation
@@ -546,42 +548,23 @@ impl GaussianProcess {
         let (m, p) = (self.m, xq.ncols());
         let mut mean = Vec::with_capacity(p);
         let mut std = with_std.then(|| Vec::with_capacity(p));
-        // Test points in blocks: the correlations of a block form the right-hand sides of one
-        // forward substitution, so each column of L is read once per block, not once per point.
-        const BLOCK: usize = 32;
-        let mut kblock = vec![0.0; m * BLOCK];
+        // The correlations of all test points, one column each: they are also the right-hand
+        // sides of one blocked triangular solve (TRSM) for the std.
+        let mut kq = vec![0.0; m * p];
         let mut q = vec![0.0; self.n_dim];
-        for start in (0..p).step_by(BLOCK) {
-            let nb = BLOCK.min(p - start);
-            for j in 0..nb {
-                q.iter_mut().zip(xq.column(start + j).iter()).for_each(|(a, b)| *a = *b);
-                let k = &mut kblock[j * m..(j + 1) * m];
-                self.correlations(&q, k);
-                mean.push(self.y_mean + k.iter().zip(&self.alpha_scaled).map(|(a, b)| a * b).sum::<f64>());
-            }
-            if let Some(std) = std.as_mut() {
-                // var = k** - k*^T K^{-1} k* = signal_var - |L^{-1} k*|^2 with k* = signal_var c
-                // (R&W eq. 2.26, solved with the factor).
-                let sv = self.hyper.signal_var;
-                kblock[..nb * m].iter_mut().for_each(|v| *v *= sv);
-                for k in 0..m {
-                    let col = &self.l[k * m..(k + 1) * m];
-                    let (lkk, below) = (col[k], &col[k + 1..]);
-                    for j in 0..nb {
-                        let v = &mut kblock[j * m..(j + 1) * m];
-                        let vk = v[k] / lkk;
-                        v[k] = vk;
-                        if vk != 0.0 {
-                            for (o, c) in v[k + 1..].iter_mut().zip(below) {
-                                *o -= vk * c;
-                            }
-                        }
-                    }
-                }
-                for j in 0..nb {
-                    let v2: f64 = kblock[j * m..(j + 1) * m].iter().map(|v| v * v).sum();
-                    std.push((sv - v2).max(0.0).sqrt());
-                }
+        for (j, k) in kq.chunks_exact_mut(m).enumerate().take(p) {
+            q.iter_mut().zip(xq.column(j).iter()).for_each(|(a, b)| *a = *b);
+            self.correlations(&q, k);
+            mean.push(self.y_mean + k.iter().zip(&self.alpha_scaled).map(|(a, b)| a * b).sum::<f64>());
+        }
+        if let Some(std) = std.as_mut() {
+            // var = k** - k*^T K^{-1} k* = signal_var - |L^{-1} k*|^2 with k* = signal_var c
+            // (R&W eq. 2.26, solved with the factor).
+            let sv = self.hyper.signal_var;
+            kq.iter_mut().for_each(|v| *v *= sv);
+            solve_lower_many_in_place(&self.l, m, &mut kq, p);
+            for v in kq.chunks_exact(m).take(p) {
+                std.push((sv - dot(v, v)).max(0.0).sqrt());
             }
         }
         Ok((mean, std))
