@@ -34,14 +34,19 @@ impl Basis {
         crate::error::check_scalar("alpha_x", alpha_x, true)?;
         crate::error::check_scalar("width_factor", width_factor, true)?;
         let last = (n_basis - 1) as f64;
-        let centers: Vec<f64> =
-            (0..n_basis).map(|k| (-alpha_x * k as f64 / last).exp()).collect();
+        let centers: Vec<f64> = (0..n_basis)
+            .map(|k| (-alpha_x * k as f64 / last).exp())
+            .collect();
         let mut widths: Vec<f64> = centers
             .windows(2)
             .map(|c| width_factor / ((c[1] - c[0]) * (c[1] - c[0])))
             .collect();
         widths.push(widths[n_basis - 2]);
-        Ok(Self { centers, widths, log_ratio: alpha_x / last })
+        Ok(Self {
+            centers,
+            widths,
+            log_ratio: alpha_x / last,
+        })
     }
 
     pub fn len(&self) -> usize {
@@ -80,7 +85,11 @@ impl Basis {
         };
         // c_k0 >= x >= c_{k0+1}: k0 = floor(ln(1/x) / ln(1/r)), clamped to the basis.
         let steps = -(x.max(f64::MIN_POSITIVE)).ln() / self.log_ratio;
-        let k0 = if steps.is_finite() && steps > 0.0 { (steps as usize).min(n - 2) } else { 0 };
+        let k0 = if steps.is_finite() && steps > 0.0 {
+            (steps as usize).min(n - 2)
+        } else {
+            0
+        };
         let (a0, a1) = (arg(k0), arg(k0 + 1));
         let min_arg = a0.min(a1);
         let limit = min_arg + ACTIVATION_CUTOFF;
@@ -161,14 +170,20 @@ mod tests {
 
     #[test]
     fn the_walk_finds_every_significant_kernel() {
-        for (n, alpha_x, wf) in [(2, 2.0, 2.0), (7, 1.0, 1.0), (50, 2.0, 2.0), (120, 4.0, 0.5)] {
+        for (n, alpha_x, wf) in [
+            (2, 2.0, 2.0),
+            (7, 1.0, 1.0),
+            (50, 2.0, 2.0),
+            (120, 4.0, 0.5),
+        ] {
             let b = Basis::new(n, alpha_x, wf).unwrap();
             let mut out = vec![0.0; n];
             for i in 0..=400 {
                 let x = (-(i as f64) / 100.0).exp(); // 1 down to e^-4, past the last centre
                 let range = b.normalized_activations(x, &mut out);
-                let args: Vec<f64> =
-                    (0..n).map(|k| b.widths()[k] * (x - b.centers()[k]).powi(2)).collect();
+                let args: Vec<f64> = (0..n)
+                    .map(|k| b.widths()[k] * (x - b.centers()[k]).powi(2))
+                    .collect();
                 let min = args.iter().cloned().fold(f64::INFINITY, f64::min);
                 let psi: Vec<f64> = args.iter().map(|a| (min - a).exp()).collect();
                 let s: f64 = psi.iter().sum();
@@ -194,6 +209,9 @@ mod tests {
 
     #[test]
     fn too_few_kernels_is_an_error() {
-        assert!(matches!(Basis::new(1, 2.0, 2.0), Err(Error::InvalidParameter { .. })));
+        assert!(matches!(
+            Basis::new(1, 2.0, 2.0),
+            Err(Error::InvalidParameter { .. })
+        ));
     }
 }

@@ -46,7 +46,11 @@ impl<'a> PreparedDemo<'a> {
         let (t, y) = (demo.t, demo.y);
         let n_dof = y.nrows();
         if n_dof == 0 {
-            return Err(Error::Shape { name: "y", expected: "at least one column".into(), got: format!("({}, 0)", t.len()) });
+            return Err(Error::Shape {
+                name: "y",
+                expected: "at least one column".into(),
+                got: format!("({}, 0)", t.len()),
+            });
         }
         if y.ncols() != t.len() {
             return Err(Error::Shape {
@@ -111,7 +115,11 @@ pub struct NormalEquations {
 
 /// Accumulates `A^T A` and `A^T F` row by row. Each row of `A` has only a handful of entries above
 /// the cut-off, so this costs O(T) instead of O(T N^2).
-pub fn normal_equations(demo: &PreparedDemo<'_>, basis: &Basis, config: &DmpConfig) -> NormalEquations {
+pub fn normal_equations(
+    demo: &PreparedDemo<'_>,
+    basis: &Basis,
+    config: &DmpConfig,
+) -> NormalEquations {
     let n = basis.len();
     let n_dof = demo.n_dof();
     let (t, y, tau) = (demo.t, &demo.y, demo.tau);
@@ -179,7 +187,10 @@ pub fn solve_ridge(
     })?;
     let weights = chol.solve(atf);
     if weights.iter().any(|w| !w.is_finite()) {
-        return Err(Error::Numerical { context, detail: "non-finite weights".into() });
+        return Err(Error::Numerical {
+            context,
+            detail: "non-finite weights".into(),
+        });
     }
     Ok(weights)
 }

@@ -27,14 +27,32 @@ pub fn gradient(t: &[f64], y: &DMatrixView<'_, f64>) -> DMatrix<f64> {
     for j in 1..n - 1 {
         let hs = t[j] - t[j - 1];
         let hd = t[j + 1] - t[j];
-        combine(j, j - 1, -hd / (hs * (hs + hd)), (hd - hs) / (hs * hd), hs / (hd * (hs + hd)));
+        combine(
+            j,
+            j - 1,
+            -hd / (hs * (hs + hd)),
+            (hd - hs) / (hs * hd),
+            hs / (hd * (hs + hd)),
+        );
     }
     // Start: one-sided, also exact for quadratics.
     let (d1, d2) = (t[1] - t[0], t[2] - t[1]);
-    combine(0, 0, -(2.0 * d1 + d2) / (d1 * (d1 + d2)), (d1 + d2) / (d1 * d2), -d1 / (d2 * (d1 + d2)));
+    combine(
+        0,
+        0,
+        -(2.0 * d1 + d2) / (d1 * (d1 + d2)),
+        (d1 + d2) / (d1 * d2),
+        -d1 / (d2 * (d1 + d2)),
+    );
     // End.
     let (d1, d2) = (t[n - 2] - t[n - 3], t[n - 1] - t[n - 2]);
-    combine(n - 1, n - 3, d2 / (d1 * (d1 + d2)), -(d2 + d1) / (d1 * d2), (2.0 * d2 + d1) / (d2 * (d1 + d2)));
+    combine(
+        n - 1,
+        n - 3,
+        d2 / (d1 * (d1 + d2)),
+        -(d2 + d1) / (d1 * d2),
+        (2.0 * d2 + d1) / (d2 * (d1 + d2)),
+    );
     out
 }
 

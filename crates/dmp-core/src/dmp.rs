@@ -38,7 +38,13 @@ impl Default for DmpConfig {
     /// The JSI lab's constants (method.md §2.2): alpha_z = 48, beta_z = alpha_z / 4 (critically
     /// damped), alpha_x = 2, width factor 2; 25 kernels.
     fn default() -> Self {
-        Self { n_basis: 25, alpha_z: 48.0, beta_z: 12.0, alpha_x: 2.0, width_factor: 2.0 }
+        Self {
+            n_basis: 25,
+            alpha_z: 48.0,
+            beta_z: 12.0,
+            alpha_x: 2.0,
+            width_factor: 2.0,
+        }
     }
 }
 
@@ -114,10 +120,21 @@ impl Dmp {
         check_scalar("tau", tau, true)?;
         for (k, w) in weights.column_iter().enumerate() {
             if let Some((n, &v)) = w.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                return Err(Error::NonFinite { name: "weights", location: format!("[{k}, {n}]"), value: v });
+                return Err(Error::NonFinite {
+                    name: "weights",
+                    location: format!("[{k}, {n}]"),
+                    value: v,
+                });
             }
         }
-        Ok(Self { config, basis, weights, goal, y0, tau })
+        Ok(Self {
+            config,
+            basis,
+            weights,
+            goal,
+            y0,
+            tau,
+        })
     }
 
     /// Fits a DMP to one demonstration by batch least squares (method.md §2.3):
@@ -133,7 +150,14 @@ impl Dmp {
         let normal = normal_equations(&prepared, &basis, &config);
         let weights = solve_ridge(normal.ata, &normal.atf, FIT_RIDGE, "DMP fit")?;
         let PreparedDemo { goal, y0, tau, .. } = prepared;
-        Ok(Self { config, basis, weights, goal, y0, tau })
+        Ok(Self {
+            config,
+            basis,
+            weights,
+            goal,
+            y0,
+            tau,
+        })
     }
 
     pub fn config(&self) -> &DmpConfig {
@@ -164,21 +188,43 @@ impl Dmp {
 
     /// The same movement towards a new goal (weights unchanged).
     pub fn with_goal(&self, goal: DVector<f64>) -> Result<Self> {
-        Self::new(self.config, self.weights.clone(), goal, self.y0.clone(), self.tau)
+        Self::new(
+            self.config,
+            self.weights.clone(),
+            goal,
+            self.y0.clone(),
+            self.tau,
+        )
     }
     /// The same movement from a new start.
     pub fn with_start(&self, y0: DVector<f64>) -> Result<Self> {
-        Self::new(self.config, self.weights.clone(), self.goal.clone(), y0, self.tau)
+        Self::new(
+            self.config,
+            self.weights.clone(),
+            self.goal.clone(),
+            y0,
+            self.tau,
+        )
     }
     /// The same path at another speed: tau only scales time.
     pub fn with_tau(&self, tau: f64) -> Result<Self> {
-        Self::new(self.config, self.weights.clone(), self.goal.clone(), self.y0.clone(), tau)
+        Self::new(
+            self.config,
+            self.weights.clone(),
+            self.goal.clone(),
+            self.y0.clone(),
+            tau,
+        )
     }
 }
 
 fn check_vector(name: &'static str, v: &DVector<f64>) -> Result<()> {
     match v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-        Some((i, &x)) => Err(Error::NonFinite { name, location: format!("[{i}]"), value: x }),
+        Some((i, &x)) => Err(Error::NonFinite {
+            name,
+            location: format!("[{i}]"),
+            value: x,
+        }),
         None => Ok(()),
     }
 }

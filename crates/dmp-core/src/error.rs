@@ -49,13 +49,29 @@ pub enum Error {
     },
     /// A generalizer given a number of demonstrations its method cannot use.
     #[error("method '{method}' {requirement}, but there are {got} demonstrations")]
-    DemoCount { method: &'static str, got: usize, requirement: String },
+    DemoCount {
+        method: &'static str,
+        got: usize,
+        requirement: String,
+    },
     /// Two demonstrations at the same query: the generalization would be ill-defined there.
-    #[error("demonstrations {first} and {second} have the same query {query}; a generalizer cannot tell them apart")]
-    DuplicateQuery { first: usize, second: usize, query: String },
+    #[error(
+        "demonstrations {first} and {second} have the same query {query}; a generalizer cannot tell them apart"
+    )]
+    DuplicateQuery {
+        first: usize,
+        second: usize,
+        query: String,
+    },
     /// Demonstrations with different numbers of degrees of freedom.
-    #[error("demonstration {index} has {got} degrees of freedom, but demonstration 0 has {expected}")]
-    DofMismatch { index: usize, got: usize, expected: usize },
+    #[error(
+        "demonstration {index} has {got} degrees of freedom, but demonstration 0 has {expected}"
+    )]
+    DofMismatch {
+        index: usize,
+        got: usize,
+        expected: usize,
+    },
     /// Demonstration queries whose geometry the method cannot use (e.g. collinear for "linear").
     #[error("the demonstration queries are degenerate: {detail}")]
     DegenerateQueries { detail: String },
@@ -67,7 +83,10 @@ pub enum Error {
     InDemo { index: usize, source: Box<Error> },
     /// The input was valid but the computation failed (e.g. a matrix that is not positive definite).
     #[error("numerical failure in {context}: {detail}")]
-    Numerical { context: &'static str, detail: String },
+    Numerical {
+        context: &'static str,
+        detail: String,
+    },
 }
 
 impl Error {
@@ -86,7 +105,11 @@ pub type Result<T> = std::result::Result<T, Error>;
 /// Checks a scalar: finite and, if `positive`, strictly positive.
 pub(crate) fn check_scalar(name: &'static str, value: f64, positive: bool) -> Result<()> {
     if !value.is_finite() {
-        return Err(Error::NonFinite { name, location: String::new(), value });
+        return Err(Error::NonFinite {
+            name,
+            location: String::new(),
+            value,
+        });
     }
     if positive && value <= 0.0 {
         return Err(Error::InvalidParameter {
@@ -106,7 +129,11 @@ pub(crate) fn check_finite_matrix(
 ) -> Result<()> {
     for (j, col) in values.column_iter().enumerate() {
         if let Some((d, &v)) = col.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFinite { name, location: format!("[{j}, {d}]"), value: v });
+            return Err(Error::NonFinite {
+                name,
+                location: format!("[{j}, {d}]"),
+                value: v,
+            });
         }
     }
     Ok(())
@@ -115,11 +142,20 @@ pub(crate) fn check_finite_matrix(
 /// Checks that a 1-D array is finite and strictly increasing.
 pub(crate) fn check_increasing(name: &'static str, t: &[f64]) -> Result<()> {
     if let Some((j, &v)) = t.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(Error::NonFinite { name, location: format!("[{j}]"), value: v });
+        return Err(Error::NonFinite {
+            name,
+            location: format!("[{j}]"),
+            value: v,
+        });
     }
     for j in 1..t.len() {
         if t[j] <= t[j - 1] {
-            return Err(Error::NotIncreasing { name, index: j, value: t[j], prev: t[j - 1] });
+            return Err(Error::NotIncreasing {
+                name,
+                index: j,
+                value: t[j],
+                prev: t[j - 1],
+            });
         }
     }
     Ok(())

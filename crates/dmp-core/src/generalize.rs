@@ -47,7 +47,12 @@ pub struct LwrGpOptions {
 
 impl Default for LwrGpOptions {
     fn default() -> Self {
-        Self { lwr: LwrOptions::default(), gp_noise: 1e-4, gp_optimize: None, gp_restarts: 4 }
+        Self {
+            lwr: LwrOptions::default(),
+            gp_noise: 1e-4,
+            gp_optimize: None,
+            gp_restarts: 4,
+        }
     }
 }
 
@@ -126,7 +131,12 @@ fn flatten(dmp: &Dmp) -> DVector<f64> {
 impl Generalizer {
     /// Fits one DMP per demonstration (method.md §2.3, each on its own tau and goal) and
     /// precomputes what `method` needs for fast queries.
-    pub fn new(queries: &[Vec<f64>], demos: &[Demonstration<'_>], config: DmpConfig, method: Method) -> Result<Self> {
+    pub fn new(
+        queries: &[Vec<f64>],
+        demos: &[Demonstration<'_>],
+        config: DmpConfig,
+        method: Method,
+    ) -> Result<Self> {
         config.validate()?;
         let name = method.name();
         let m = demos.len();
@@ -138,11 +148,19 @@ impl Generalizer {
             });
         }
         if m < 2 {
-            return Err(Error::DemoCount { method: name, got: m, requirement: "needs at least 2 demonstrations".into() });
+            return Err(Error::DemoCount {
+                method: name,
+                got: m,
+                requirement: "needs at least 2 demonstrations".into(),
+            });
         }
         let n_dim = queries[0].len();
         if n_dim == 0 {
-            return Err(Error::Shape { name: "queries", expected: "(M, n) with n >= 1".into(), got: format!("({m}, 0)") });
+            return Err(Error::Shape {
+                name: "queries",
+                expected: "(M, n) with n >= 1".into(),
+                got: format!("({m}, 0)"),
+            });
         }
         for (k, q) in queries.iter().enumerate() {
             if q.len() != n_dim {
@@ -153,10 +171,18 @@ impl Generalizer {
                 });
             }
             if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                return Err(Error::NonFinite { name: "queries", location: format!("[{k}, {d}]"), value: v });
+                return Err(Error::NonFinite {
+                    name: "queries",
+                    location: format!("[{k}, {d}]"),
+                    value: v,
+                });
             }
             if let Some(j) = queries[..k].iter().position(|p| p == q) {
-                return Err(Error::DuplicateQuery { first: j, second: k, query: format_query(q) });
+                return Err(Error::DuplicateQuery {
+                    first: j,
+                    second: k,
+                    query: format_query(q),
+                });
             }
         }
         let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
@@ -164,17 +190,33 @@ impl Generalizer {
         let mut demo_dmps = Vec::with_capacity(m);
         let mut n_dof = 0;
         for (k, demo) in demos.iter().enumerate() {
-            let in_demo = |e: Error| Error::InDemo { index: k, source: Box::new(e) };
+            let in_demo = |e: Error| Error::InDemo {
+                index: k,
+                source: Box::new(e),
+            };
             let prepared = PreparedDemo::new(demo).map_err(in_demo)?;
             if k == 0 {
                 n_dof = prepared.n_dof();
             } else if prepared.n_dof() != n_dof {
-                return Err(Error::DofMismatch { index: k, got: prepared.n_dof(), expected: n_dof });
+                return Err(Error::DofMismatch {
+                    index: k,
+                    got: prepared.n_dof(),
+                    expected: n_dof,
+                });
             }
             let ne = normal_equations(&prepared, &basis, &config);
             // Exactly what Dmp::fit computes: the demo's own DMP, bit for bit.
             let w = solve_ridge(ne.ata.clone(), &ne.atf, FIT_RIDGE, "DMP fit").map_err(in_demo)?;
-            demo_dmps.push(Dmp::new(config, w, prepared.goal.clone(), prepared.y0.clone(), prepared.tau).map_err(in_demo)?);
+            demo_dmps.push(
+                Dmp::new(
+                    config,
+                    w,
+                    prepared.goal.clone(),
+                    prepared.y0.clone(),
+                    prepared.tau,
+                )
+                .map_err(in_demo)?,
+            );
             normal.push(ne);
         }
         let taus: Vec<f64> = demo_dmps.iter().map(|d| d.tau()).collect();
@@ -183,9 +225,20 @@ impl Generalizer {
         let tau_valid = (TAU_LOW * tau_min, TAU_HIGH * tau_max);
         let model = match method {
             Method::Linear => Model::Linear(Self::linear_model(queries, &demo_dmps)?),
-            Method::LwrGp(opts) => Model::LwrGp(Box::new(Self::lwr_gp_model(queries, normal, &demo_dmps, &opts)?)),
+            Method::LwrGp(opts) => Model::LwrGp(Box::new(Self::lwr_gp_model(
+                queries, normal, &demo_dmps, &opts,
+            )?)),
         };
-        Ok(Self { config, method: name, n_dim, n_dof, queries: queries.to_vec(), demo_dmps, tau_valid, model })
+        Ok(Self {
+            config,
+            method: name,
+            n_dim,
+            n_dof,
+            queries: queries.to_vec(),
+            demo_dmps,
+            tau_valid,
+            model,
+        })
     }
 
     fn linear_model(queries: &[Vec<f64>], dmps: &[Dmp]) -> Result<Linear> {
@@ -208,12 +261,22 @@ impl Generalizer {
                 detail: format!(
                     "method 'linear' needs affinely independent demo queries (a segment, triangle, ...), \
                      but {} lie in a lower-dimensional subspace",
-                    queries.iter().map(|q| format_query(q)).collect::<Vec<_>>().join(", ")
+                    queries
+                        .iter()
+                        .map(|q| format_query(q))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             });
         }
-        let pinv = svd.pseudo_inverse(0.0).map_err(|e| Error::Numerical { context: "linear generalizer", detail: e.to_string() })?;
-        Ok(Linear { pinv, thetas: dmps.iter().map(flatten).collect() })
+        let pinv = svd.pseudo_inverse(0.0).map_err(|e| Error::Numerical {
+            context: "linear generalizer",
+            detail: e.to_string(),
+        })?;
+        Ok(Linear {
+            pinv,
+            thetas: dmps.iter().map(flatten).collect(),
+        })
     }
 
     fn lwr_gp_model(
@@ -239,7 +302,11 @@ impl Generalizer {
             let var = y.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / m as f64;
             let var = if var > 0.0 { var } else { 1.0 };
             let noise = opts.gp_noise * opts.gp_noise * var;
-            let initial = Hyperparameters { length_scales: ranges.clone(), signal_var: var, noise_var: noise };
+            let initial = Hyperparameters {
+                length_scales: ranges.clone(),
+                signal_var: var,
+                noise_var: noise,
+            };
             let bounds = HyperBounds {
                 length_scales: ranges.iter().map(|r| (1e-2 * r, 1e2 * r)).collect(),
                 signal_var: (1e-4 * var, 1e4 * var),
@@ -255,8 +322,12 @@ impl Generalizer {
         };
         let n_dof = dmps[0].n_dof();
         let tau = fit(dmps.iter().map(|d| d.tau()).collect())?;
-        let goal = (0..n_dof).map(|i| fit(dmps.iter().map(|d| d.goal()[i]).collect())).collect::<Result<_>>()?;
-        let y0 = (0..n_dof).map(|i| fit(dmps.iter().map(|d| d.y0()[i]).collect())).collect::<Result<_>>()?;
+        let goal = (0..n_dof)
+            .map(|i| fit(dmps.iter().map(|d| d.goal()[i]).collect()))
+            .collect::<Result<_>>()?;
+        let y0 = (0..n_dof)
+            .map(|i| fit(dmps.iter().map(|d| d.y0()[i]).collect()))
+            .collect::<Result<_>>()?;
         Ok(LwrGp { lwr, tau, goal, y0 })
     }
 
@@ -295,12 +366,19 @@ impl Generalizer {
         if q.len() != self.n_dim {
             return Err(Error::Shape {
                 name: "q",
-                expected: format!("({},), the dimension of the demonstration queries", self.n_dim),
+                expected: format!(
+                    "({},), the dimension of the demonstration queries",
+                    self.n_dim
+                ),
                 got: format!("({},)", q.len()),
             });
         }
         if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFinite { name: "q", location: format!("[{d}]"), value: v });
+            return Err(Error::NonFinite {
+                name: "q",
+                location: format!("[{d}]"),
+                value: v,
+            });
         }
         Ok(())
     }
@@ -333,8 +411,10 @@ impl Generalizer {
             Model::LwrGp(model) => {
                 let w = model.lwr.weights_at(q)?;
                 let tau = model.tau.predict_mean_at(q);
-                let goal = DVector::from_iterator(n_dof, model.goal.iter().map(|g| g.predict_mean_at(q)));
-                let y0 = DVector::from_iterator(n_dof, model.y0.iter().map(|g| g.predict_mean_at(q)));
+                let goal =
+                    DVector::from_iterator(n_dof, model.goal.iter().map(|g| g.predict_mean_at(q)));
+                let y0 =
+                    DVector::from_iterator(n_dof, model.y0.iter().map(|g| g.predict_mean_at(q)));
                 Ok((w, tau, goal, y0))
             }
         }
@@ -382,8 +462,17 @@ impl Generalizer {
         let mut jac = DMatrix::zeros(self.n_parameters(), self.n_dim);
         let mut qp = q.to_vec();
         for d in 0..self.n_dim {
-            let (lo, hi) = self.queries.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v[d]), b.max(v[d])));
-            let scale = if hi > lo { hi - lo } else { q[d].abs().max(1.0) };
+            let (lo, hi) = self
+                .queries
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v[d]), b.max(v[d]))
+                });
+            let scale = if hi > lo {
+                hi - lo
+            } else {
+                q[d].abs().max(1.0)
+            };
             let h = rel_step * scale;
             qp[d] = q[d] + h;
             let plus = self.parameters(&qp)?;
@@ -407,17 +496,36 @@ mod tests {
         let y = DMatrix::from_fn(2, 300, |d, j| {
             let s = j as f64 / 299.0;
             let mj = 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5);
-            if d == 0 { (1.0 + q) * mj } else { 0.2 * q + (0.5 - q) * mj + 0.1 * (3.0 * s).sin() * q }
+            if d == 0 {
+                (1.0 + q) * mj
+            } else {
+                0.2 * q + (0.5 - q) * mj + 0.1 * (3.0 * s).sin() * q
+            }
         });
         (t, y)
     }
 
     fn build(qs: &[f64], method: Method) -> Result<Generalizer> {
         let data: Vec<_> = qs.iter().map(|&q| demo(q)).collect();
-        let demos: Vec<Demonstration> =
-            data.iter().map(|(t, y)| Demonstration { t, y: y.as_view(), yd: None, ydd: None }).collect();
+        let demos: Vec<Demonstration> = data
+            .iter()
+            .map(|(t, y)| Demonstration {
+                t,
+                y: y.as_view(),
+                yd: None,
+                ydd: None,
+            })
+            .collect();
         let queries: Vec<Vec<f64>> = qs.iter().map(|&q| vec![q]).collect();
-        Generalizer::new(&queries, &demos, DmpConfig { n_basis: 15, ..DmpConfig::default() }, method)
+        Generalizer::new(
+            &queries,
+            &demos,
+            DmpConfig {
+                n_basis: 15,
+                ..DmpConfig::default()
+            },
+            method,
+        )
     }
 
     #[test]
@@ -455,7 +563,11 @@ mod tests {
         for (k, &q) in qs.iter().enumerate() {
             let got = g.parameters(&[q]).unwrap();
             let want = flatten(&g.demo_dmps()[k]);
-            assert!((&got - &want).amax() < 1e-5 * want.amax(), "k={k}: {}", (&got - &want).amax());
+            assert!(
+                (&got - &want).amax() < 1e-5 * want.amax(),
+                "k={k}: {}",
+                (&got - &want).amax()
+            );
         }
     }
 
@@ -479,11 +591,27 @@ mod tests {
 
     #[test]
     fn bad_demo_sets_are_errors() {
-        assert!(matches!(build(&[0.0], Method::Linear), Err(Error::DemoCount { .. })));
-        assert!(matches!(build(&[0.0, 1.0, 2.0], Method::Linear), Err(Error::DemoCount { .. })));
-        assert!(matches!(build(&[0.0, 1.0, 0.0], Method::LwrGp(LwrGpOptions::default())), Err(Error::DuplicateQuery { first: 0, second: 2, .. })));
+        assert!(matches!(
+            build(&[0.0], Method::Linear),
+            Err(Error::DemoCount { .. })
+        ));
+        assert!(matches!(
+            build(&[0.0, 1.0, 2.0], Method::Linear),
+            Err(Error::DemoCount { .. })
+        ));
+        assert!(matches!(
+            build(&[0.0, 1.0, 0.0], Method::LwrGp(LwrGpOptions::default())),
+            Err(Error::DuplicateQuery {
+                first: 0,
+                second: 2,
+                ..
+            })
+        ));
         let g = build(&[0.0, 1.0], Method::Linear).unwrap();
         assert!(matches!(g.predict(&[0.0, 1.0]), Err(Error::Shape { .. })));
-        assert!(matches!(g.predict(&[f64::NAN]), Err(Error::NonFinite { .. })));
+        assert!(matches!(
+            g.predict(&[f64::NAN]),
+            Err(Error::NonFinite { .. })
+        ));
     }
 }

@@ -17,7 +17,8 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result, check_scalar};
 use crate::linalg::{
-    Scratch, cholesky_in_place_with, dot, exp_in_place, solve_lower_in_place, solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
+    Scratch, cholesky_in_place_with, dot, exp_in_place, solve_lower_in_place,
+    solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
 };
 use crate::optimize::{MinimizeOptions, halton, minimize_box};
 
@@ -83,7 +84,10 @@ impl HyperBounds {
             .copied()
             .chain([self.signal_var, self.noise_var])
             .collect();
-        (all.iter().map(|b| b.0.ln()).collect(), all.iter().map(|b| b.1.ln()).collect())
+        (
+            all.iter().map(|b| b.0.ln()).collect(),
+            all.iter().map(|b| b.1.ln()).collect(),
+        )
     }
 
     fn validate(&self, n_dim: usize) -> Result<()> {
@@ -98,7 +102,10 @@ impl HyperBounds {
             .length_scales
             .iter()
             .map(|b| ("length_scale_bounds", *b))
-            .chain([("signal_var_bounds", self.signal_var), ("noise_var_bounds", self.noise_var)]);
+            .chain([
+                ("signal_var_bounds", self.signal_var),
+                ("noise_var_bounds", self.noise_var),
+            ]);
         for (name, (lo, hi)) in named {
             check_scalar(name, lo, true)?;
             check_scalar(name, hi, true)?;
@@ -142,7 +149,12 @@ pub struct GpOptions {
 
 impl Default for GpOptions {
     fn default() -> Self {
-        Self { optimize: true, n_restarts: 4, bounds: None, minimize: MinimizeOptions::default() }
+        Self {
+            optimize: true,
+            n_restarts: 4,
+            bounds: None,
+            minimize: MinimizeOptions::default(),
+        }
     }
 }
 
@@ -150,17 +162,34 @@ impl Default for GpOptions {
 fn check_data(x: &DMatrixView<'_, f64>, y: &[f64]) -> Result<()> {
     let (n_dim, m) = x.shape();
     if n_dim == 0 {
-        return Err(Error::Shape { name: "X", expected: "(m, n) with n >= 1".into(), got: format!("({m}, 0)") });
+        return Err(Error::Shape {
+            name: "X",
+            expected: "(m, n) with n >= 1".into(),
+            got: format!("({m}, 0)"),
+        });
     }
     if m == 0 {
-        return Err(Error::TooFewSamples { name: "X", got: 0, needed: 1, why: "a GP needs training data" });
+        return Err(Error::TooFewSamples {
+            name: "X",
+            got: 0,
+            needed: 1,
+            why: "a GP needs training data",
+        });
     }
     if y.len() != m {
-        return Err(Error::Shape { name: "y", expected: format!("({m},), one value per row of X"), got: format!("({},)", y.len()) });
+        return Err(Error::Shape {
+            name: "y",
+            expected: format!("({m},), one value per row of X"),
+            got: format!("({},)", y.len()),
+        });
     }
     crate::error::check_finite_matrix("X", x)?;
     if let Some((j, &v)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(Error::NonFinite { name: "y", location: format!("[{j}]"), value: v });
+        return Err(Error::NonFinite {
+            name: "y",
+            location: format!("[{j}]"),
+            value: v,
+        });
     }
     Ok(())
 }
@@ -184,7 +213,11 @@ fn data_scales(x: &DMatrixView<'_, f64>, y: &[f64]) -> (Vec<f64>, f64) {
 pub fn default_hyperparameters(x: &DMatrixView<'_, f64>, y: &[f64]) -> Result<Hyperparameters> {
     check_data(x, y)?;
     let (ranges, var) = data_scales(x, y);
-    Ok(Hyperparameters { length_scales: ranges, signal_var: var, noise_var: 1e-2 * var })
+    Ok(Hyperparameters {
+        length_scales: ranges,
+        signal_var: var,
+        noise_var: 1e-2 * var,
+    })
 }
 
 /// Data-relative bounds: `l_d` in `[1e-3, 1e3] x range_d`, `signal_var` in `[1e-4, 1e4] x var(y)`,
@@ -374,7 +407,12 @@ fn sum(v: &[f64]) -> f64 {
 fn weighted_sq_diff(t: &[f64], x: &[f64], c: f64) -> f64 {
     let mut acc = [0.0f64; 4];
     let (ct, cx) = (t.chunks_exact(4), x.chunks_exact(4));
-    let tail: f64 = ct.remainder().iter().zip(cx.remainder()).map(|(w, v)| w * (v - c) * (v - c)).sum();
+    let tail: f64 = ct
+        .remainder()
+        .iter()
+        .zip(cx.remainder())
+        .map(|(w, v)| w * (v - c) * (v - c))
+        .sum();
     for (w, v) in ct.zip(cx) {
         for k in 0..4 {
             acc[k] += w[k] * (v[k] - c) * (v[k] - c);
@@ -385,7 +423,12 @@ fn weighted_sq_diff(t: &[f64], x: &[f64], c: f64) -> f64 {
 
 /// The log marginal likelihood of centred outputs `r` at log hyperparameters `theta`, and its
 /// gradient. `x` is sample-major `(m, n_dim)`. `None` if the kernel matrix is not positive definite.
-pub fn log_marginal_likelihood(x: &[f64], n_dim: usize, r: &[f64], theta: &[f64]) -> Option<(f64, Vec<f64>)> {
+pub fn log_marginal_likelihood(
+    x: &[f64],
+    n_dim: usize,
+    r: &[f64],
+    theta: &[f64],
+) -> Option<(f64, Vec<f64>)> {
     let mut ws = Workspace::new(r.len(), n_dim);
     let h = Hyperparameters::from_log(theta);
     let lml = ws.factor(x, r, &h)?;
@@ -393,7 +436,12 @@ pub fn log_marginal_likelihood(x: &[f64], n_dim: usize, r: &[f64], theta: &[f64]
 }
 
 /// The log marginal likelihood alone (no gradient), for profiling and line searches.
-pub fn log_marginal_likelihood_value(x: &[f64], n_dim: usize, r: &[f64], theta: &[f64]) -> Option<f64> {
+pub fn log_marginal_likelihood_value(
+    x: &[f64],
+    n_dim: usize,
+    r: &[f64],
+    theta: &[f64],
+) -> Option<f64> {
     let mut ws = Workspace::new(r.len(), n_dim);
     ws.factor(x, r, &Hyperparameters::from_log(theta))
 }
@@ -465,8 +513,21 @@ impl GaussianProcess {
             ),
         })?;
         let alpha_scaled = ws.alpha.iter().map(|a| a * hyper.signal_var).collect();
-        let xs = (0..m * n_dim).map(|i| xv[i] / hyper.length_scales[i % n_dim]).collect();
-        Ok(Self { n_dim, m, x: xv, r, xs, y_mean, hyper, l: ws.l, alpha_scaled, lml })
+        let xs = (0..m * n_dim)
+            .map(|i| xv[i] / hyper.length_scales[i % n_dim])
+            .collect();
+        Ok(Self {
+            n_dim,
+            m,
+            x: xv,
+            r,
+            xs,
+            y_mean,
+            hyper,
+            l: ws.l,
+            alpha_scaled,
+            lml,
+        })
     }
 
     pub fn hyperparameters(&self) -> &Hyperparameters {
@@ -481,16 +542,26 @@ impl GaussianProcess {
         if theta.len() != self.n_dim + 2 {
             return Err(Error::Shape {
                 name: "theta",
-                expected: format!("({},): n length scales, signal_var, noise_var (logs)", self.n_dim + 2),
+                expected: format!(
+                    "({},): n length scales, signal_var, noise_var (logs)",
+                    self.n_dim + 2
+                ),
                 got: format!("({},)", theta.len()),
             });
         }
         if let Some((i, &v)) = theta.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFinite { name: "theta", location: format!("[{i}]"), value: v });
+            return Err(Error::NonFinite {
+                name: "theta",
+                location: format!("[{i}]"),
+                value: v,
+            });
         }
-        log_marginal_likelihood(&self.x, self.n_dim, &self.r, theta).ok_or_else(|| Error::Numerical {
-            context: "log marginal likelihood",
-            detail: "the kernel matrix is not positive definite at these hyperparameters".into(),
+        log_marginal_likelihood(&self.x, self.n_dim, &self.r, theta).ok_or_else(|| {
+            Error::Numerical {
+                context: "log marginal likelihood",
+                detail: "the kernel matrix is not positive definite at these hyperparameters"
+                    .into(),
+            }
         })
     }
 
@@ -507,7 +578,11 @@ impl GaussianProcess {
     /// `exp(-1/2 |(q - x_i) / l|^2)` for every training point, into `out`.
     fn correlations(&self, q: &[f64], out: &mut [f64]) {
         let n = self.n_dim;
-        let qs: Vec<f64> = q.iter().zip(&self.hyper.length_scales).map(|(v, l)| v / l).collect();
+        let qs: Vec<f64> = q
+            .iter()
+            .zip(&self.hyper.length_scales)
+            .map(|(v, l)| v / l)
+            .collect();
         for (i, o) in out.iter_mut().enumerate() {
             let xi = &self.xs[i * n..(i + 1) * n];
             let s: f64 = xi.iter().zip(&qs).map(|(a, b)| (a - b) * (a - b)).sum();
@@ -536,11 +611,18 @@ impl GaussianProcess {
 
     /// Posterior mean and, if asked, standard deviation of the latent function at the columns of
     /// `xq` (`n_dim x p`).
-    pub fn predict(&self, xq: &DMatrixView<'_, f64>, with_std: bool) -> Result<(Vec<f64>, Option<Vec<f64>>)> {
+    pub fn predict(
+        &self,
+        xq: &DMatrixView<'_, f64>,
+        with_std: bool,
+    ) -> Result<(Vec<f64>, Option<Vec<f64>>)> {
         if xq.nrows() != self.n_dim {
             return Err(Error::Shape {
                 name: "X",
-                expected: format!("(p, {}), as many columns as the training inputs", self.n_dim),
+                expected: format!(
+                    "(p, {}), as many columns as the training inputs",
+                    self.n_dim
+                ),
                 got: format!("({}, {})", xq.ncols(), xq.nrows()),
             });
         }
@@ -553,9 +635,17 @@ impl GaussianProcess {
         let mut kq = vec![0.0; m * p];
         let mut q = vec![0.0; self.n_dim];
         for (j, k) in kq.chunks_exact_mut(m).enumerate().take(p) {
-            q.iter_mut().zip(xq.column(j).iter()).for_each(|(a, b)| *a = *b);
+            q.iter_mut()
+                .zip(xq.column(j).iter())
+                .for_each(|(a, b)| *a = *b);
             self.correlations(&q, k);
-            mean.push(self.y_mean + k.iter().zip(&self.alpha_scaled).map(|(a, b)| a * b).sum::<f64>());
+            mean.push(
+                self.y_mean
+                    + k.iter()
+                        .zip(&self.alpha_scaled)
+                        .map(|(a, b)| a * b)
+                        .sum::<f64>(),
+            );
         }
         if let Some(std) = std.as_mut() {
             // var = k** - k*^T K^{-1} k* = signal_var - |L^{-1} k*|^2 with k* = signal_var c
@@ -604,7 +694,9 @@ fn optimize_hyperparameters(
                 initial.to_log()
             } else {
                 let u = halton(start as u64, dim);
-                (0..dim).map(|i| slo[i] + u[i] * (shi[i] - slo[i])).collect()
+                (0..dim)
+                    .map(|i| slo[i] + u[i] * (shi[i] - slo[i]))
+                    .collect()
             }
         })
         .collect();
@@ -621,7 +713,11 @@ fn optimize_hyperparameters(
         minimize_box(objective, x0, &lo, &hi, &options.minimize)
     };
     // Small problems are faster on one thread than the cost of spreading them.
-    let minima: Vec<_> = if m >= 40 { starts.par_iter().map(run).collect() } else { starts.iter().map(run).collect() };
+    let minima: Vec<_> = if m >= 40 {
+        starts.par_iter().map(run).collect()
+    } else {
+        starts.iter().map(run).collect()
+    };
     let mut best: Option<(f64, Vec<f64>)> = None;
     for min in minima.into_iter().flatten() {
         if best.as_ref().is_none_or(|(f, _)| min.f < *f) {
@@ -645,23 +741,33 @@ mod tests {
     fn dense_lml(x: &DMatrix<f64>, r: &[f64], h: &Hyperparameters) -> f64 {
         let m = x.ncols();
         let k = DMatrix::from_fn(m, m, |a, b| {
-            let s: f64 = (0..x.nrows()).map(|d| ((x[(d, a)] - x[(d, b)]) / h.length_scales[d]).powi(2)).sum();
+            let s: f64 = (0..x.nrows())
+                .map(|d| ((x[(d, a)] - x[(d, b)]) / h.length_scales[d]).powi(2))
+                .sum();
             h.signal_var * (-0.5 * s).exp() + if a == b { h.noise_var } else { 0.0 }
         });
         let y = DVector::from_column_slice(r);
         let kinv = k.clone().try_inverse().unwrap();
-        -0.5 * (y.transpose() * kinv * &y)[0] - 0.5 * k.determinant().ln() - 0.5 * m as f64 * LOG_2PI
+        -0.5 * (y.transpose() * kinv * &y)[0]
+            - 0.5 * k.determinant().ln()
+            - 0.5 * m as f64 * LOG_2PI
     }
 
     fn data(m: usize, n: usize) -> DMatrix<f64> {
-        DMatrix::from_fn(n, m, |d, j| ((j * 37 + d * 11) % 23) as f64 / 7.0 + 0.1 * d as f64)
+        DMatrix::from_fn(n, m, |d, j| {
+            ((j * 37 + d * 11) % 23) as f64 / 7.0 + 0.1 * d as f64
+        })
     }
 
     #[test]
     fn lml_matches_the_dense_formula() {
         let x = data(9, 2);
         let r: Vec<f64> = (0..9).map(|j| (j as f64 * 0.7).sin()).collect();
-        let h = Hyperparameters { length_scales: vec![0.8, 2.0], signal_var: 1.3, noise_var: 0.05 };
+        let h = Hyperparameters {
+            length_scales: vec![0.8, 2.0],
+            signal_var: 1.3,
+            noise_var: 0.05,
+        };
         let xv: Vec<f64> = x.iter().copied().collect();
         let (lml, _) = log_marginal_likelihood(&xv, 2, &r, &h.to_log()).unwrap();
         assert!((lml - dense_lml(&x, &r, &h)).abs() < 1e-10, "{lml}");
@@ -695,8 +801,15 @@ mod tests {
     fn noise_free_posterior_mean_interpolates_and_std_vanishes() {
         let x = data(7, 1);
         let y: Vec<f64> = x.iter().map(|v| v.sin() * 3.0 + 1.0).collect();
-        let h = Hyperparameters { length_scales: vec![1.0], signal_var: 4.0, noise_var: 1e-12 };
-        let opts = GpOptions { optimize: false, ..GpOptions::default() };
+        let h = Hyperparameters {
+            length_scales: vec![1.0],
+            signal_var: 4.0,
+            noise_var: 1e-12,
+        };
+        let opts = GpOptions {
+            optimize: false,
+            ..GpOptions::default()
+        };
         let gp = GaussianProcess::fit(&x.as_view(), &y, Some(h), &opts).unwrap();
         let (mean, std) = gp.predict(&x.as_view(), true).unwrap();
         for j in 0..7 {
@@ -714,7 +827,11 @@ mod tests {
     #[test]
     fn ml2_improves_on_the_start_and_on_a_grid() {
         let x = data(25, 1);
-        let y: Vec<f64> = x.iter().enumerate().map(|(j, v)| (1.5 * v).sin() + 0.05 * ((j * 7 % 5) as f64 - 2.0)).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(j, v)| (1.5 * v).sin() + 0.05 * ((j * 7 % 5) as f64 - 2.0))
+            .collect();
         let gp = GaussianProcess::fit(&x.as_view(), &y, None, &GpOptions::default()).unwrap();
         let xv: Vec<f64> = x.iter().copied().collect();
         let mean = y.iter().sum::<f64>() / 25.0;
@@ -730,7 +847,11 @@ mod tests {
                 }
             }
         }
-        assert!(gp.log_marginal_likelihood() >= grid_best - 1e-6, "{} < {grid_best}", gp.log_marginal_likelihood());
+        assert!(
+            gp.log_marginal_likelihood() >= grid_best - 1e-6,
+            "{} < {grid_best}",
+            gp.log_marginal_likelihood()
+        );
     }
 
     #[test]
@@ -740,22 +861,39 @@ mod tests {
         let a = GaussianProcess::fit(&x.as_view(), &y, None, &GpOptions::default()).unwrap();
         let b = GaussianProcess::fit(&x.as_view(), &y, None, &GpOptions::default()).unwrap();
         assert_eq!(a.hyperparameters(), b.hyperparameters());
-        assert_eq!(a.log_marginal_likelihood().to_bits(), b.log_marginal_likelihood().to_bits());
+        assert_eq!(
+            a.log_marginal_likelihood().to_bits(),
+            b.log_marginal_likelihood().to_bits()
+        );
     }
 
     #[test]
     fn bad_input_is_an_error() {
         let x = data(4, 1);
         let opts = GpOptions::default();
-        assert!(matches!(GaussianProcess::fit(&x.as_view(), &[1.0, 2.0], None, &opts), Err(Error::Shape { .. })));
+        assert!(matches!(
+            GaussianProcess::fit(&x.as_view(), &[1.0, 2.0], None, &opts),
+            Err(Error::Shape { .. })
+        ));
         assert!(matches!(
             GaussianProcess::fit(&x.as_view(), &[1.0, f64::NAN, 0.0, 0.0], None, &opts),
             Err(Error::NonFinite { .. })
         ));
-        let h = Hyperparameters { length_scales: vec![1.0, 1.0], signal_var: 1.0, noise_var: 1.0 };
-        assert!(matches!(GaussianProcess::fit(&x.as_view(), &[0.0; 4], Some(h), &opts), Err(Error::Shape { .. })));
+        let h = Hyperparameters {
+            length_scales: vec![1.0, 1.0],
+            signal_var: 1.0,
+            noise_var: 1.0,
+        };
+        assert!(matches!(
+            GaussianProcess::fit(&x.as_view(), &[0.0; 4], Some(h), &opts),
+            Err(Error::Shape { .. })
+        ));
         let dup = DMatrix::from_element(1, 3, 2.0);
-        let h = Hyperparameters { length_scales: vec![1.0], signal_var: 1.0, noise_var: 0.0 };
+        let h = Hyperparameters {
+            length_scales: vec![1.0],
+            signal_var: 1.0,
+            noise_var: 0.0,
+        };
         assert!(GaussianProcess::fit(&dup.as_view(), &[1.0, 2.0, 3.0], Some(h), &opts).is_err());
     }
 }

@@ -22,6 +22,6 @@ pub use basis::Basis;
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
 pub use generalize::{Generalizer, LwrGpOptions, Method};
-pub use lwr::{Kernel, LwrOptions};
 pub use gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
+pub use lwr::{Kernel, LwrOptions};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};

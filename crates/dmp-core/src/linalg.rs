@@ -46,7 +46,8 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 pub fn exp_in_place(v: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
             // SAFETY: the CPU supports the enabled features (checked just above).
             unsafe { exp_in_place_avx2(v) };
             return;
@@ -129,7 +130,10 @@ impl Scratch {
         let params: Spec<LltParams, f64> = Default::default();
         let req = llt::factor::cholesky_in_place_scratch::<f64>(m, Par::Seq, params)
             .or(llt::inverse::inverse_scratch::<f64>(m, Par::Seq));
-        Self { m, buf: MemBuffer::new(req) }
+        Self {
+            m,
+            buf: MemBuffer::new(req),
+        }
     }
 
     fn stack(&mut self, m: usize) -> &mut MemStack {
@@ -244,12 +248,24 @@ mod tests {
     #[test]
     fn exp_matches_std() {
         let mut xs: Vec<f64> = (0..20001).map(|i| -740.0 + i as f64 * 0.037).collect();
-        xs.extend([0.0, -0.0, 1e-300, -1e-17, 0.5 * std::f64::consts::LN_2, -708.0, 709.0, f64::NEG_INFINITY]);
+        xs.extend([
+            0.0,
+            -0.0,
+            1e-300,
+            -1e-17,
+            0.5 * std::f64::consts::LN_2,
+            -708.0,
+            709.0,
+            f64::NEG_INFINITY,
+        ]);
         let mut ys = xs.clone();
         exp_in_place(&mut ys);
         for (&x, &y) in xs.iter().zip(&ys) {
             let e = x.exp();
-            assert!((y - e).abs() <= 4.0 * f64::EPSILON * e + 1e-307, "exp({x}) = {y} vs {e}");
+            assert!(
+                (y - e).abs() <= 4.0 * f64::EPSILON * e + 1e-307,
+                "exp({x}) = {y} vs {e}"
+            );
         }
         let mut nan = [f64::NAN];
         exp_in_place(&mut nan);

@@ -71,7 +71,12 @@ pub struct LwrOptions {
 
 impl Default for LwrOptions {
     fn default() -> Self {
-        Self { kernel: Kernel::Tricube, bandwidth: 1.5, ridge: crate::dmp::FIT_RIDGE, interpolate: true }
+        Self {
+            kernel: Kernel::Tricube,
+            bandwidth: 1.5,
+            ridge: crate::dmp::FIT_RIDGE,
+            interpolate: true,
+        }
     }
 }
 
@@ -104,7 +109,11 @@ pub struct Lwr {
 impl Lwr {
     /// `queries[k]` is the query of demo k (all of length `n_dim`, finite, distinct: checked by
     /// the caller); `normal[k]` its normal equations, all of the same size.
-    pub fn new(queries: &[Vec<f64>], normal: Vec<NormalEquations>, options: LwrOptions) -> Result<Self> {
+    pub fn new(
+        queries: &[Vec<f64>],
+        normal: Vec<NormalEquations>,
+        options: LwrOptions,
+    ) -> Result<Self> {
         options.validate()?;
         if queries.is_empty() || queries.len() != normal.len() {
             return Err(Error::Shape {
@@ -116,12 +125,25 @@ impl Lwr {
         let n_dim = queries[0].len();
         let inv_range: Vec<f64> = (0..n_dim)
             .map(|d| {
-                let (lo, hi) = queries.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| (a.min(q[d]), b.max(q[d])));
+                let (lo, hi) = queries
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+                        (a.min(q[d]), b.max(q[d]))
+                    });
                 if hi > lo { 1.0 / (hi - lo) } else { 1.0 }
             })
             .collect();
-        let scaled_queries = queries.iter().flat_map(|q| q.iter().zip(&inv_range).map(|(v, s)| v * s)).collect();
-        Ok(Self { n_dim, scaled_queries, inv_range, normal, options })
+        let scaled_queries = queries
+            .iter()
+            .flat_map(|q| q.iter().zip(&inv_range).map(|(v, s)| v * s))
+            .collect();
+        Ok(Self {
+            n_dim,
+            scaled_queries,
+            inv_range,
+            normal,
+            options,
+        })
     }
 
     pub fn n_demos(&self) -> usize {
@@ -136,7 +158,11 @@ impl Lwr {
         let dist: Vec<f64> = (0..m)
             .map(|k| {
                 let qk = &self.scaled_queries[k * n..(k + 1) * n];
-                qk.iter().zip(&qs).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()
+                qk.iter()
+                    .zip(&qs)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt()
             })
             .collect();
         let mut sorted = dist.clone();
@@ -145,13 +171,19 @@ impl Lwr {
         let mut kappa: Vec<f64> = if d_min == 0.0 {
             // At a demo's query (exactly): the limit of the interpolating weights, or of any
             // kernel as the bandwidth shrinks to the nearest demo.
-            dist.iter().map(|&d| if d == 0.0 { 1.0 } else { 0.0 }).collect()
+            dist.iter()
+                .map(|&d| if d == 0.0 { 1.0 } else { 0.0 })
+                .collect()
         } else {
             let b = self.options.bandwidth * sorted[(n + 1).min(m) - 1];
             dist.iter()
                 .map(|&d| {
                     let k = self.options.kernel.eval(d / b);
-                    if self.options.interpolate { k * (d_min / d) * (d_min / d) } else { k }
+                    if self.options.interpolate {
+                        k * (d_min / d) * (d_min / d)
+                    } else {
+                        k
+                    }
                 })
                 .collect()
         };
@@ -196,7 +228,12 @@ mod tests {
         let w = DMatrix::from_fn(6, 2, |i, j| i as f64 - 2.0 * j as f64);
         let atf = &ata * &w;
         let ne = NormalEquations { ata, atf };
-        let lwr = Lwr::new(&[vec![0.0], vec![1.0], vec![3.0]], vec![ne.clone(), ne.clone(), ne], LwrOptions::default()).unwrap();
+        let lwr = Lwr::new(
+            &[vec![0.0], vec![1.0], vec![3.0]],
+            vec![ne.clone(), ne.clone(), ne],
+            LwrOptions::default(),
+        )
+        .unwrap();
         for q in [-1.0, 0.3, 2.0, 7.0] {
             let got = lwr.weights_at(&[q]).unwrap();
             assert!((got - &w).abs().max() < 1e-6, "q={q}");
@@ -206,30 +243,65 @@ mod tests {
     #[test]
     fn equal_design_matrices_give_a_convex_blend() {
         let ata = spd(5, 0.3);
-        let ws: Vec<DMatrix<f64>> = (0..3).map(|k| DMatrix::from_fn(5, 1, |i, _| (i + 3 * k) as f64)).collect();
-        let normal: Vec<NormalEquations> = ws.iter().map(|w| NormalEquations { ata: ata.clone(), atf: &ata * w }).collect();
+        let ws: Vec<DMatrix<f64>> = (0..3)
+            .map(|k| DMatrix::from_fn(5, 1, |i, _| (i + 3 * k) as f64))
+            .collect();
+        let normal: Vec<NormalEquations> = ws
+            .iter()
+            .map(|w| NormalEquations {
+                ata: ata.clone(),
+                atf: &ata * w,
+            })
+            .collect();
         for options in [
-            LwrOptions { ridge: 1e-14, ..LwrOptions::default() },
-            LwrOptions { kernel: Kernel::Gaussian, ridge: 1e-14, interpolate: false, ..LwrOptions::default() },
+            LwrOptions {
+                ridge: 1e-14,
+                ..LwrOptions::default()
+            },
+            LwrOptions {
+                kernel: Kernel::Gaussian,
+                ridge: 1e-14,
+                interpolate: false,
+                ..LwrOptions::default()
+            },
         ] {
-            let lwr = Lwr::new(&[vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]], normal.clone(), options).unwrap();
+            let lwr = Lwr::new(
+                &[vec![0.0, 0.0], vec![1.0, 0.0], vec![0.0, 1.0]],
+                normal.clone(),
+                options,
+            )
+            .unwrap();
             let q = [0.3, 0.2];
             let kappa = lwr.demo_weights(&q);
             assert!(kappa.iter().all(|&k| (0.0..=1.0).contains(&k)));
             assert!((kappa.iter().sum::<f64>() - 1.0).abs() < 1e-14);
-            let blend = ws.iter().zip(&kappa).fold(DMatrix::zeros(5, 1), |acc, (w, k)| acc + w * *k);
+            let blend = ws
+                .iter()
+                .zip(&kappa)
+                .fold(DMatrix::zeros(5, 1), |acc, (w, k)| acc + w * *k);
             assert!((lwr.weights_at(&q).unwrap() - blend).abs().max() < 1e-9);
         }
     }
 
     #[test]
     fn a_demo_query_selects_that_demo_and_nearby_queries_approach_it() {
-        let ws: Vec<DMatrix<f64>> = (0..3).map(|k| DMatrix::from_element(4, 1, k as f64)).collect();
-        let normal = ws.iter().enumerate().map(|(k, w)| {
-            let ata = spd(4, 0.2 + k as f64);
-            NormalEquations { atf: &ata * w, ata }
-        }).collect();
-        let lwr = Lwr::new(&[vec![0.0], vec![1.0], vec![2.0]], normal, LwrOptions::default()).unwrap();
+        let ws: Vec<DMatrix<f64>> = (0..3)
+            .map(|k| DMatrix::from_element(4, 1, k as f64))
+            .collect();
+        let normal = ws
+            .iter()
+            .enumerate()
+            .map(|(k, w)| {
+                let ata = spd(4, 0.2 + k as f64);
+                NormalEquations { atf: &ata * w, ata }
+            })
+            .collect();
+        let lwr = Lwr::new(
+            &[vec![0.0], vec![1.0], vec![2.0]],
+            normal,
+            LwrOptions::default(),
+        )
+        .unwrap();
         assert_eq!(lwr.demo_weights(&[1.0]), vec![0.0, 1.0, 0.0]);
         let near = lwr.demo_weights(&[1.0 + 1e-6]);
         assert!(near[1] > 1.0 - 1e-9);
@@ -241,15 +313,37 @@ mod tests {
     fn tricube_is_compact_and_the_bandwidth_keeps_n_plus_1_demos() {
         assert_eq!(Kernel::Tricube.eval(1.0), 0.0);
         assert_eq!(Kernel::Tricube.eval(0.0), 1.0);
-        let normal: Vec<NormalEquations> =
-            (0..5).map(|_| NormalEquations { ata: DMatrix::identity(2, 2), atf: DMatrix::zeros(2, 1) }).collect();
+        let normal: Vec<NormalEquations> = (0..5)
+            .map(|_| NormalEquations {
+                ata: DMatrix::identity(2, 2),
+                atf: DMatrix::zeros(2, 1),
+            })
+            .collect();
         let queries: Vec<Vec<f64>> = (0..5).map(|k| vec![(k * k) as f64]).collect();
-        let lwr = Lwr::new(&queries, normal, LwrOptions { interpolate: false, ..LwrOptions::default() }).unwrap();
+        let lwr = Lwr::new(
+            &queries,
+            normal,
+            LwrOptions {
+                interpolate: false,
+                ..LwrOptions::default()
+            },
+        )
+        .unwrap();
         // Distances from 5: 5, 4, 1, 4, 11; the two nearest end at 4, so b = 6 and only 16 is out.
         let kappa = lwr.demo_weights(&[5.0]);
-        assert_eq!(kappa.iter().map(|&k| k > 0.0).collect::<Vec<_>>(), vec![true, true, true, true, false]);
+        assert_eq!(
+            kappa.iter().map(|&k| k > 0.0).collect::<Vec<_>>(),
+            vec![true, true, true, true, false]
+        );
         let kappa = lwr.demo_weights(&[0.5]); // 0.5, 0.5 nearest: b = 0.75; 4 is at 3.5
         assert_eq!(kappa.iter().filter(|&&k| k > 0.0).count(), 2);
-        assert!(LwrOptions { bandwidth: 1.0, ..LwrOptions::default() }.validate().is_err());
+        assert!(
+            LwrOptions {
+                bandwidth: 1.0,
+                ..LwrOptions::default()
+            }
+            .validate()
+            .is_err()
+        );
     }
 }

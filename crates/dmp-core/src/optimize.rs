@@ -24,7 +24,12 @@ impl Default for MinimizeOptions {
     /// The stopping rules of SciPy's L-BFGS-B defaults (`pgtol = 1e-5`, `factr = 1e7`, i.e.
     /// `ftol = 1e7 x eps = 2.2e-9`), which scikit-learn's GP uses; memory as its `m = 10`.
     fn default() -> Self {
-        Self { max_iter: 200, gtol: 1e-5, ftol: 1e7 * f64::EPSILON, memory: 10 }
+        Self {
+            max_iter: 200,
+            gtol: 1e-5,
+            ftol: 1e7 * f64::EPSILON,
+            memory: 10,
+        }
     }
 }
 
@@ -54,7 +59,11 @@ fn projected_gradient(x: &[f64], g: &[f64], lo: &[f64], hi: &[f64]) -> Vec<f64> 
         .map(|i| {
             let at_lo = x[i] <= lo[i] && g[i] > 0.0;
             let at_hi = x[i] >= hi[i] && g[i] < 0.0;
-            if at_lo || at_hi || lo[i] >= hi[i] { 0.0 } else { g[i] }
+            if at_lo || at_hi || lo[i] >= hi[i] {
+                0.0
+            } else {
+                g[i]
+            }
         })
         .collect()
 }
@@ -62,7 +71,13 @@ fn projected_gradient(x: &[f64], g: &[f64], lo: &[f64], hi: &[f64]) -> Vec<f64> 
 /// Minimizes `f` over the box `[lo, hi]` from `x0` (clamped into the box). `f` returns the value
 /// and gradient, or `None` where it cannot be evaluated (treated as +infinity: the line search
 /// backs off). Returns `None` only if `f` cannot be evaluated at the start.
-pub fn minimize_box<F>(mut f: F, x0: &[f64], lo: &[f64], hi: &[f64], opts: &MinimizeOptions) -> Option<Minimum>
+pub fn minimize_box<F>(
+    mut f: F,
+    x0: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    opts: &MinimizeOptions,
+) -> Option<Minimum>
 where
     F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>,
 {
@@ -87,7 +102,12 @@ where
         }
         // Two-loop recursion on the free variables only.
         let free: Vec<bool> = pg.iter().map(|v| *v != 0.0).collect();
-        let mask = |v: &[f64]| -> Vec<f64> { v.iter().zip(&free).map(|(a, &fr)| if fr { *a } else { 0.0 }).collect() };
+        let mask = |v: &[f64]| -> Vec<f64> {
+            v.iter()
+                .zip(&free)
+                .map(|(a, &fr)| if fr { *a } else { 0.0 })
+                .collect()
+        };
         let mut d = {
             let mut q = pg.clone();
             let k = s_hist.len();
@@ -175,7 +195,12 @@ where
             break;
         }
     }
-    Some(Minimum { x, f: fx, iterations, evaluations })
+    Some(Minimum {
+        x,
+        f: fx,
+        iterations,
+        evaluations,
+    })
 }
 
 /// The first primes, for the Halton sequence.
@@ -215,28 +240,65 @@ mod tests {
     fn rosenbrock(x: &[f64]) -> Option<(f64, Vec<f64>)> {
         let (a, b) = (x[0], x[1]);
         let f = (1.0 - a).powi(2) + 100.0 * (b - a * a).powi(2);
-        let g = vec![-2.0 * (1.0 - a) - 400.0 * a * (b - a * a), 200.0 * (b - a * a)];
+        let g = vec![
+            -2.0 * (1.0 - a) - 400.0 * a * (b - a * a),
+            200.0 * (b - a * a),
+        ];
         Some((f, g))
     }
 
     #[test]
     fn finds_the_rosenbrock_minimum() {
-        let m = minimize_box(rosenbrock, &[-1.2, 1.0], &[-5.0, -5.0], &[5.0, 5.0], &MinimizeOptions::default()).unwrap();
-        assert!((m.x[0] - 1.0).abs() < 1e-4 && (m.x[1] - 1.0).abs() < 1e-4, "{m:?}");
+        let m = minimize_box(
+            rosenbrock,
+            &[-1.2, 1.0],
+            &[-5.0, -5.0],
+            &[5.0, 5.0],
+            &MinimizeOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            (m.x[0] - 1.0).abs() < 1e-4 && (m.x[1] - 1.0).abs() < 1e-4,
+            "{m:?}"
+        );
     }
 
     #[test]
     fn stops_at_an_active_bound() {
         // min (x-3)^2 + (y+1)^2 on [0,2] x [0,2] is at (2, 0).
-        let f = |x: &[f64]| Some(((x[0] - 3.0).powi(2) + (x[1] + 1.0).powi(2), vec![2.0 * (x[0] - 3.0), 2.0 * (x[1] + 1.0)]));
-        let m = minimize_box(f, &[0.5, 1.5], &[0.0, 0.0], &[2.0, 2.0], &MinimizeOptions::default()).unwrap();
+        let f = |x: &[f64]| {
+            Some((
+                (x[0] - 3.0).powi(2) + (x[1] + 1.0).powi(2),
+                vec![2.0 * (x[0] - 3.0), 2.0 * (x[1] + 1.0)],
+            ))
+        };
+        let m = minimize_box(
+            f,
+            &[0.5, 1.5],
+            &[0.0, 0.0],
+            &[2.0, 2.0],
+            &MinimizeOptions::default(),
+        )
+        .unwrap();
         assert_eq!(m.x, vec![2.0, 0.0]);
     }
 
     #[test]
     fn a_fixed_variable_stays_fixed() {
-        let f = |x: &[f64]| Some((x[0].powi(2) + (x[1] - 1.0).powi(2), vec![2.0 * x[0], 2.0 * (x[1] - 1.0)]));
-        let m = minimize_box(f, &[3.0, 4.0], &[-9.0, 4.0], &[9.0, 4.0], &MinimizeOptions::default()).unwrap();
+        let f = |x: &[f64]| {
+            Some((
+                x[0].powi(2) + (x[1] - 1.0).powi(2),
+                vec![2.0 * x[0], 2.0 * (x[1] - 1.0)],
+            ))
+        };
+        let m = minimize_box(
+            f,
+            &[3.0, 4.0],
+            &[-9.0, 4.0],
+            &[9.0, 4.0],
+            &MinimizeOptions::default(),
+        )
+        .unwrap();
         assert!(m.x[0].abs() < 1e-6);
         assert_eq!(m.x[1], 4.0);
     }
@@ -244,7 +306,13 @@ mod tests {
     #[test]
     fn backs_off_where_f_is_undefined() {
         // f undefined for x < 0.5; minimum of (x-1)^2 from x = 3 must still be found.
-        let f = |x: &[f64]| if x[0] < 0.5 { None } else { Some(((x[0] - 1.0).powi(2), vec![2.0 * (x[0] - 1.0)])) };
+        let f = |x: &[f64]| {
+            if x[0] < 0.5 {
+                None
+            } else {
+                Some(((x[0] - 1.0).powi(2), vec![2.0 * (x[0] - 1.0)]))
+            }
+        };
         let m = minimize_box(f, &[3.0], &[-10.0], &[10.0], &MinimizeOptions::default()).unwrap();
         assert!((m.x[0] - 1.0).abs() < 1e-6);
     }

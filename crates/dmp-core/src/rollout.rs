@@ -31,7 +31,12 @@ pub struct RolloutOptions {
 
 impl RolloutOptions {
     pub fn new(dt: f64) -> Self {
-        Self { dt, duration: None, until_rest: false, rest_tol: 1e-4 }
+        Self {
+            dt,
+            duration: None,
+            until_rest: false,
+            rest_tol: 1e-4,
+        }
     }
 
     pub fn validate(&self) -> Result<()> {
@@ -63,7 +68,11 @@ impl Trajectory {
 /// rounding error, else rounded up, so the rollout never stops short.
 fn n_steps(duration: f64, dt: f64) -> f64 {
     let r = duration / dt;
-    if (r - r.round()).abs() <= 1e-9 * r.max(1.0) { r.round() } else { r.ceil() }
+    if (r - r.round()).abs() <= 1e-9 * r.max(1.0) {
+        r.round()
+    } else {
+        r.ceil()
+    }
 }
 
 impl Dmp {

@@ -7,8 +7,14 @@ use proptest::prelude::*;
 
 fn zero_weight_dmp(y0: f64, g: f64, tau: f64) -> Dmp {
     let cfg = DmpConfig::default();
-    Dmp::new(cfg, DMatrix::zeros(cfg.n_basis, 1), DVector::from_element(1, g), DVector::from_element(1, y0), tau)
-        .unwrap()
+    Dmp::new(
+        cfg,
+        DMatrix::zeros(cfg.n_basis, 1),
+        DVector::from_element(1, g),
+        DVector::from_element(1, y0),
+        tau,
+    )
+    .unwrap()
 }
 
 /// With w = 0, eqs. 1-2 are tau^2 ydd + alpha_z tau yd + alpha_z beta_z (y - g) = 0, critically
@@ -21,8 +27,13 @@ fn spring(y0: f64, g: f64, tau: f64, t: f64) -> f64 {
 
 fn max_spring_error(dt: f64) -> f64 {
     let (y0, g, tau) = (0.3, 1.7, 0.8);
-    let tr = zero_weight_dmp(y0, g, tau).rollout(&RolloutOptions::new(dt)).unwrap();
-    tr.t.iter().zip(&tr.y).map(|(&t, &y)| (y - spring(y0, g, tau, t)).abs()).fold(0.0, f64::max)
+    let tr = zero_weight_dmp(y0, g, tau)
+        .rollout(&RolloutOptions::new(dt))
+        .unwrap();
+    tr.t.iter()
+        .zip(&tr.y)
+        .map(|(&t, &y)| (y - spring(y0, g, tau, t)).abs())
+        .fold(0.0, f64::max)
 }
 
 #[test]
@@ -38,7 +49,9 @@ fn zero_weights_follow_the_closed_form_spring_and_error_shrinks_with_dt() {
 
 /// A smooth 3-DOF demonstration that starts and ends at rest (minimum jerk plus a bump).
 fn demo(n: usize, duration: f64) -> (Vec<f64>, DMatrix<f64>) {
-    let t: Vec<f64> = (0..n).map(|j| duration * j as f64 / (n - 1) as f64).collect();
+    let t: Vec<f64> = (0..n)
+        .map(|j| duration * j as f64 / (n - 1) as f64)
+        .collect();
     let mut y = DMatrix::zeros(3, n);
     for (j, &tj) in t.iter().enumerate() {
         let s = tj / duration;
@@ -51,8 +64,20 @@ fn demo(n: usize, duration: f64) -> (Vec<f64>, DMatrix<f64>) {
 }
 
 fn fit(t: &[f64], y: &DMatrix<f64>, n_basis: usize) -> Dmp {
-    let demo = Demonstration { t, y: y.as_view(), yd: None, ydd: None };
-    Dmp::fit(&demo, DmpConfig { n_basis, ..DmpConfig::default() }).unwrap()
+    let demo = Demonstration {
+        t,
+        y: y.as_view(),
+        yd: None,
+        ydd: None,
+    };
+    Dmp::fit(
+        &demo,
+        DmpConfig {
+            n_basis,
+            ..DmpConfig::default()
+        },
+    )
+    .unwrap()
 }
 
 #[test]
@@ -64,7 +89,9 @@ fn fit_then_rollout_reproduces_a_smooth_demo_within_one_percent() {
     for d in 0..3 {
         let row = y.row(d);
         let range = row.max() - row.min();
-        let err = (0..1001).map(|j| (tr.y[j * 3 + d] - y[(d, j)]).abs()).fold(0.0, f64::max);
+        let err = (0..1001)
+            .map(|j| (tr.y[j * 3 + d] - y[(d, j)]).abs())
+            .fold(0.0, f64::max);
         assert!(err < 0.01 * range, "dof {d}: error {err} of range {range}");
     }
 }
@@ -87,7 +114,12 @@ fn derivatives_given_or_computed_give_nearly_the_same_fit() {
         ydd[(2, j)] = 0.3 * 2.0 * w * w * (2.0 * w * tj).cos();
     }
     let exact = Dmp::fit(
-        &Demonstration { t: &t, y: y.as_view(), yd: Some(yd.as_view()), ydd: Some(ydd.as_view()) },
+        &Demonstration {
+            t: &t,
+            y: y.as_view(),
+            yd: Some(yd.as_view()),
+            ydd: Some(ydd.as_view()),
+        },
         DmpConfig::default(),
     )
     .unwrap();
@@ -99,8 +131,18 @@ fn derivatives_given_or_computed_give_nearly_the_same_fit() {
 #[test]
 fn non_uniform_sample_times_fit_as_well_as_uniform_ones() {
     let n = 800;
-    let t: Vec<f64> = (0..n).map(|j| { let s = j as f64 / (n - 1) as f64; s - 0.1 * (2.0 * std::f64::consts::PI * s).sin() / (2.0 * std::f64::consts::PI) }).collect();
-    let y = DMatrix::from_iterator(1, n, t.iter().map(|&s| 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5)));
+    let t: Vec<f64> = (0..n)
+        .map(|j| {
+            let s = j as f64 / (n - 1) as f64;
+            s - 0.1 * (2.0 * std::f64::consts::PI * s).sin() / (2.0 * std::f64::consts::PI)
+        })
+        .collect();
+    let y = DMatrix::from_iterator(
+        1,
+        n,
+        t.iter()
+            .map(|&s| 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5)),
+    );
     let dmp = fit(&t, &y, 25);
     let tr = dmp.rollout(&RolloutOptions::new(1e-3)).unwrap();
     for (j, &tj) in tr.t.iter().enumerate() {
@@ -113,8 +155,14 @@ fn non_uniform_sample_times_fit_as_well_as_uniform_ones() {
 #[test]
 fn converges_to_a_new_goal() {
     let (t, y) = demo(501, 1.0);
-    let dmp = fit(&t, &y, 25).with_goal(DVector::from_vec(vec![2.0, -1.0, 0.7])).unwrap();
-    let opts = RolloutOptions { until_rest: true, rest_tol: 1e-6, ..RolloutOptions::new(1e-3) };
+    let dmp = fit(&t, &y, 25)
+        .with_goal(DVector::from_vec(vec![2.0, -1.0, 0.7]))
+        .unwrap();
+    let opts = RolloutOptions {
+        until_rest: true,
+        rest_tol: 1e-6,
+        ..RolloutOptions::new(1e-3)
+    };
     let tr = dmp.rollout(&opts).unwrap();
     let last = &tr.y[tr.y.len() - 3..];
     for (got, want) in last.iter().zip([2.0, -1.0, 0.7]) {
@@ -131,7 +179,9 @@ fn rollout_is_bit_identical_across_runs_and_in_batch() {
     let a = dmp.rollout(&opts).unwrap();
     let b = fit(&t, &y, 30).rollout(&opts).unwrap();
     assert_eq!(a, b);
-    let many: Vec<Dmp> = (0..64).map(|k| dmp.with_tau(0.2 + 0.01 * k as f64).unwrap()).collect();
+    let many: Vec<Dmp> = (0..64)
+        .map(|k| dmp.with_tau(0.2 + 0.01 * k as f64).unwrap())
+        .collect();
     let batch = rollout_batch(&many, &opts).unwrap();
     for (d, tr) in many.iter().zip(&batch) {
         assert_eq!(&d.rollout(&opts).unwrap(), tr);
@@ -146,20 +196,42 @@ fn bad_input_is_an_error_not_a_panic() {
         t2[10] = t2[9];
         t2
     };
-    let d = |t: &[f64], y: &DMatrix<f64>| Dmp::fit(&Demonstration { t, y: y.as_view(), yd: None, ydd: None }, DmpConfig::default());
-    assert!(matches!(d(&bad_t, &y), Err(Error::NotIncreasing { index: 10, .. })));
+    let d = |t: &[f64], y: &DMatrix<f64>| {
+        Dmp::fit(
+            &Demonstration {
+                t,
+                y: y.as_view(),
+                yd: None,
+                ydd: None,
+            },
+            DmpConfig::default(),
+        )
+    };
+    assert!(matches!(
+        d(&bad_t, &y),
+        Err(Error::NotIncreasing { index: 10, .. })
+    ));
     let mut nan_y = y.clone();
     nan_y[(1, 7)] = f64::NAN;
     let err = d(&t, &nan_y).unwrap_err();
     assert_eq!(err.to_string(), "y[7, 1] is NaN: all values must be finite");
-    assert!(matches!(d(&t[..2], &y.columns(0, 2).into_owned()), Err(Error::TooFewSamples { .. })));
+    assert!(matches!(
+        d(&t[..2], &y.columns(0, 2).into_owned()),
+        Err(Error::TooFewSamples { .. })
+    ));
     assert!(matches!(d(&t[..20], &y), Err(Error::Shape { .. })));
     let dmp = d(&t, &y).unwrap();
     for dt in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         assert!(dmp.rollout(&RolloutOptions::new(dt)).is_err());
     }
-    let huge = RolloutOptions { duration: Some(1e9), ..RolloutOptions::new(1e-3) };
-    assert!(matches!(dmp.rollout(&huge), Err(Error::InvalidParameter { name: "dt", .. })));
+    let huge = RolloutOptions {
+        duration: Some(1e9),
+        ..RolloutOptions::new(1e-3)
+    };
+    assert!(matches!(
+        dmp.rollout(&huge),
+        Err(Error::InvalidParameter { name: "dt", .. })
+    ));
     assert!(dmp.with_tau(0.0).is_err());
     assert!(dmp.with_goal(DVector::from_vec(vec![1.0])).is_err());
 }

@@ -12,7 +12,17 @@ fn strike(duration: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
 
 fn regime(duration: f64) -> Regime {
     let (t, x, z) = strike(duration);
-    simulate(&FingerPath { t: &t, x: &x, z: &z }, &MatchboxConfig::default()).unwrap().measures.regime
+    simulate(
+        &FingerPath {
+            t: &t,
+            x: &x,
+            z: &z,
+        },
+        &MatchboxConfig::default(),
+    )
+    .unwrap()
+    .measures
+    .regime
 }
 
 /// Sweeping the strike speed goes flipped back, then upright, then flipped over (paper §5), with
@@ -22,18 +32,47 @@ fn faster_strikes_go_back_then_upright_then_over() {
     let durations: Vec<f64> = (0..=40).map(|k| 0.14 - 0.002 * k as f64).collect(); // slow -> fast
     let cfg = MatchboxConfig::default();
     let strikes: Vec<_> = durations.iter().map(|&d| strike(d)).collect();
-    let paths: Vec<FingerPath> = strikes.iter().map(|(t, x, z)| FingerPath { t, x, z }).collect();
-    let regimes: Vec<Regime> = simulate_batch(&paths, &cfg).into_iter().map(|e| e.unwrap().measures.regime).collect();
-    let first_up = regimes.iter().position(|r| *r == Regime::Upright).expect("an upright window");
+    let paths: Vec<FingerPath> = strikes
+        .iter()
+        .map(|(t, x, z)| FingerPath { t, x, z })
+        .collect();
+    let regimes: Vec<Regime> = simulate_batch(&paths, &cfg)
+        .into_iter()
+        .map(|e| e.unwrap().measures.regime)
+        .collect();
+    let first_up = regimes
+        .iter()
+        .position(|r| *r == Regime::Upright)
+        .expect("an upright window");
     let last_up = regimes.iter().rposition(|r| *r == Regime::Upright).unwrap();
-    assert!(regimes[..first_up].iter().all(|r| *r == Regime::FlippedBack), "{regimes:?}");
-    assert!(regimes[last_up + 1..].iter().all(|r| *r == Regime::FlippedOver), "{regimes:?}");
-    let upright = regimes[first_up..=last_up].iter().filter(|r| **r == Regime::Upright).count();
-    assert!(upright as f64 >= 0.8 * (last_up - first_up + 1) as f64, "{regimes:?}");
+    assert!(
+        regimes[..first_up]
+            .iter()
+            .all(|r| *r == Regime::FlippedBack),
+        "{regimes:?}"
+    );
+    assert!(
+        regimes[last_up + 1..]
+            .iter()
+            .all(|r| *r == Regime::FlippedOver),
+        "{regimes:?}"
+    );
+    let upright = regimes[first_up..=last_up]
+        .iter()
+        .filter(|r| **r == Regime::Upright)
+        .count();
+    assert!(
+        upright as f64 >= 0.8 * (last_up - first_up + 1) as f64,
+        "{regimes:?}"
+    );
     // Speed is proportional to 1 / duration.
     let (slow, fast) = (durations[first_up], durations[last_up]);
     let half_width = (slow - fast) / (slow + fast);
-    assert!(half_width >= 0.06, "upright window {fast}..{slow} s is only +-{:.1} %", 100.0 * half_width);
+    assert!(
+        half_width >= 0.06,
+        "upright window {fast}..{slow} s is only +-{:.1} %",
+        100.0 * half_width
+    );
 }
 
 #[test]
@@ -43,9 +82,22 @@ fn flip_back_errors_are_bounded_by_the_tipping_angle() {
     let tipping = std::f64::consts::FRAC_PI_2 - (16.0f64 / 36.0).atan();
     for d in [0.16, 0.14, 0.12] {
         let (t, x, z) = strike(d);
-        let m = simulate(&FingerPath { t: &t, x: &x, z: &z }, &MatchboxConfig::default()).unwrap().measures;
+        let m = simulate(
+            &FingerPath {
+                t: &t,
+                x: &x,
+                z: &z,
+            },
+            &MatchboxConfig::default(),
+        )
+        .unwrap()
+        .measures;
         assert_eq!(m.regime, Regime::FlippedBack);
-        assert!(m.phi_max > 0.1 && m.phi_max < tipping + 0.02, "{}", m.phi_max.to_degrees());
+        assert!(
+            m.phi_max > 0.1 && m.phi_max < tipping + 0.02,
+            "{}",
+            m.phi_max.to_degrees()
+        );
         assert_eq!(m.outcome_angle, m.phi_max);
     }
 }
@@ -53,7 +105,11 @@ fn flip_back_errors_are_bounded_by_the_tipping_angle() {
 #[test]
 fn episodes_are_bit_identical_and_batch_equals_serial() {
     let (t, x, z) = strike(0.1);
-    let path = FingerPath { t: &t, x: &x, z: &z };
+    let path = FingerPath {
+        t: &t,
+        x: &x,
+        z: &z,
+    };
     let cfg = MatchboxConfig::default();
     let a = simulate(&path, &cfg).unwrap();
     let b = simulate(&path, &cfg).unwrap();
@@ -83,10 +139,33 @@ fn bad_trajectories_are_errors_with_a_reason() {
     assert!(check(&t, &through, &z).contains("passes through the table"));
     let high: Vec<f64> = z.iter().map(|v| v + 0.2).collect();
     assert!(check(&t, &x, &high).contains("leaves the workspace"));
-    assert!(simulate(&FingerPath { t: &t, x: &through, z: &z }, &cfg).is_err());
+    assert!(
+        simulate(
+            &FingerPath {
+                t: &t,
+                x: &through,
+                z: &z
+            },
+            &cfg
+        )
+        .is_err()
+    );
     let long: Vec<f64> = t.iter().map(|v| v * 1e6).collect();
     assert!(check(&long, &x, &z).contains("exceeds the 60 s"));
-    let bad_cfg = MatchboxConfig { overhang: 0.03, ..cfg };
-    assert!(simulate(&FingerPath { t: &t, x: &x, z: &z }, &bad_cfg).is_err());
+    let bad_cfg = MatchboxConfig {
+        overhang: 0.03,
+        ..cfg
+    };
+    assert!(
+        simulate(
+            &FingerPath {
+                t: &t,
+                x: &x,
+                z: &z
+            },
+            &bad_cfg
+        )
+        .is_err()
+    );
     assert_eq!(regime(0.1), regime(0.1));
 }

@@ -12,23 +12,36 @@ use pyo3::prelude::*;
 use crate::errors::{IntoPyResult, raise};
 
 /// A C-ordered `(T, D)` array viewed as the `D x T` matrix the core expects (no copy).
-pub(crate) fn time_major<'a>(name: &str, a: &'a PyReadonlyArray2<'_, f64>) -> PyResult<DMatrixView<'a, f64>> {
+pub(crate) fn time_major<'a>(
+    name: &str,
+    a: &'a PyReadonlyArray2<'_, f64>,
+) -> PyResult<DMatrixView<'a, f64>> {
     let (t, d) = (a.shape()[0], a.shape()[1]);
-    let slice = a
-        .as_slice()
-        .map_err(|_| raise("InvalidInputError", format!("{name} must be a C-contiguous array")))?;
+    let slice = a.as_slice().map_err(|_| {
+        raise(
+            "InvalidInputError",
+            format!("{name} must be a C-contiguous array"),
+        )
+    })?;
     Ok(DMatrixView::from_slice(slice, d, t))
 }
 
 pub(crate) fn vector(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<DVector<f64>> {
-    let slice = a
-        .as_slice()
-        .map_err(|_| raise("InvalidInputError", format!("{name} must be a contiguous array")))?;
+    let slice = a.as_slice().map_err(|_| {
+        raise(
+            "InvalidInputError",
+            format!("{name} must be a contiguous array"),
+        )
+    })?;
     Ok(DVector::from_column_slice(slice))
 }
 
-type TrajectoryArrays<'py> =
-    (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+type TrajectoryArrays<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
 
 fn trajectory_arrays(py: Python<'_>, tr: Trajectory) -> PyResult<TrajectoryArrays<'_>> {
     let shape = [tr.t.len(), tr.n_dof];
@@ -63,9 +76,23 @@ impl PyDmp {
         // weights arrive (D, N) C-ordered, which is the N x D column-major matrix of the core.
         let n = weights.shape()[1];
         let w = time_major("weights", &weights)?;
-        let config = DmpConfig { n_basis: n, alpha_z, beta_z, alpha_x, width_factor };
-        let inner = Dmp::new(config, DMatrix::from(w), vector("goal", &goal)?, vector("y0", &y0)?, tau);
-        Ok(Self { inner: inner.py_err()? })
+        let config = DmpConfig {
+            n_basis: n,
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        let inner = Dmp::new(
+            config,
+            DMatrix::from(w),
+            vector("goal", &goal)?,
+            vector("y0", &y0)?,
+            tau,
+        );
+        Ok(Self {
+            inner: inner.py_err()?,
+        })
     }
 
     #[staticmethod]
@@ -91,8 +118,16 @@ impl PyDmp {
             yd: yd.as_ref().map(|a| time_major("yd", a)).transpose()?,
             ydd: ydd.as_ref().map(|a| time_major("ydd", a)).transpose()?,
         };
-        let config = DmpConfig { n_basis, alpha_z, beta_z, alpha_x, width_factor };
-        Ok(Self { inner: Dmp::fit(&demo, config).py_err()? })
+        let config = DmpConfig {
+            n_basis,
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        Ok(Self {
+            inner: Dmp::fit(&demo, config).py_err()?,
+        })
     }
 
     #[pyo3(signature = (dt, duration=None, until_rest=false, rest_tol=1e-4))]
@@ -104,28 +139,42 @@ impl PyDmp {
         until_rest: bool,
         rest_tol: f64,
     ) -> PyResult<TrajectoryArrays<'py>> {
-        let opts = RolloutOptions { dt, duration, until_rest, rest_tol };
+        let opts = RolloutOptions {
+            dt,
+            duration,
+            until_rest,
+            rest_tol,
+        };
         let tr = py.detach(|| self.inner.rollout(&opts)).py_err()?;
         trajectory_arrays(py, tr)
     }
 
     fn with_goal(&self, goal: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
-        Ok(Self { inner: self.inner.with_goal(vector("goal", &goal)?).py_err()? })
+        Ok(Self {
+            inner: self.inner.with_goal(vector("goal", &goal)?).py_err()?,
+        })
     }
 
     fn with_start(&self, y0: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
-        Ok(Self { inner: self.inner.with_start(vector("y0", &y0)?).py_err()? })
+        Ok(Self {
+            inner: self.inner.with_start(vector("y0", &y0)?).py_err()?,
+        })
     }
 
     fn with_tau(&self, tau: f64) -> PyResult<Self> {
-        Ok(Self { inner: self.inner.with_tau(tau).py_err()? })
+        Ok(Self {
+            inner: self.inner.with_tau(tau).py_err()?,
+        })
     }
 
     /// (D, N)
     #[getter]
     fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let w = self.inner.weights();
-        w.as_slice().to_vec().into_pyarray(py).reshape([w.ncols(), w.nrows()])
+        w.as_slice()
+            .to_vec()
+            .into_pyarray(py)
+            .reshape([w.ncols(), w.nrows()])
     }
     #[getter]
     fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -185,7 +234,15 @@ pub fn py_rollout_batch<'py>(
     rest_tol: f64,
 ) -> PyResult<Vec<TrajectoryArrays<'py>>> {
     let owned: Vec<Dmp> = dmps.iter().map(|d| d.inner.clone()).collect();
-    let opts = RolloutOptions { dt, duration, until_rest, rest_tol };
+    let opts = RolloutOptions {
+        dt,
+        duration,
+        until_rest,
+        rest_tol,
+    };
     let trajectories = py.detach(|| rollout_batch(&owned, &opts)).py_err()?;
-    trajectories.into_iter().map(|tr| trajectory_arrays(py, tr)).collect()
+    trajectories
+        .into_iter()
+        .map(|tr| trajectory_arrays(py, tr))
+        .collect()
 }

@@ -15,7 +15,9 @@ pub fn raise(class_name: &str, message: String) -> PyErr {
             .and_then(|c| c.cast_into::<PyType>().map_err(PyErr::from));
         match class {
             Ok(class) => PyErr::from_type(class, message),
-            Err(e) => PyRuntimeError::new_err(format!("{message} (and dmprs.errors is unusable: {e})")),
+            Err(e) => {
+                PyRuntimeError::new_err(format!("{message} (and dmprs.errors is unusable: {e})"))
+            }
         }
     })
 }

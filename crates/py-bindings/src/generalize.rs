@@ -16,7 +16,8 @@ type DemoArrays<'py> = (
 );
 
 fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    q.as_slice().map_err(|_| raise("InvalidInputError", "q must be a contiguous array".into()))
+    q.as_slice()
+        .map_err(|_| raise("InvalidInputError", "q must be a contiguous array".into()))
 }
 
 #[pyclass(name = "Generalizer", module = "dmprs._core", frozen)]
@@ -52,23 +53,43 @@ impl PyGeneralizer {
         let kernel = match kernel {
             "tricube" => Kernel::Tricube,
             "gaussian" => Kernel::Gaussian,
-            other => return Err(raise("InvalidInputError", format!("kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"))),
+            other => {
+                return Err(raise(
+                    "InvalidInputError",
+                    format!("kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"),
+                ));
+            }
         };
         let method = match method {
             "linear" => Method::Linear,
             "lwr-gp" => Method::LwrGp(LwrGpOptions {
-                lwr: LwrOptions { kernel, bandwidth, ridge, interpolate },
+                lwr: LwrOptions {
+                    kernel,
+                    bandwidth,
+                    ridge,
+                    interpolate,
+                },
                 gp_noise,
                 gp_optimize,
                 gp_restarts,
             }),
-            other => return Err(raise("InvalidInputError", format!("method = {other:?} is invalid: use 'linear' or 'lwr-gp'"))),
+            other => {
+                return Err(raise(
+                    "InvalidInputError",
+                    format!("method = {other:?} is invalid: use 'linear' or 'lwr-gp'"),
+                ));
+            }
         };
         let qv = time_major("queries", &queries)?;
-        let qs: Vec<Vec<f64>> = qv.column_iter().map(|c| c.iter().copied().collect()).collect();
+        let qs: Vec<Vec<f64>> = qv
+            .column_iter()
+            .map(|c| c.iter().copied().collect())
+            .collect();
         let mut views = Vec::with_capacity(demos.len());
         for (t, y, yd, ydd) in &demos {
-            let t = t.as_slice().map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
+            let t = t
+                .as_slice()
+                .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
             views.push(Demonstration {
                 t,
                 y: time_major("y", y)?,
@@ -76,30 +97,62 @@ impl PyGeneralizer {
                 ydd: ydd.as_ref().map(|a| time_major("ydd", a)).transpose()?,
             });
         }
-        let config = DmpConfig { n_basis, alpha_z, beta_z, alpha_x, width_factor };
-        let inner = py.detach(|| Generalizer::new(&qs, &views, config, method)).py_err()?;
+        let config = DmpConfig {
+            n_basis,
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        let inner = py
+            .detach(|| Generalizer::new(&qs, &views, config, method))
+            .py_err()?;
         Ok(Self { inner })
     }
 
     fn predict(&self, q: PyReadonlyArray1<'_, f64>) -> PyResult<PyDmp> {
-        Ok(PyDmp { inner: self.inner.predict(query(&q)?).py_err()? })
+        Ok(PyDmp {
+            inner: self.inner.predict(query(&q)?).py_err()?,
+        })
     }
 
-    fn parameters<'py>(&self, py: Python<'py>, q: PyReadonlyArray1<'_, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        Ok(self.inner.parameters(query(&q)?).py_err()?.as_slice().to_vec().into_pyarray(py))
+    fn parameters<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(self
+            .inner
+            .parameters(query(&q)?)
+            .py_err()?
+            .as_slice()
+            .to_vec()
+            .into_pyarray(py))
     }
 
     /// `(n_parameters, n)`.
-    fn jacobian<'py>(&self, py: Python<'py>, q: PyReadonlyArray1<'_, f64>, rel_step: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+        rel_step: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
         let (p, n) = jac.shape();
-        let row_major: Vec<f64> = (0..p).flat_map(|i| (0..n).map(move |j| (i, j))).map(|ij| jac[ij]).collect();
+        let row_major: Vec<f64> = (0..p)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|ij| jac[ij])
+            .collect();
         row_major.into_pyarray(py).reshape([p, n])
     }
 
     #[getter]
     fn demo_dmps(&self) -> Vec<PyDmp> {
-        self.inner.demo_dmps().iter().map(|d| PyDmp { inner: d.clone() }).collect()
+        self.inner
+            .demo_dmps()
+            .iter()
+            .map(|d| PyDmp { inner: d.clone() })
+            .collect()
     }
     #[getter]
     fn method(&self) -> &'static str {

@@ -9,14 +9,27 @@ use crate::dmp::time_major;
 use crate::errors::{IntoPyResult, raise};
 
 fn slice<'a>(name: &str, a: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| raise("InvalidInputError", format!("{name} must be a contiguous array")))
+    a.as_slice().map_err(|_| {
+        raise(
+            "InvalidInputError",
+            format!("{name} must be a contiguous array"),
+        )
+    })
 }
 
 fn pairs(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
     if a.shape()[1] != 2 {
-        return Err(raise("InvalidInputError", format!("{name} must have shape (n, 2); got {:?}", a.shape())));
+        return Err(raise(
+            "InvalidInputError",
+            format!("{name} must have shape (n, 2); got {:?}", a.shape()),
+        ));
     }
-    let s = a.as_slice().map_err(|_| raise("InvalidInputError", format!("{name} must be a C-contiguous array")))?;
+    let s = a.as_slice().map_err(|_| {
+        raise(
+            "InvalidInputError",
+            format!("{name} must be a C-contiguous array"),
+        )
+    })?;
     Ok(s.chunks(2).map(|c| (c[0], c[1])).collect())
 }
 
@@ -50,17 +63,40 @@ impl PyGaussianProcess {
     ) -> PyResult<Self> {
         let xv = time_major("X", &x)?;
         let yv = slice("y", &y)?;
-        let ls = length_scale.as_ref().map(|a| slice("length_scale", a).map(<[f64]>::to_vec)).transpose()?;
-        let ls_bounds = length_scale_bounds.as_ref().map(|a| pairs("length_scale_bounds", a)).transpose()?;
+        let ls = length_scale
+            .as_ref()
+            .map(|a| slice("length_scale", a).map(<[f64]>::to_vec))
+            .transpose()?;
+        let ls_bounds = length_scale_bounds
+            .as_ref()
+            .map(|a| pairs("length_scale_bounds", a))
+            .transpose()?;
         let start = resolve_hyperparameters(&xv, yv, ls, signal_var, noise_var).py_err()?;
         let bounds = if optimize {
-            Some(resolve_bounds(&xv, yv, &start, ls_bounds, signal_var_bounds, noise_var_bounds).py_err()?)
+            Some(
+                resolve_bounds(
+                    &xv,
+                    yv,
+                    &start,
+                    ls_bounds,
+                    signal_var_bounds,
+                    noise_var_bounds,
+                )
+                .py_err()?,
+            )
         } else {
             None
         };
-        let mut options = GpOptions { optimize, n_restarts, bounds, ..GpOptions::default() };
+        let mut options = GpOptions {
+            optimize,
+            n_restarts,
+            bounds,
+            ..GpOptions::default()
+        };
         options.minimize.max_iter = max_iter;
-        let inner = py.detach(|| GaussianProcess::fit(&xv, yv, Some(start), &options)).py_err()?;
+        let inner = py
+            .detach(|| GaussianProcess::fit(&xv, yv, Some(start), &options))
+            .py_err()?;
         Ok(Self { inner })
     }
 
@@ -82,7 +118,10 @@ impl PyGaussianProcess {
         py: Python<'py>,
         theta: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
-        let (lml, grad) = self.inner.log_marginal_likelihood_at(slice("theta", &theta)?).py_err()?;
+        let (lml, grad) = self
+            .inner
+            .log_marginal_likelihood_at(slice("theta", &theta)?)
+            .py_err()?;
         Ok((lml, grad.into_pyarray(py)))
     }
 
@@ -92,7 +131,11 @@ impl PyGaussianProcess {
     }
     #[getter]
     fn length_scale<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.hyperparameters().length_scales.clone().into_pyarray(py)
+        self.inner
+            .hyperparameters()
+            .length_scales
+            .clone()
+            .into_pyarray(py)
     }
     #[getter]
     fn signal_var(&self) -> f64 {

@@ -88,9 +88,18 @@ fn slices<'a>(
     z: &'a PyReadonlyArray1<'_, f64>,
 ) -> PyResult<FingerPath<'a>> {
     let get = |name: &str, a: &'a PyReadonlyArray1<'_, f64>| {
-        a.as_slice().map_err(|_| raise("InvalidInputError", format!("{name} must be a contiguous array")))
+        a.as_slice().map_err(|_| {
+            raise(
+                "InvalidInputError",
+                format!("{name} must be a contiguous array"),
+            )
+        })
     };
-    Ok(FingerPath { t: get("t", t)?, x: get("x", x)?, z: get("z", z)? })
+    Ok(FingerPath {
+        t: get("t", t)?,
+        x: get("x", x)?,
+        z: get("z", z)?,
+    })
 }
 
 fn episode_dict(py: Python<'_>, ep: Episode) -> PyResult<Bound<'_, PyDict>> {
@@ -139,17 +148,30 @@ pub fn matchbox_simulate<'py>(
 #[pyfunction]
 pub fn matchbox_simulate_batch<'py>(
     py: Python<'py>,
-    paths: Vec<(PyReadonlyArray1<'py, f64>, PyReadonlyArray1<'py, f64>, PyReadonlyArray1<'py, f64>)>,
+    paths: Vec<(
+        PyReadonlyArray1<'py, f64>,
+        PyReadonlyArray1<'py, f64>,
+        PyReadonlyArray1<'py, f64>,
+    )>,
     config: &PyMatchboxConfig,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
     let cfg = config.inner;
-    let views: Vec<FingerPath> = paths.iter().map(|(t, x, z)| slices(t, x, z)).collect::<PyResult<_>>()?;
+    let views: Vec<FingerPath> = paths
+        .iter()
+        .map(|(t, x, z)| slices(t, x, z))
+        .collect::<PyResult<_>>()?;
     for (i, p) in views.iter().enumerate() {
         let problems = p.problems(&cfg);
         if !problems.is_empty() {
-            return Err(raise("InvalidInputError", format!("paths[{i}]: {}", problems.join("; "))));
+            return Err(raise(
+                "InvalidInputError",
+                format!("paths[{i}]: {}", problems.join("; ")),
+            ));
         }
     }
     let episodes = py.detach(|| simulate_batch(&views, &cfg));
-    episodes.into_iter().map(|e| episode_dict(py, e.py_err()?)).collect()
+    episodes
+        .into_iter()
+        .map(|e| episode_dict(py, e.py_err()?))
+        .collect()
 }

@@ -101,12 +101,19 @@ impl MatchboxConfig {
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Error::InvalidConfig(format!("{name} = {v} must be finite and > 0")));
+                return Err(Error::InvalidConfig(format!(
+                    "{name} = {v} must be finite and > 0"
+                )));
             }
         }
-        for (name, v) in [("friction", self.friction), ("restitution", self.restitution)] {
+        for (name, v) in [
+            ("friction", self.friction),
+            ("restitution", self.restitution),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::InvalidConfig(format!("{name} = {v} must be finite and >= 0")));
+                return Err(Error::InvalidConfig(format!(
+                    "{name} = {v} must be finite and >= 0"
+                )));
             }
         }
         if !(self.overhang > 0.0 && self.overhang < self.box_size[0] / 2.0) {
@@ -117,10 +124,15 @@ impl MatchboxConfig {
             )));
         }
         if self.dt > 0.005 {
-            return Err(Error::InvalidConfig(format!("dt = {} is too coarse for a strike (max 0.005 s)", self.dt)));
+            return Err(Error::InvalidConfig(format!(
+                "dt = {} is too coarse for a strike (max 0.005 s)",
+                self.dt
+            )));
         }
         if self.solver_iterations == 0 {
-            return Err(Error::InvalidConfig("solver_iterations must be at least 1".into()));
+            return Err(Error::InvalidConfig(
+                "solver_iterations must be at least 1".into(),
+            ));
         }
         Ok(())
     }

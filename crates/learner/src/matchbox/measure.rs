@@ -90,8 +90,7 @@ pub fn measure(t: &[f64], phi: &[f64], off_table: bool, cfg: &MatchboxConfig) ->
     let outcome_angle = phi_after.unwrap_or(phi_max);
     let end = t.last().copied().unwrap_or(0.0);
     let upright = t0.is_some()
-        && t
-            .iter()
+        && t.iter()
             .zip(phi)
             .filter(|(s, _)| **s >= end - cfg.upright_hold)
             .all(|(_, p)| (p - FRAC_PI_2).abs() <= cfg.upright_tolerance);
@@ -104,7 +103,14 @@ pub fn measure(t: &[f64], phi: &[f64], off_table: bool, cfg: &MatchboxConfig) ->
     } else {
         Regime::FlippedBack
     };
-    Measures { phi_max, t0, phi_after, outcome_angle, eps18: outcome_angle - FRAC_PI_2, regime }
+    Measures {
+        phi_max,
+        t0,
+        phi_after,
+        outcome_angle,
+        eps18: outcome_angle - FRAC_PI_2,
+        regime,
+    }
 }
 
 #[cfg(test)]
@@ -119,7 +125,9 @@ mod tests {
 
     #[test]
     fn unwrap_follows_somersaults() {
-        let raw: Vec<f64> = (0..100).map(|k| ((k as f64) * 0.3 + PI).rem_euclid(2.0 * PI) - PI).collect();
+        let raw: Vec<f64> = (0..100)
+            .map(|k| ((k as f64) * 0.3 + PI).rem_euclid(2.0 * PI) - PI)
+            .collect();
         let u = unwrap(&raw);
         for k in 1..u.len() {
             assert!((u[k] - u[k - 1] - 0.3).abs() < 1e-12);
@@ -145,7 +153,10 @@ mod tests {
         assert_eq!(m.regime, Regime::Upright);
         let t0 = m.t0.unwrap();
         assert!((t0 - 0.393).abs() < 1e-3);
-        assert!((m.outcome_angle - 4.0 * (t0 + 0.05)).abs() < 1e-3, "still rising 0.05 s after t0");
+        assert!(
+            (m.outcome_angle - 4.0 * (t0 + 0.05)).abs() < 1e-3,
+            "still rising 0.05 s after t0"
+        );
         let (t, phi) = series(|s| (4.0 * s).min(PI));
         let m = measure(&t, &phi, false, &cfg);
         assert_eq!(m.regime, Regime::FlippedOver);

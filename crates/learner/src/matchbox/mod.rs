@@ -22,7 +22,12 @@ pub fn simulate_batch(paths: &[FingerPath<'_>], cfg: &MatchboxConfig) -> Vec<Res
 
 /// A minimum-jerk fingertip strike between two points over `duration` seconds, sampled every
 /// `dt` seconds: the scripted demonstrator's movement.
-pub fn min_jerk_strike(from: [f64; 2], to: [f64; 2], duration: f64, dt: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+pub fn min_jerk_strike(
+    from: [f64; 2],
+    to: [f64; 2],
+    duration: f64,
+    dt: f64,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let n = (duration / dt).round().max(2.0) as usize;
     let mut t = Vec::with_capacity(n + 1);
     let (mut x, mut z) = (Vec::with_capacity(n + 1), Vec::with_capacity(n + 1));

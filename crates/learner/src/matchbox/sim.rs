@@ -46,7 +46,10 @@ impl FingerPath<'_> {
             return (self.x[t.len() - 1], self.z[t.len() - 1]);
         }
         let w = (time - t[j - 1]) / (t[j] - t[j - 1]);
-        (self.x[j - 1] + w * (self.x[j] - self.x[j - 1]), self.z[j - 1] + w * (self.z[j] - self.z[j - 1]))
+        (
+            self.x[j - 1] + w * (self.x[j] - self.x[j - 1]),
+            self.z[j - 1] + w * (self.z[j] - self.z[j - 1]),
+        )
     }
 
     /// Every reason the path is unusable, or empty. Checked at the physics step, between samples
@@ -55,7 +58,12 @@ impl FingerPath<'_> {
         let (t, x, z) = (self.t, self.x, self.z);
         let mut out = Vec::new();
         if t.len() != x.len() || t.len() != z.len() {
-            out.push(format!("t, x and z have {}, {} and {} samples", t.len(), x.len(), z.len()));
+            out.push(format!(
+                "t, x and z have {}, {} and {} samples",
+                t.len(),
+                x.len(),
+                z.len()
+            ));
             return out;
         }
         if t.len() < 2 {
@@ -71,7 +79,11 @@ impl FingerPath<'_> {
             return out;
         }
         if let Some(j) = (1..t.len()).find(|&j| t[j] <= t[j - 1]) {
-            out.push(format!("t must be strictly increasing: t[{j}] = {} after {}", t[j], t[j - 1]));
+            out.push(format!(
+                "t must be strictly increasing: t[{j}] = {} after {}",
+                t[j],
+                t[j - 1]
+            ));
             return out;
         }
         let duration = t[t.len() - 1] - t[0];
@@ -133,27 +145,52 @@ pub fn simulate(path: &FingerPath<'_>, cfg: &MatchboxConfig) -> Result<Episode> 
     let mut bodies = RigidBodySet::new();
     let mut colliders = ColliderSet::new();
     let surface = |b: ColliderBuilder| {
-        b.friction(cfg.friction as f32).restitution(cfg.restitution as f32)
+        b.friction(cfg.friction as f32)
+            .restitution(cfg.restitution as f32)
     };
 
-    let table = bodies.insert(RigidBodyBuilder::fixed().translation(v(-0.25, 0.0, -TABLE_THICKNESS / 2.0)));
-    colliders.insert_with_parent(surface(ColliderBuilder::cuboid(0.25, 0.25, (TABLE_THICKNESS / 2.0) as f32)), table, &mut bodies);
+    let table =
+        bodies.insert(RigidBodyBuilder::fixed().translation(v(-0.25, 0.0, -TABLE_THICKNESS / 2.0)));
+    colliders.insert_with_parent(
+        surface(ColliderBuilder::cuboid(
+            0.25,
+            0.25,
+            (TABLE_THICKNESS / 2.0) as f32,
+        )),
+        table,
+        &mut bodies,
+    );
     let floor = bodies.insert(RigidBodyBuilder::fixed().translation(v(0.0, 0.0, FLOOR_Z - 0.01)));
-    colliders.insert_with_parent(surface(ColliderBuilder::cuboid(1.0, 1.0, 0.01)), floor, &mut bodies);
+    colliders.insert_with_parent(
+        surface(ColliderBuilder::cuboid(1.0, 1.0, 0.01)),
+        floor,
+        &mut bodies,
+    );
 
     let box_x0 = cfg.overhang - bx / 2.0;
     let matchbox = bodies.insert(
-        RigidBodyBuilder::dynamic().translation(v(box_x0, 0.0, bz / 2.0)).ccd_enabled(true),
+        RigidBodyBuilder::dynamic()
+            .translation(v(box_x0, 0.0, bz / 2.0))
+            .ccd_enabled(true),
     );
     colliders.insert_with_parent(
-        surface(ColliderBuilder::cuboid((bx / 2.0) as f32, (by / 2.0) as f32, (bz / 2.0) as f32))
-            .mass(cfg.box_mass as f32),
+        surface(ColliderBuilder::cuboid(
+            (bx / 2.0) as f32,
+            (by / 2.0) as f32,
+            (bz / 2.0) as f32,
+        ))
+        .mass(cfg.box_mass as f32),
         matchbox,
         &mut bodies,
     );
     let (fx, fz) = path.at(path.t[0]);
-    let finger = bodies.insert(RigidBodyBuilder::kinematic_position_based().translation(v(fx, 0.0, fz)));
-    colliders.insert_with_parent(surface(ColliderBuilder::ball(cfg.finger_radius as f32)), finger, &mut bodies);
+    let finger =
+        bodies.insert(RigidBodyBuilder::kinematic_position_based().translation(v(fx, 0.0, fz)));
+    colliders.insert_with_parent(
+        surface(ColliderBuilder::ball(cfg.finger_radius as f32)),
+        finger,
+        &mut bodies,
+    );
 
     let params = IntegrationParameters {
         dt: cfg.dt as f32,
@@ -212,5 +249,10 @@ pub fn simulate(path: &FingerPath<'_>, cfg: &MatchboxConfig) -> Result<Episode> 
     let phi: Vec<f64> = unwrap(&raw).into_iter().map(|p| p.clamp(0.0, PI)).collect();
     let off_table = box_z.last().is_some_and(|&z| z < -0.01);
     let measures = measure(&t, &phi, off_table, cfg);
-    Ok(Episode { t, phi, box_z, measures })
+    Ok(Episode {
+        t,
+        phi,
+        box_z,
+        measures,
+    })
 }
