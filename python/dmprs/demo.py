@@ -51,13 +51,12 @@ def run(out: Path | None) -> dict[str, float]:
 
 
 def _plot(out: Path, t, y, repro, adapted) -> None:
-    try:
-        import matplotlib
+    from dmprs.plots import pyplot
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib is not installed (pip install 'dmprs[plot]'): no figure written")
+    try:
+        plt = pyplot()
+    except dmprs.DmprsError as exc:
+        print(f"{exc}: no figure written")
         return
     out.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(1, 2, figsize=(11, 4), sharey=True)

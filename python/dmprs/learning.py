@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 import dmprs
+from dmprs._arrays import as_query
 from dmprs.adapters import Outcome, Status
 from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.runlog import RunLog, RunLogError, TrialRecord
@@ -59,13 +60,6 @@ class LearningResult:
             if t.success:
                 return i + 1
         return None
-
-
-def _as_query(value: Any, n: int) -> NDArray[np.float64]:
-    q = np.atleast_1d(np.asarray(value, dtype=float))
-    if q.shape != (n,):
-        raise InvalidInputError(f"the learner asked for a query of shape {q.shape}; the task has {n} components")
-    return q
 
 
 def _eps_like(q_obj: Any, eps: NDArray[np.float64]) -> Any:
@@ -119,7 +113,7 @@ def learn(
         log.meta()
         trials, cut = log.read()
         log.repair()
-        _replay(learner, [t for t in trials if t.status == Status.OK.value], task.n_query, log.trials_path)
+        _replay(learner, [t for t in trials if t.status == Status.OK.value], task.query_names, log.trials_path)
     elif log_dir is not None:
         log = RunLog.create(log_dir, {
             "task": task.name, "desired_query": q0, "query_names": task.query_names,
@@ -155,10 +149,10 @@ def learn(
                 return finish(f"the learner stopped without a successful trial ({detail})", False)
             index = len(trials)
             q_obj = learner.ask()
-            q = _as_query(q_obj, task.n_query)
+            q = as_query(q_obj, "the learner's query", task.query_names)
             command = None
             try:
-                dmp = generalizer.predict(q_obj if np.ndim(q_obj) else q)
+                dmp = generalizer.predict(q)
                 command = task.trajectory(dmp)
             except DmprsError as exc:
                 outcome: Outcome = Outcome(Status.REJECTED, message=f"generalization failed: {exc}")
@@ -196,13 +190,13 @@ def learn(
             learner.tell(q_obj, _eps_like(q_obj, eps))
 
 
-def _replay(learner: AskTell, trials: list[TrialRecord], n: int, path: Path) -> None:
+def _replay(learner: AskTell, trials: list[TrialRecord], query_names: tuple[str, ...], path: Path) -> None:
     """Feeds logged trials to a fresh learner, checking it asks for the same queries."""
     for t in trials:
         if t.success:
             return
         q_obj = learner.ask()
-        q = _as_query(q_obj, n)
+        q = as_query(q_obj, "the learner's query", query_names)
         if not np.allclose(q, t.query, rtol=1e-12, atol=1e-12):
             raise RunLogError(
                 f"{path}: trial {t.index} executed query {t.query.tolist()} but the learner now asks "

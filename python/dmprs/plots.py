@@ -10,7 +10,8 @@ from dmprs.errors import DmprsError
 from dmprs.runlog import RunLog
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib.pyplot with the Agg backend, or a DmprsError saying how to install it."""
     try:
         import matplotlib
 
@@ -29,7 +30,7 @@ def plot_run(run: str | Path, out: str | Path | None = None) -> Path:
     ok = [t for t in trials if t.eps is not None]
     if not ok:
         raise DmprsError(f"{log.trials_path} has no scored trial to plot")
-    plt = _pyplot()
+    plt = pyplot()
     n = np.arange(1, len(ok) + 1)
     eps = np.array([t.eps for t in ok])
     q = np.array([t.query for t in ok])

@@ -208,9 +208,9 @@ def markdown(report: dict[str, Any], figures: list[Path]) -> str:
 def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
     """Figs. 4, 7, 9 in the paper's style and a baseline comparison (needs matplotlib)."""
     try:
-        from dmprs.plots import _pyplot
+        from dmprs.plots import pyplot
 
-        plt = _pyplot()
+        plt = pyplot()
     except Exception:  # noqa: BLE001 - the report is written without figures
         return []
     paths = []

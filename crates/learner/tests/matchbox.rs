@@ -1,7 +1,7 @@
 //! The matchbox simulation has the paper's structure, is deterministic and rejects bad input.
 
 use learner::matchbox::{
-    FingerPath, MatchboxConfig, Regime, min_jerk_strike, simulate, simulate_batch,
+    FingerPath, MatchboxConfig, Measures, Regime, min_jerk_strike, simulate, simulate_batch,
 };
 
 fn strike(duration: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
@@ -10,19 +10,17 @@ fn strike(duration: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     min_jerk_strike(from, to, duration, 1e-3)
 }
 
-fn regime(duration: f64) -> Regime {
+/// The measures of one default scripted strike of `duration` seconds.
+fn measures(duration: f64) -> Measures {
     let (t, x, z) = strike(duration);
-    simulate(
-        &FingerPath {
-            t: &t,
-            x: &x,
-            z: &z,
-        },
-        &MatchboxConfig::default(),
-    )
-    .unwrap()
-    .measures
-    .regime
+    let path = FingerPath {
+        t: &t,
+        x: &x,
+        z: &z,
+    };
+    simulate(&path, &MatchboxConfig::default())
+        .unwrap()
+        .measures
 }
 
 /// Sweeping the strike speed goes flipped back, then upright, then flipped over (paper §5), with
@@ -81,17 +79,7 @@ fn flip_back_errors_are_bounded_by_the_tipping_angle() {
     // upright or over (method.md §8.3): flip-back errors jump across zero (paper Fig. 2c).
     let tipping = std::f64::consts::FRAC_PI_2 - (16.0f64 / 36.0).atan();
     for d in [0.16, 0.14, 0.12] {
-        let (t, x, z) = strike(d);
-        let m = simulate(
-            &FingerPath {
-                t: &t,
-                x: &x,
-                z: &z,
-            },
-            &MatchboxConfig::default(),
-        )
-        .unwrap()
-        .measures;
+        let m = measures(d);
         assert_eq!(m.regime, Regime::FlippedBack);
         assert!(
             m.phi_max > 0.1 && m.phi_max < tipping + 0.02,
@@ -167,5 +155,5 @@ fn bad_trajectories_are_errors_with_a_reason() {
         )
         .is_err()
     );
-    assert_eq!(regime(0.1), regime(0.1));
+    assert_eq!(measures(0.1).regime, measures(0.1).regime);
 }
