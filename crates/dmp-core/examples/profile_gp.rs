@@ -61,9 +61,16 @@ fn main() {
             chol * 1e6,
             inv * 1e6
         );
-        let t = std::time::Instant::now();
-        let gp = GaussianProcess::fit(&x.as_view(), &y, None, &GpOptions::default()).unwrap();
-        let fit = t.elapsed().as_secs_f64();
+        // The fastest of 5 fits: the least disturbed by other load (run with RAYON_NUM_THREADS=1
+        // for the single-threaded time).
+        let mut fit = f64::INFINITY;
+        let mut gp = None;
+        for _ in 0..5 {
+            let t = std::time::Instant::now();
+            gp = Some(GaussianProcess::fit(&x.as_view(), &y, None, &GpOptions::default()).unwrap());
+            fit = fit.min(t.elapsed().as_secs_f64());
+        }
+        let gp = gp.unwrap();
         println!(
             "m={m}: eval {:.1} us, fit {:.1} ms (~{:.0} evals), lml {:.3}",
             per * 1e6,

@@ -17,12 +17,15 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result, check_scalar};
 use crate::linalg::{
-    Scratch, cholesky_in_place_with, dot, exp_in_place, solve_lower_in_place,
+    Scratch, cholesky_in_place_with, dot, exp_in_place, simd, solve_lower_in_place,
     solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
 };
-use crate::optimize::{MinimizeOptions, halton, minimize_box};
+use crate::optimize::{MinimizeOptions, Objective, halton, minimize_box};
 
 const LOG_2PI: f64 = 1.837_877_066_409_345_3;
+
+/// Training points per block of a one-point prediction (a stack buffer of correlations).
+const MEAN_BLOCK: usize = 64;
 
 /// The covariance hyperparameters, in the units of the data.
 #[derive(Debug, Clone, PartialEq)]
@@ -313,29 +316,19 @@ impl Workspace {
     /// likelihood (R&W eq. 2.30), or `None` if `K` is not numerically positive definite.
     fn factor(&mut self, x: &[f64], r: &[f64], h: &Hyperparameters) -> Option<f64> {
         let (m, n) = (self.m, self.n_dim);
-        for d in 0..n {
-            let inv = 1.0 / h.length_scales[d];
-            for j in 0..m {
-                self.xd[d * m + j] = x[j * n + d] * inv;
+        scale_dimension_major(x, n, &h.length_scales, &mut self.xd);
+        let (xd, kf) = (&self.xd, &mut self.kf);
+        simd(|| {
+            for b in 0..m {
+                // Column b below the diagonal: squared scaled distances, then the kernel.
+                let col = &mut kf[b * m..(b + 1) * m];
+                col[b] = h.signal_var;
+                let below = &mut col[b + 1..];
+                half_sq_distances(xd, m, b + 1, |d| xd[d * m + b], below);
+                exp_in_place(below);
+                below.iter_mut().for_each(|v| *v *= h.signal_var);
             }
-        }
-        for b in 0..m {
-            // Column b below the diagonal: squared scaled distances, then the kernel.
-            let col = &mut self.kf[b * m..(b + 1) * m];
-            col[b] = h.signal_var;
-            let below = &mut col[b + 1..];
-            below.iter_mut().for_each(|v| *v = 0.0);
-            for d in 0..n {
-                let xd = &self.xd[d * m..(d + 1) * m];
-                let c = xd[b];
-                for (s, v) in below.iter_mut().zip(&xd[b + 1..]) {
-                    *s += (v - c) * (v - c);
-                }
-            }
-            below.iter_mut().for_each(|v| *v *= -0.5);
-            exp_in_place(below);
-            below.iter_mut().for_each(|v| *v *= h.signal_var);
-        }
+        });
         self.l.copy_from_slice(&self.kf);
         for i in 0..m {
             self.l[i * m + i] += h.noise_var;
@@ -364,25 +357,33 @@ impl Workspace {
         spd_inverse_lower(&self.l, m, &mut self.kinv, &mut self.scratch);
         let mut g_len = vec![0.0; n];
         let (mut g_sig, mut g_noise) = (0.0, 0.0);
-        for b in 0..m {
-            let kinv_b = &self.kinv[b * m..(b + 1) * m];
-            // Diagonal: K_f = signal_var, no length-scale term.
-            let w = self.alpha[b] * self.alpha[b] - kinv_b[b];
-            g_sig += w * h.signal_var;
-            g_noise += w * h.noise_var;
-            // Pairs (a, b), a > b, each counted twice: t_a = 2 (alpha_a alpha_b - K^{-1}_ab) K_f,ab.
-            let t = &mut self.col[b + 1..];
-            t.copy_from_slice(&kinv_b[b + 1..]);
-            let (ab, kf) = (self.alpha[b], &self.kf[b * m + b + 1..(b + 1) * m]);
-            for ((v, &al), &k) in t.iter_mut().zip(&self.alpha[b + 1..]).zip(kf) {
-                *v = 2.0 * (al * ab - *v) * k;
+        let (kinv, alpha, kf, xd, col) =
+            (&self.kinv, &self.alpha, &self.kf, &self.xd, &mut self.col);
+        simd(|| {
+            for b in 0..m {
+                let kinv_b = &kinv[b * m..(b + 1) * m];
+                // Diagonal: K_f = signal_var, no length-scale term.
+                let w = alpha[b] * alpha[b] - kinv_b[b];
+                g_sig += w * h.signal_var;
+                g_noise += w * h.noise_var;
+                // Pairs (a, b), a > b, each counted twice: t_a = 2 (alpha_a alpha_b - K^{-1}_ab) K_f,ab.
+                let t = &mut col[b + 1..];
+                let (ab, kf_b) = (alpha[b], &kf[b * m + b + 1..(b + 1) * m]);
+                for (((v, &ki), &al), &k) in t
+                    .iter_mut()
+                    .zip(&kinv_b[b + 1..])
+                    .zip(&alpha[b + 1..])
+                    .zip(kf_b)
+                {
+                    *v = 2.0 * (al * ab - ki) * k;
+                }
+                g_sig += sum(t);
+                for (d, g) in g_len.iter_mut().enumerate() {
+                    let xd = &xd[d * m..(d + 1) * m];
+                    *g += weighted_sq_diff(t, &xd[b + 1..], xd[b]);
+                }
             }
-            g_sig += sum(t);
-            for (d, g) in g_len.iter_mut().enumerate() {
-                let xd = &self.xd[d * m..(d + 1) * m];
-                *g += weighted_sq_diff(t, &xd[b + 1..], xd[b]);
-            }
-        }
+        });
         let mut g: Vec<f64> = g_len.into_iter().map(|v| 0.5 * v).collect();
         g.push(0.5 * g_sig);
         g.push(0.5 * g_noise);
@@ -390,7 +391,64 @@ impl Workspace {
     }
 }
 
+/// `xd[d * m + j] = x[j * n + d] / l_d`: sample-major inputs to dimension-major scaled ones, so
+/// that the distance loops run along contiguous memory.
+fn scale_dimension_major(x: &[f64], n: usize, length_scales: &[f64], xd: &mut [f64]) {
+    let m = x.len() / n;
+    for (d, l) in length_scales.iter().enumerate() {
+        let inv = 1.0 / l;
+        for (j, v) in xd[d * m..(d + 1) * m].iter_mut().enumerate() {
+            *v = x[j * n + d] * inv;
+        }
+    }
+}
+
+/// `out_i = -1/2 sum_d (xd_d[from + i] - q_d)^2`: the exponents of the squared-exponential
+/// kernel between training points `from..from + out.len()` (dimension-major, `m` per dimension)
+/// and the scaled point `q` (`q(d)` is its coordinate `d`). One fused pass for the usual 1-3
+/// input dimensions, one pass per dimension otherwise; the same sums in the same order either way.
+#[inline(always)]
+fn half_sq_distances(xd: &[f64], m: usize, from: usize, q: impl Fn(usize) -> f64, out: &mut [f64]) {
+    match xd.len() / m {
+        1 => half_sq_distances_fused::<1>(xd, m, from, q, out),
+        2 => half_sq_distances_fused::<2>(xd, m, from, q, out),
+        3 => half_sq_distances_fused::<3>(xd, m, from, q, out),
+        n => {
+            out.iter_mut().for_each(|v| *v = 0.0);
+            for d in 0..n {
+                let c = q(d);
+                for (s, v) in out.iter_mut().zip(&xd[d * m + from..(d + 1) * m]) {
+                    *s += (v - c) * (v - c);
+                }
+            }
+            out.iter_mut().for_each(|v| *v *= -0.5);
+        }
+    }
+}
+
+#[inline(always)]
+fn half_sq_distances_fused<const D: usize>(
+    xd: &[f64],
+    m: usize,
+    from: usize,
+    q: impl Fn(usize) -> f64,
+    out: &mut [f64],
+) {
+    let len = out.len();
+    let c: [f64; D] = std::array::from_fn(&q);
+    let cols: [&[f64]; D] = std::array::from_fn(|d| &xd[d * m + from..d * m + from + len]);
+    for (i, o) in out.iter_mut().enumerate() {
+        let mut s = 0.0;
+        for d in 0..D {
+            let t = cols[d][i] - c[d];
+            s += t * t;
+        }
+        *o = s * -0.5;
+    }
+}
+
 /// `sum_i v_i` with four independent partial sums (vectorizes; fixed order, deterministic).
+#[inline(always)]
 fn sum(v: &[f64]) -> f64 {
     let mut acc = [0.0f64; 4];
     let chunks = v.chunks_exact(4);
@@ -404,6 +462,7 @@ fn sum(v: &[f64]) -> f64 {
 }
 
 /// `sum_i t_i (x_i - c)^2` with four independent partial sums.
+#[inline(always)]
 fn weighted_sq_diff(t: &[f64], x: &[f64], c: f64) -> f64 {
     let mut acc = [0.0f64; 4];
     let (ct, cx) = (t.chunks_exact(4), x.chunks_exact(4));
@@ -454,8 +513,8 @@ pub struct GaussianProcess {
     /// Raw training inputs (sample-major) and centred outputs, for [`Self::log_marginal_likelihood_at`].
     x: Vec<f64>,
     r: Vec<f64>,
-    /// Training inputs divided by the length scales, sample-major.
-    xs: Vec<f64>,
+    /// Training inputs divided by the length scales, dimension-major (`xd[d * m + i]`).
+    xd: Vec<f64>,
     y_mean: f64,
     hyper: Hyperparameters,
     /// Cholesky factor of `K_f + noise_var I`, column-major lower.
@@ -513,15 +572,14 @@ impl GaussianProcess {
             ),
         })?;
         let alpha_scaled = ws.alpha.iter().map(|a| a * hyper.signal_var).collect();
-        let xs = (0..m * n_dim)
-            .map(|i| xv[i] / hyper.length_scales[i % n_dim])
-            .collect();
+        let mut xd = vec![0.0; m * n_dim];
+        scale_dimension_major(&xv, n_dim, &hyper.length_scales, &mut xd);
         Ok(Self {
             n_dim,
             m,
             x: xv,
             r,
-            xs,
+            xd,
             y_mean,
             hyper,
             l: ws.l,
@@ -575,37 +633,42 @@ impl GaussianProcess {
         self.m
     }
 
-    /// `exp(-1/2 |(q - x_i) / l|^2)` for every training point, into `out`.
+    /// `exp(-1/2 |(q - x_i) / l|^2)` for every training point, into `out` (`m` values). Call
+    /// inside [`simd`].
+    #[inline(always)]
     fn correlations(&self, q: &[f64], out: &mut [f64]) {
-        let n = self.n_dim;
-        let qs: Vec<f64> = q
-            .iter()
-            .zip(&self.hyper.length_scales)
-            .map(|(v, l)| v / l)
-            .collect();
-        for (i, o) in out.iter_mut().enumerate() {
-            let xi = &self.xs[i * n..(i + 1) * n];
-            let s: f64 = xi.iter().zip(&qs).map(|(a, b)| (a - b) * (a - b)).sum();
-            *o = -0.5 * s;
-        }
+        let l = &self.hyper.length_scales;
+        half_sq_distances(&self.xd, self.m, 0, |d| q[d] / l[d], out);
         exp_in_place(out);
     }
 
-    /// Posterior mean at one point `q` (`n_dim` values; the caller checks the length). Allocation
-    /// free apart from the scaled query: this is the generalizer's hot path.
+    /// Posterior mean at one point `q` (`n_dim` values; the caller checks the length). No heap
+    /// allocation: this is the generalizer's hot path. The training points go through a stack
+    /// buffer in blocks, so that the exponentials run as vectors.
     pub fn predict_mean_at(&self, q: &[f64]) -> f64 {
         debug_assert_eq!(q.len(), self.n_dim);
-        let n = self.n_dim;
-        let mut s = 0.0;
-        for i in 0..self.m {
-            let xi = &self.xs[i * n..(i + 1) * n];
-            let mut d2 = 0.0;
-            for d in 0..n {
-                let diff = xi[d] - q[d] / self.hyper.length_scales[d];
-                d2 += diff * diff;
+        let (m, l) = (self.m, &self.hyper.length_scales);
+        simd(|| {
+            let mut buf = [0.0f64; MEAN_BLOCK];
+            let mut s = 0.0;
+            for from in (0..m).step_by(MEAN_BLOCK) {
+                let k = &mut buf[..MEAN_BLOCK.min(m - from)];
+                half_sq_distances(&self.xd, m, from, |d| q[d] / l[d], k);
+                exp_in_place(k);
+                s += dot(k, &self.alpha_scaled[from..]);
             }
-            s += (-0.5 * d2).exp() * self.alpha_scaled[i];
-        }
+            self.y_mean + s
+        })
+    }
+
+    /// `y_mean + k . alpha` summed block by block as in [`Self::predict_mean_at`], so that both
+    /// give the same bits.
+    #[inline(always)]
+    fn mean_from_correlations(&self, k: &[f64]) -> f64 {
+        let s = k
+            .chunks(MEAN_BLOCK)
+            .zip(self.alpha_scaled.chunks(MEAN_BLOCK))
+            .fold(0.0, |s, (k, a)| s + dot(k, a));
         self.y_mean + s
     }
 
@@ -630,34 +693,66 @@ impl GaussianProcess {
         let (m, p) = (self.m, xq.ncols());
         let mut mean = Vec::with_capacity(p);
         let mut std = with_std.then(|| Vec::with_capacity(p));
-        // The correlations of all test points, one column each: they are also the right-hand
-        // sides of one blocked triangular solve (TRSM) for the std.
-        let mut kq = vec![0.0; m * p];
+        // The correlations of the test points, one column each. With the std they are kept: they
+        // are the right-hand sides of one blocked triangular solve (TRSM). For the mean alone one
+        // column is reused: a fresh m x p buffer would cost more in page faults than the
+        // arithmetic at these sizes.
+        let mut kq = vec![0.0; if with_std { m * p } else { m }];
         let mut q = vec![0.0; self.n_dim];
-        for (j, k) in kq.chunks_exact_mut(m).enumerate().take(p) {
-            q.iter_mut()
-                .zip(xq.column(j).iter())
-                .for_each(|(a, b)| *a = *b);
-            self.correlations(&q, k);
-            mean.push(
-                self.y_mean
-                    + k.iter()
-                        .zip(&self.alpha_scaled)
-                        .map(|(a, b)| a * b)
-                        .sum::<f64>(),
-            );
-        }
+        simd(|| {
+            for j in 0..p {
+                let k = if with_std {
+                    &mut kq[j * m..(j + 1) * m]
+                } else {
+                    &mut kq[..]
+                };
+                q.iter_mut()
+                    .zip(xq.column(j).iter())
+                    .for_each(|(a, b)| *a = *b);
+                self.correlations(&q, k);
+                mean.push(self.mean_from_correlations(k));
+            }
+        });
         if let Some(std) = std.as_mut() {
             // var = k** - k*^T K^{-1} k* = signal_var - |L^{-1} k*|^2 with k* = signal_var c
             // (R&W eq. 2.26, solved with the factor).
             let sv = self.hyper.signal_var;
             kq.iter_mut().for_each(|v| *v *= sv);
             solve_lower_many_in_place(&self.l, m, &mut kq, p);
-            for v in kq.chunks_exact(m).take(p) {
-                std.push((sv - dot(v, v)).max(0.0).sqrt());
-            }
+            simd(|| {
+                for v in kq.chunks_exact(m) {
+                    std.push((sv - dot(v, v)).max(0.0).sqrt());
+                }
+            });
         }
         Ok((mean, std))
+    }
+}
+
+/// The negative log marginal likelihood of centred outputs `r` as a function of the log
+/// hyperparameters, for the minimizer.
+struct NegativeLml<'a> {
+    ws: Workspace,
+    x: &'a [f64],
+    r: &'a [f64],
+    /// The hyperparameters of the last successful factorization.
+    at: Option<Hyperparameters>,
+}
+
+impl Objective for NegativeLml<'_> {
+    fn value(&mut self, theta: &[f64]) -> Option<f64> {
+        let h = Hyperparameters::from_log(theta);
+        self.at = None;
+        let lml = self.ws.factor(self.x, self.r, &h)?;
+        self.at = Some(h);
+        Some(-lml)
+    }
+    fn gradient(&mut self) -> Vec<f64> {
+        let h = self
+            .at
+            .as_ref()
+            .expect("gradient asked before a successful value");
+        self.ws.gradient(h).into_iter().map(|v| -v).collect()
     }
 }
 
@@ -703,14 +798,13 @@ fn optimize_hyperparameters(
     // The starts are independent: run them in parallel, each with its own workspace, and pick
     // the best in start order, so the result does not depend on the number of threads.
     let run = |x0: &Vec<f64>| {
-        let mut ws = Workspace::new(m, n_dim);
-        let objective = |theta: &[f64]| {
-            let h = Hyperparameters::from_log(theta);
-            let lml = ws.factor(x, r, &h)?;
-            let g = ws.gradient(&h);
-            Some((-lml, g.into_iter().map(|v| -v).collect::<Vec<f64>>()))
+        let mut objective = NegativeLml {
+            ws: Workspace::new(m, n_dim),
+            x,
+            r,
+            at: None,
         };
-        minimize_box(objective, x0, &lo, &hi, &options.minimize)
+        minimize_box(&mut objective, x0, &lo, &hi, &options.minimize)
     };
     // Small problems are faster on one thread than the cost of spreading them.
     let minima: Vec<_> = if m >= 40 {
@@ -822,6 +916,34 @@ mod tests {
         let (mf, sf) = gp.predict(&far.as_view(), true).unwrap();
         assert!((mf[0] - gp.prior_mean()).abs() < 1e-12);
         assert!((sf.unwrap()[0] - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn one_point_and_batch_predictions_are_the_same_bits() {
+        // 150 training points: more than one block of the one-point path.
+        let x = data(150, 2);
+        let y: Vec<f64> = (0..150)
+            .map(|j| x[(0, j)].sin() + 0.2 * x[(1, j)])
+            .collect();
+        let h = Hyperparameters {
+            length_scales: vec![0.7, 1.3],
+            signal_var: 2.0,
+            noise_var: 1e-3,
+        };
+        let opts = GpOptions {
+            optimize: false,
+            ..GpOptions::default()
+        };
+        let gp = GaussianProcess::fit(&x.as_view(), &y, Some(h), &opts).unwrap();
+        let xq = DMatrix::from_fn(2, 9, |d, j| j as f64 * 0.4 - 1.5 + d as f64 * 0.1);
+        let (mean, _) = gp.predict(&xq.as_view(), false).unwrap();
+        let (mean_s, std) = gp.predict(&xq.as_view(), true).unwrap();
+        assert_eq!(mean, mean_s, "asking for the std must not change the mean");
+        assert_eq!(std.unwrap().len(), 9);
+        for j in 0..9 {
+            let q = [xq[(0, j)], xq[(1, j)]];
+            assert_eq!(gp.predict_mean_at(&q).to_bits(), mean[j].to_bits());
+        }
     }
 
     #[test]

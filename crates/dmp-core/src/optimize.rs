@@ -68,27 +68,61 @@ fn projected_gradient(x: &[f64], g: &[f64], lo: &[f64], hi: &[f64]) -> Vec<f64> 
         .collect()
 }
 
-/// Minimizes `f` over the box `[lo, hi]` from `x0` (clamped into the box). `f` returns the value
-/// and gradient, or `None` where it cannot be evaluated (treated as +infinity: the line search
-/// backs off). Returns `None` only if `f` cannot be evaluated at the start.
-pub fn minimize_box<F>(
-    mut f: F,
+/// A function to minimize. The value and the gradient are asked for separately because the line
+/// search rejects some trial points, and for the GP's likelihood the gradient costs twice the
+/// value (it needs the whole `K^{-1}`): it is asked for only at accepted points.
+pub trait Objective {
+    /// `f(x)`, or `None` where it cannot be evaluated (treated as +infinity: the line search
+    /// backs off).
+    fn value(&mut self, x: &[f64]) -> Option<f64>;
+    /// The gradient at the point of the last `value` call, which returned a finite value.
+    fn gradient(&mut self) -> Vec<f64>;
+}
+
+/// An [`Objective`] from a closure that returns the value and the gradient together.
+pub struct WithGradient<F> {
+    f: F,
+    last: Vec<f64>,
+}
+
+impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> WithGradient<F> {
+    pub fn new(f: F) -> Self {
+        Self {
+            f,
+            last: Vec::new(),
+        }
+    }
+}
+
+impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> Objective for WithGradient<F> {
+    fn value(&mut self, x: &[f64]) -> Option<f64> {
+        let (v, g) = (self.f)(x)?;
+        self.last = g;
+        Some(v)
+    }
+    fn gradient(&mut self) -> Vec<f64> {
+        std::mem::take(&mut self.last)
+    }
+}
+
+/// Minimizes `f` over the box `[lo, hi]` from `x0` (clamped into the box). Returns `None` only
+/// if `f` cannot be evaluated at the start.
+pub fn minimize_box(
+    f: &mut impl Objective,
     x0: &[f64],
     lo: &[f64],
     hi: &[f64],
     opts: &MinimizeOptions,
-) -> Option<Minimum>
-where
-    F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>,
-{
+) -> Option<Minimum> {
     let n = x0.len();
     debug_assert!(lo.len() == n && hi.len() == n);
     let mut x = x0.to_vec();
     project(&mut x, lo, hi);
-    let (mut fx, mut gx) = f(&x)?;
+    let mut fx = f.value(&x)?;
     if !fx.is_finite() {
         return None;
     }
+    let mut gx = f.gradient();
     let mut evaluations = 1;
     let mut s_hist: Vec<Vec<f64>> = Vec::new();
     let mut y_hist: Vec<Vec<f64>> = Vec::new();
@@ -160,9 +194,9 @@ where
             project(&mut xn, lo, hi);
             let decrease: f64 = (0..n).map(|i| gx[i] * (xn[i] - x[i])).sum();
             evaluations += 1;
-            if let Some((fnew, gnew)) = f(&xn) {
+            if let Some(fnew) = f.value(&xn) {
                 if fnew.is_finite() && fnew <= fx + 1e-4 * decrease {
-                    accepted = Some((xn, fnew, gnew));
+                    accepted = Some((xn, fnew, f.gradient()));
                     break;
                 }
             }
@@ -250,7 +284,7 @@ mod tests {
     #[test]
     fn finds_the_rosenbrock_minimum() {
         let m = minimize_box(
-            rosenbrock,
+            &mut WithGradient::new(rosenbrock),
             &[-1.2, 1.0],
             &[-5.0, -5.0],
             &[5.0, 5.0],
@@ -273,7 +307,7 @@ mod tests {
             ))
         };
         let m = minimize_box(
-            f,
+            &mut WithGradient::new(f),
             &[0.5, 1.5],
             &[0.0, 0.0],
             &[2.0, 2.0],
@@ -292,7 +326,7 @@ mod tests {
             ))
         };
         let m = minimize_box(
-            f,
+            &mut WithGradient::new(f),
             &[3.0, 4.0],
             &[-9.0, 4.0],
             &[9.0, 4.0],
@@ -313,7 +347,14 @@ mod tests {
                 Some(((x[0] - 1.0).powi(2), vec![2.0 * (x[0] - 1.0)]))
             }
         };
-        let m = minimize_box(f, &[3.0], &[-10.0], &[10.0], &MinimizeOptions::default()).unwrap();
+        let m = minimize_box(
+            &mut WithGradient::new(f),
+            &[3.0],
+            &[-10.0],
+            &[10.0],
+            &MinimizeOptions::default(),
+        )
+        .unwrap();
         assert!((m.x[0] - 1.0).abs() < 1e-6);
     }
 
