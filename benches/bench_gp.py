@@ -9,8 +9,9 @@ differ (Halton points for us, random for sklearn), so the log marginal likelihoo
 printed too.
 
 Run:  python benches/bench_gp.py [--sizes 10 30 100 200 500 1000] [--dims 1 2 3] [--repeats 5]
-Medians of --repeats runs (fewer for n >= 500, see below), both libraries timed in the same
-process, interleaved. Not part of the test suite.
+Fits: medians of --repeats runs (fewer for n >= 500, see below), both libraries timed in the same
+process, interleaved. Predictions: medians of 5 rounds of about 0.2 s of calls each (timeit).
+Not part of the test suite.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import os
 import platform
 import statistics
 import time
+import timeit
 
 import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
@@ -59,6 +61,15 @@ def timed(fn, repeats: int) -> tuple[float, object]:
     return statistics.median(times), out
 
 
+def per_call(fn, repeats: int = 5) -> float:
+    """Seconds per call: the median over `repeats` rounds of as many calls as fill about 0.2 s
+    (timeit's autorange). Microsecond calls timed one at a time mostly measure the timer and
+    the first call's cold caches."""
+    timer = timeit.Timer(fn)
+    number, _ = timer.autorange()
+    return statistics.median(timer.repeat(repeats, number)) / number
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 100, 200, 500, 1000])
@@ -85,14 +96,13 @@ def main() -> None:
                 ours_t.append(t_o)
                 theirs_t.append(t_s)
             fit_o, fit_s = statistics.median(ours_t), statistics.median(theirs_t)
-            pr = max(5, reps)
-            pm_o, _ = timed(lambda: gp.predict(Xt), pr)
-            pm_s, _ = timed(lambda: sk.predict(Xt), pr)
-            p_o, _ = timed(lambda: gp.predict(Xt, return_std=True), pr)
-            p_s, _ = timed(lambda: sk.predict(Xt, return_std=True), pr)
+            pm_o = per_call(lambda: gp.predict(Xt))
+            pm_s = per_call(lambda: sk.predict(Xt))
+            p_o = per_call(lambda: gp.predict(Xt, return_std=True))
+            p_s = per_call(lambda: sk.predict(Xt, return_std=True))
             x1 = Xt[:1]
-            p1_o, _ = timed(lambda: gp.predict(x1), 50)
-            p1_s, _ = timed(lambda: sk.predict(x1), 50)
+            p1_o = per_call(lambda: gp.predict(x1))
+            p1_s = per_call(lambda: sk.predict(x1))
             print(
                 f"| {n} | {d} | {fit_o * 1e3:.1f} ms | {fit_s * 1e3:.1f} ms | {fit_s / fit_o:.1f}x "
                 f"| {gp.log_marginal_likelihood():.2f} / {sk.log_marginal_likelihood_value_:.2f} "
