@@ -35,7 +35,7 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
-/// Whether this CPU runs the AVX2 + FMA code paths (checked once per call, cached by std).
+/// Whether this CPU runs the AVX2 + FMA code paths (std caches the answer after the first call).
 #[inline]
 pub fn has_avx2_fma() -> bool {
     #[cfg(target_arch = "x86_64")]
