@@ -115,7 +115,8 @@ TOLERANCE = 1e-8
 SOLREF_TIME = 2 * TIMESTEP
 
 #: collision groups (MuJoCo's contype/conaffinity bit masks): bit 0 the liquid and the containers
-#: (which all collide with each other), bit 1 the arm's links, which collide with the table only.
+#: (which all collide with each other), bit 1 the arm's links, which collide with the table and
+#: the glass only.
 _LIQUID, _ARM = 1, 2
 
 
@@ -124,7 +125,7 @@ def _fmt(v: Sequence[float] | NDArray[np.float64]) -> str:
 
 
 def _wall(name: str, r0: float, z0: float, r1: float, z1: float, *, n: int = STAVES,
-          rgba: str = "0.7 0.85 1 0.35") -> list[str]:
+          rgba: str = "0.7 0.85 1 0.35", cls: str = "container") -> list[str]:
     """Box staves forming the surface of revolution of the segment (r0, z0)-(r1, z1) of a
     container's inner wall (a cylinder when r0 = r1, a cone frustum otherwise), in the frame of
     the body they are added to (axis = z). Each stave's inner face lies on the segment."""
@@ -142,7 +143,7 @@ def _wall(name: str, r0: float, z0: float, r1: float, z1: float, *, n: int = STA
         centre = (0.5 * (r0 + r1) + WALL * nr) * er + (0.5 * (z0 + z1) + WALL * nz) * ez
         x_axis = nr * er + nz * ez
         geoms.append(
-            f'<geom name="{name}{i}" class="container" type="box" size="{WALL} {half_width:.9g} '
+            f'<geom name="{name}{i}" class="{cls}" type="box" size="{WALL} {half_width:.9g} '
             f'{length / 2:.9g}" pos="{_fmt(centre)}" xyaxes="{_fmt(x_axis)} {_fmt(ephi)}" rgba="{rgba}"/>')
     return geoms
 
@@ -164,10 +165,11 @@ def bottle_geoms() -> list[str]:
 def glass_geoms() -> list[str]:
     """The glass in the world frame, standing on the table at GLASS_CENTER."""
     x, y = GLASS_CENTER
-    inner = _wall("glass", GLASS_RADIUS, 2 * WALL, GLASS_RADIUS, GLASS_HEIGHT, rgba="0.6 0.8 0.6 0.4")
+    inner = _wall("glass", GLASS_RADIUS, 2 * WALL, GLASS_RADIUS, GLASS_HEIGHT, rgba="0.6 0.8 0.6 0.4",
+                  cls="glassware")
     body = "\n".join(inner)
     return [f'<body name="glass" pos="{x} {y} 0">',
-            (f'<geom name="glass_bottom" class="container" type="cylinder" '
+            (f'<geom name="glass_bottom" class="glassware" type="cylinder" '
             f'size="{GLASS_RADIUS + 2 * WALL:.9g} {WALL}" pos="0 0 {WALL}" rgba="0.6 0.8 0.6 0.4"/>'),
             body, "</body>"]
 
@@ -235,6 +237,7 @@ def scene_xml(particle_positions: NDArray[np.float64] | None = None, *, solver: 
   <geom condim="{condim}" solref="{SOLREF_TIME} 1"/>
   <default class="link"><geom contype="{_ARM}" conaffinity="0" rgba="0.9 0.9 0.9 1"/></default>
   <default class="container"><geom contype="{_LIQUID}" conaffinity="{_LIQUID}" mass="0"/></default>
+  <default class="glassware"><geom contype="{_LIQUID}" conaffinity="{_LIQUID | _ARM}" mass="0"/></default>
   <default class="particle"><geom type="sphere" size="{PARTICLE_RADIUS:.9g}" mass="{PARTICLE_MASS}"
       contype="{_LIQUID}" conaffinity="{_LIQUID}" rgba="0.2 0.4 0.9 1"/></default>
 </default>

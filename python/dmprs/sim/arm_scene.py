@@ -40,7 +40,10 @@ SETTLE_TIME = 0.4
 #: s between stop/timeout checks
 STOP_CHECK_EVERY = 100
 
-_WARNINGS = ("mjWARN_BADQACC", "mjWARN_CONTACTFULL", "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
+#: MuJoCo's warnings that mean the state is no longer physical (on a bad qpos, qvel or qacc
+#: MuJoCo resets the state and carries on, so the warning is the only trace)
+_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL", "mjWARN_CONTACTFULL",
+             "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
 
 
 @functools.lru_cache(maxsize=1)
@@ -107,7 +110,7 @@ def _check_health(mujoco: Any, data: Any, when: float) -> None:
         if w.number > 0:
             raise NumericalError(f"MuJoCo warned {name} at t = {when:.3f} s: the simulation diverged")
     if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
-        raise NumericalError(f"the simulation state became non-finite at t = {when:.3f} s")
+        raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")
 
 
 @functools.lru_cache(maxsize=8)
@@ -157,6 +160,7 @@ def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np
     data.qpos[:] = liquid.qpos
     data.qvel[:] = liquid.qvel
     mujoco.mj_forward(model, data)
+    _check_health(mujoco, data, 0.0)
     dt = am.TIMESTEP
     n_move = max(1, math.ceil((t[-1] - t[0]) / dt - 1e-9))
     n_steps = n_move + round(hold / dt)
