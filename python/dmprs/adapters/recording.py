@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 
 from dmprs._io import append_jsonl, read_jsonl, write_npz_atomic
-from dmprs.adapters.base import Adapter, AdapterError
+from dmprs.adapters.base import Adapter
+from dmprs.errors import AdapterError
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
 from dmprs.errors import InvalidInputError
 from dmprs.trajectory import Trajectory
