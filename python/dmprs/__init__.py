@@ -19,7 +19,7 @@ from dmprs.errors import (
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
 from dmprs.trajectory import Trajectory
-from dmprs.learning import LearningResult, learn
+from dmprs.loop import LearningResult, learn
 from dmprs import adapters, tasks  # noqa: E402 - they build on the classes above
 
 __all__ = [

@@ -77,7 +77,7 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
 def resume_cmd(run: Path, max_trials: int | None) -> None:
     """Continue the run logged in RUN where it stopped."""
     from dmprs import experiments
-    from dmprs.learning import learn
+    from dmprs.loop import learn
     from dmprs.runlog import RunLog
 
     console = _console()

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError
-from dmprs.learning import LearningResult, learn
+from dmprs.loop import LearningResult, learn
 from dmprs.tasks.base import Task
 
 

@@ -1,7 +1,11 @@
-"""The learning loop of the paper (design.md §3): generalize, roll out, execute, score, tell.
+"""The paper's learning loop in the query space (docs/method.md §4-§6): ask, generalize, run
+the trial, tell.
 
-    Database -> Generalizer.predict(q) -> DMP -> rollout -> Trajectory -> adapter.execute
-      -> Outcome -> task.error(q0, outcome) = eps -> learner.tell(q, eps) -> learner.ask() ...
+    learner.ask() = q -> Generalizer.predict(q) -> DMP -> run_trial (roll out, check, execute,
+      score, log) -> eps -> learner.tell(q, eps) -> learner.ask() ...
+
+One trial is :func:`dmprs.trial.run_trial`; this module adds what a run is made of: the stop
+rules, resuming from the trial log, and adding a success to the database.
 """
 
 from __future__ import annotations
@@ -15,25 +19,35 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-import dmprs
 from dmprs._arrays import as_query
-from dmprs.adapters import Outcome, Status
-from dmprs.errors import DmprsError, InvalidInputError
-from dmprs.runlog import RunLog, RunLogError, TrialRecord
+from dmprs._core import __version__
+from dmprs.adapters.spec import Status
+from dmprs.dmp import DMP
+from dmprs.errors import DmprsError, InvalidInputError, RunLogError
+from dmprs.runlog import RunLog, TrialRecord
 from dmprs.tasks.base import Task
+from dmprs.trial import run_trial
 
 
 class AskTell(Protocol):
-    """What the loop needs of a learner (the cma / optuna / nevergrad convention)."""
+    """What the loops read of a learner (the cma / optuna / nevergrad convention); every learner
+    of :mod:`dmprs.learners` has it."""
 
     def ask(self) -> Any: ...
-    def tell(self, q: Any, eps: Any) -> None: ...
+    def tell(self, q: Any, feedback: Any) -> None: ...
+    @property
+    def done(self) -> bool:
+        """The learner stopped: it asks nothing more."""
     @property
     def converged(self) -> bool: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
 
 
 class GeneralizerLike(Protocol):
-    def predict(self, q: Any) -> dmprs.DMP: ...
+    def predict(self, q: Any) -> DMP: ...
 
 
 @dataclass(frozen=True)
@@ -62,9 +76,9 @@ class LearningResult:
         return None
 
 
-def _eps_like(q_obj: Any, eps: NDArray[np.float64]) -> Any:
+def _feedback_like(asked: Any, eps: NDArray[np.float64]) -> Any:
     """eps in the form the learner uses for queries: a float for scalar queries."""
-    return float(eps[0]) if np.ndim(q_obj) == 0 else eps
+    return float(eps[0]) if np.ndim(asked) == 0 else eps
 
 
 def learn(
@@ -85,20 +99,21 @@ def learn(
 ) -> LearningResult:
     """Learns the query that achieves ``desired_query`` on ``task``, one trial at a time.
 
-    Each trial: ``q = learner.ask()``, ``generalizer.predict(q)`` -> DMP -> ``task.trajectory``
-    -> ``adapter.execute`` (checked; the adapter is reset with ``seed + trial``) -> eps =
-    ``task.error``. The trial is appended to ``log_dir/trials.jsonl`` and forced to disk before
-    ``learner.tell(q, eps)``. A trial that is not ``ok`` (rejected, timeout, error, an invalid
-    generalization) is logged and ends the run: it never reaches the learner.
+    Each trial: ``q = learner.ask()``, then :func:`dmprs.trial.run_trial` with
+    ``generalizer.predict(q)`` (the adapter is reset with ``seed + trial``), appended to
+    ``log_dir/trials.jsonl`` and forced to disk before ``learner.tell(q, eps)``. A trial that is
+    not ``ok`` (rejected, timeout, error, an invalid generalization, an outcome the task cannot
+    score) is logged and ends the run: it never reaches the learner.
 
     The run stops when a trial succeeds (``|eps| < tol`` if ``tol`` is given, else
-    ``task.success``), when the learner reports convergence, or after ``max_trials`` executed
-    trials. With ``resume=True`` the logged trials are replayed into the (fresh, identically
-    configured) learner, which must ask the same queries again, and the run continues. With a
-    ``database``, a successful (desired query, executed trajectory) is added to it.
+    ``task.success``), when the learner stops (``learner.done``), or after ``max_trials``
+    executed trials. With ``resume=True`` the logged trials are replayed into the (fresh,
+    identically configured) learner, which must ask the same queries again, and the run
+    continues. With a ``database``, a successful (desired query, executed trajectory) is added
+    to it; if the database refuses it, the run's result is kept and says why.
     """
     q0 = task.validate_query(desired_query)
-    if not isinstance(max_trials, (int, np.integer)) or max_trials < 1:
+    if isinstance(max_trials, bool) or not isinstance(max_trials, (int, np.integer)) or max_trials < 1:
         raise InvalidInputError(f"max_trials = {max_trials!r} must be a positive integer")
     if tol is not None and not (np.isfinite(tol) and tol > 0):
         raise InvalidInputError(f"tol = {tol!r} must be > 0")
@@ -118,14 +133,9 @@ def learn(
         log = RunLog.create(log_dir, {
             "task": task.name, "desired_query": q0, "query_names": task.query_names,
             "query_units": task.query_units, "learner": type(learner).__name__,
-            "max_trials": max_trials, "tol": tol, "seed": seed, "dmprs": dmprs.__version__,
+            "max_trials": max_trials, "tol": tol, "seed": seed, "dmprs": __version__,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), **(meta or {}),
         })
-
-    def succeeded(eps: NDArray[np.float64], outcome: Outcome) -> bool:
-        if tol is not None:
-            return bool(np.all(np.abs(eps) < tol))
-        return task.success(q0, outcome)
 
     def finish(reason: str, converged: bool) -> LearningResult:
         ok = [t for t in trials if t.status == Status.OK.value and t.eps is not None]
@@ -144,50 +154,30 @@ def learn(
             n_done = sum(1 for t in trials if t.status == Status.OK.value)
             if n_done >= max_trials:
                 return finish(f"trial cap of {max_trials} reached", False)
-            if getattr(learner, "converged", False) or getattr(learner, "done", False):
-                detail = getattr(learner, "status_detail", "") or getattr(learner, "status", "")
-                return finish(f"the learner stopped without a successful trial ({detail})", False)
-            index = len(trials)
-            q_obj = learner.ask()
-            q = as_query(q_obj, "the learner's query", task.query_names)
-            command = None
-            try:
-                dmp = generalizer.predict(q)
-                command = task.trajectory(dmp)
-            except DmprsError as exc:
-                outcome: Outcome = Outcome(Status.REJECTED, message=f"generalization failed: {exc}")
-            else:
-                task.adapter.reset(seed=seed + index)
-                try:
-                    outcome = task.adapter.execute(command, timeout_s=timeout_s)
-                except KeyboardInterrupt:
-                    task.adapter.stop()
-                    raise
-                except Exception as exc:  # noqa: BLE001 - an adapter that raises ends the run cleanly
-                    task.adapter.stop()
-                    outcome = Outcome(Status.ERROR, message=f"{type(exc).__name__}: {exc}")
-            if not outcome.ok:
-                record = TrialRecord(index, q, outcome.status.value, message=outcome.message)
-                trials.append(record)
-                if log is not None:
-                    log.append(record, command, outcome)
-                if on_trial:
-                    on_trial(record)
-                return finish(f"trial {index + 1} ended with status {outcome.status.value}: {outcome.message}", False)
-            eps = np.atleast_1d(task.error(q0, outcome))
-            success = succeeded(eps, outcome)
-            scalars = {k: v for k, v in outcome.signals.items() if np.ndim(v) == 0}
-            record = TrialRecord(index, q, Status.OK.value, eps, success, scalars, outcome.message)
+            if learner.done:
+                return finish(f"the learner stopped without a successful trial ({learner.status_detail})", False)
+            asked = learner.ask()
+            q = as_query(asked, "the learner's query", task.query_names)
+            result = run_trial(task, len(trials), q, lambda: generalizer.predict(q), q0, seed=seed,
+                               timeout_s=timeout_s, tol=tol, log=log)
+            record = result.record
             trials.append(record)
-            if log is not None:
-                log.append(record, command, outcome)  # on disk before the learner sees it
             if on_trial:
                 on_trial(record)
-            if success:
+            if not result.ok:
+                return finish(f"trial {record.index + 1} ended with status {record.status}: {record.message}",
+                              False)
+            assert record.eps is not None  # an ok trial is scored
+            if record.success:
+                reason = f"success in trial {record.index + 1}"
                 if database is not None:
-                    database.add(q0, outcome.executed if outcome.executed is not None else command)
-                return finish(f"success in trial {index + 1}", True)
-            learner.tell(q_obj, _eps_like(q_obj, eps))
+                    executed = result.outcome.executed
+                    try:
+                        database.add(q0, executed if executed is not None else result.command)
+                    except DmprsError as exc:  # the run succeeded: keep it, say what the database refused
+                        reason += f"; not added to the database: {exc}"
+                return finish(reason, True)
+            learner.tell(asked, _feedback_like(asked, record.eps))
 
 
 def _replay(learner: AskTell, trials: list[TrialRecord], query_names: tuple[str, ...], path: Path) -> None:
@@ -195,10 +185,11 @@ def _replay(learner: AskTell, trials: list[TrialRecord], query_names: tuple[str,
     for t in trials:
         if t.success:
             return
-        q_obj = learner.ask()
-        q = as_query(q_obj, "the learner's query", query_names)
+        asked = learner.ask()
+        q = as_query(asked, "the learner's query", query_names)
         if not np.allclose(q, t.query, rtol=1e-12, atol=1e-12):
             raise RunLogError(
                 f"{path}: trial {t.index} executed query {t.query.tolist()} but the learner now asks "
                 f"{q.tolist()}; resume with the learner configured as in the original run")
-        learner.tell(q_obj, _eps_like(q_obj, t.eps))
+        assert t.eps is not None
+        learner.tell(asked, _feedback_like(asked, t.eps))
