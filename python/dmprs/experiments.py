@@ -1,8 +1,8 @@
 """Ready-made learning experiments: a task, its demonstration database, a generalizer and a
 learner, wired together the way the paper does it. The CLI (``dmprs learn``) runs these.
 
-Each experiment is an :class:`ExperimentSetup` factory registered in :data:`SETUPS`; the
-matchbox and pouring simulations add theirs.
+Each experiment is an :class:`ExperimentSetup` factory; :data:`SETUPS` lists them all by the name
+the CLI uses (``dmprs learn NAME``).
 """
 
 from __future__ import annotations
@@ -71,7 +71,8 @@ def analytic_setup(noise: float = 0.0, tol: float = 0.01, desired: float = 1.5,
                    amplitudes: tuple[float, float] = (0.5, 2.5)) -> ExperimentSetup:
     """Two demonstrations (bumps of the given amplitudes, labelled with their outcomes), linear
     generalization, desired outcome ``desired``."""
-    from dmprs import Database, Generalizer
+    from dmprs.database import Database
+    from dmprs.generalize import Generalizer
     from dmprs.tasks.analytic import AnalyticTask
 
     task = AnalyticTask(noise=noise, tol=tol)
@@ -115,7 +116,8 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
     ``fixed`` (eq. 16 with the scalar gain ``fixed_gain`` in l/l) and the generic query learners
     (``error``, ``weighted`` with scale 0.05 l, ``secant``, ``golden-robust``, ``root``).
     """
-    from dmprs import Database, Generalizer
+    from dmprs.database import Database
+    from dmprs.generalize import Generalizer
     from dmprs.tasks.pouring import DEMO_VOLUMES, Pouring, demonstration
 
     task = Pouring(bottle_volume, target_volume=target_volume, tol=tol,
@@ -160,7 +162,8 @@ def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
     ``weighted`` (eq. 17 with scale 1 rad, recommended for extrapolation), ``secant``, and the
     bracketing ones between the demos' labels. ``config`` overrides simulation parameters.
     """
-    from dmprs import Database, Generalizer
+    from dmprs.database import Database
+    from dmprs.generalize import Generalizer
     from dmprs.tasks.matchbox import DEMO_SETS, MatchboxFlip
 
     if demos not in DEMO_SETS:
