@@ -31,8 +31,8 @@ from numpy.typing import NDArray
 
 from dmprs import _core
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
-from dmprs.adapters.registry import register_builtin
 from dmprs.errors import InvalidInputError
+from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
 from dmprs.trajectory import Trajectory
 
@@ -66,7 +66,7 @@ def strike(duration: float, cfg: _core.MatchboxConfig | None = None, dt: float =
     n = max(2, round(duration / dt))
     t = np.linspace(0.0, duration, n + 1)
     s = t / duration
-    m = 10 * s**3 - 15 * s**4 + 6 * s**5
+    m = min_jerk(s)[0]
     return Trajectory(t, np.stack([x0 + m * (x1 - x0), z0 + m * (z1 - z0)], axis=1))
 
 
@@ -126,7 +126,6 @@ def _signals(ep: dict) -> dict:
     }
 
 
-register_builtin("matchbox", "dmprs.tasks.matchbox:MatchboxAdapter")
 
 
 class MatchboxFlip(Task):
