@@ -9,9 +9,8 @@ import numpy as np
 
 from dmprs._io import append_jsonl, read_jsonl, write_npz_atomic
 from dmprs.adapters.base import Adapter
-from dmprs.errors import AdapterError
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import InvalidInputError
+from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.trajectory import Trajectory
 
 _INDEX = "recording.jsonl"
