@@ -1,9 +1,9 @@
 """Learning in the full DMP weight space: the baselines the paper cites (PoWER, PI²) but
-reports no numbers for (method.md §7). They start from the same first trial as error learning,
+reports no numbers for (docs/method.md §7). They start from the same first trial as error learning,
 theta0 = the weights of G(q0), and every executed rollout counts as a trial.
 
 The return is ``R = exp(-(eps / scale)^2)`` (PoWER, maximized) or the terminal cost
-``(eps / scale)^2`` (PI², minimized), with the task's signed error eps (method.md §7.1). A
+``(eps / scale)^2`` (PI², minimized), with the task's signed error eps (docs/method.md §7.1). A
 rollout the adapter rejects (e.g. beyond its acceleration limits) gets the worst value, R = 1e-12
 or cost 25, and still counts. Success is the task's own criterion; for PI² it is judged on its
 noiseless evaluation rollouts, for PoWER on any rollout (its sample code has no evaluation
@@ -34,8 +34,8 @@ class BaselineSpec:
     method: str  # "power" | "pi2"
     seed: int
     budget: int = 200
-    sigma_frac: float = 0.05  # sigma = sigma_frac x max|w| of each DOF (method.md §7.2)
-    scale: float = 0.5  # eps scale of the return (rad for the matchbox, method.md §7.1)
+    sigma_frac: float = 0.05  # sigma = sigma_frac x max|w| of each DOF (docs/method.md §7.2)
+    scale: float = 0.5  # eps scale of the return (rad for the matchbox, docs/method.md §7.1)
     setup: tuple[tuple[str, Any], ...] = ()
 
 

@@ -1,4 +1,4 @@
-"""The learning loop of the paper (design.md §3): generalize, roll out, execute, score, tell.
+"""The learning loop of the paper (docs/method.md §1): generalize, roll out, execute, score, tell.
 
     Database -> Generalizer.predict(q) -> DMP -> rollout -> Trajectory -> adapter.execute
       -> Outcome -> task.error(q0, outcome) = eps -> learner.tell(q, eps) -> learner.ask() ...
@@ -50,7 +50,7 @@ class LearningResult:
 
     @property
     def n_trials(self) -> int:
-        """Executed trials, counting the first, purely generalized one (method.md §11 #8)."""
+        """Executed trials, counting the first, purely generalized one (docs/method.md §11 #8)."""
         return sum(1 for t in self.trials if t.status == Status.OK.value)
 
     @property

@@ -2,14 +2,14 @@
 
 The robot tilts a bottle about its mouth and must pour **0.2 l** into a glass, whatever the
 bottle holds. The query is the bottle's volume (l). Two scripted demonstrations pour 0.2 l from
-bottles of 0.3 l and 1.0 l (method.md §9.1); the learner then searches for the *assumed* volume
+bottles of 0.3 l and 1.0 l (docs/method.md §9.1); the learner then searches for the *assumed* volume
 whose generalized movement pours 0.2 l from the real bottle.
 
 * :class:`PouringAdapter` runs the pymunk scene of :mod:`dmprs.sim.pouring_scene` (one DOF: the
   tilt in rad, positive toward the glass, from and back to 0). Outcome signals are in SI: litres,
   seconds, radians.
 * :class:`Pouring` scores it: ``measure`` = poured volume, ``target`` = 0.2 l for every query,
-  ``sign = -1``, so ``eps = V_poured - V*`` (method.md §5.3, §9.2): poured too much means eps > 0,
+  ``sign = -1``, so ``eps = V_poured - V*`` (docs/method.md §5.3, §9.2): poured too much means eps > 0,
   so the assumed volume must increase, which tilts less. Success is ``|eps| < 0.010 l``.
 * :func:`demonstration` is the scripted demonstrator: a minimum-jerk up (1 s), hold (1 s),
   down (1 s) tilt profile whose peak is found by a bracketed Illinois (regula falsi) search so it
@@ -19,7 +19,7 @@ whose generalized movement pours 0.2 l from the real bottle.
 Seeds: the liquid (the disc radii, hence the settled packing) is drawn from ``liquid_seed``. By
 default ``reset(seed)`` does **not** change it: the simulator is then deterministic and every
 trial pours from the same liquid, as a real robot pours the same kind of liquid each time (the
-paper's 10 ml tolerance assumes this, method.md §9.2). With ``reseed_liquid=True``,
+paper's 10 ml tolerance assumes this, docs/method.md §9.2). With ``reseed_liquid=True``,
 ``reset(seed)`` draws a new liquid from ``seed``, which models trial-to-trial variation (the
 same movement poured 212-226 ml from 0.5 l and 188-216 ml from 1.0 l over liquid seeds 0-3);
 use a tolerance of 15-20 ml then.
@@ -45,17 +45,17 @@ from dmprs.errors import InvalidInputError, NumericalError
 from dmprs.tasks.base import Task
 from dmprs.trajectory import Trajectory
 
-#: litres per simulated disc (method.md §9.3: 2 ml; 500 discs = 1.0 l)
+#: litres per simulated disc (docs/method.md §9.3: 2 ml; 500 discs = 1.0 l)
 PARTICLE_VOLUME = 0.002
 #: the most a simulated bottle holds (l); see ``pouring_scene.MAX_PARTICLES``
 CAPACITY = 1.1
-#: the paper's task: pour 0.2 l (method.md §9.1)
+#: the paper's task: pour 0.2 l (docs/method.md §9.1)
 TARGET_VOLUME = 0.2
-#: success when |V_poured - V*| < 10 ml (method.md §9.2, deterministic simulator)
+#: success when |V_poured - V*| < 10 ml (docs/method.md §9.2, deterministic simulator)
 TOLERANCE = 0.010
-#: the demonstrations' bottle volumes (l) (method.md §9.1)
+#: the demonstrations' bottle volumes (l) (docs/method.md §9.1)
 DEMO_VOLUMES = (0.3, 1.0)
-#: the demonstrations' timing (s): min-jerk up, hold, min-jerk down (method.md §9.3)
+#: the demonstrations' timing (s): min-jerk up, hold, min-jerk down (docs/method.md §9.3)
 DEMO_TIMING = (1.0, 1.0, 1.0)
 
 CONTROL_PERIOD = 0.005  #: s; the physics runs at 600 Hz and interpolates the command
@@ -210,7 +210,7 @@ register_builtin("pouring", "dmprs.tasks.pouring:PouringAdapter")
 
 def tilt_profile(peak: float, timing: tuple[float, float, float] = DEMO_TIMING,
                  dt: float = CONTROL_PERIOD) -> Trajectory:
-    """Minimum-jerk up to ``peak`` rad, hold, minimum-jerk back to 0 (method.md §9.3), with exact
+    """Minimum-jerk up to ``peak`` rad, hold, minimum-jerk back to 0 (docs/method.md §9.3), with exact
     velocities and accelerations."""
     peak = float(peak)
     if not math.isfinite(peak):
@@ -366,7 +366,7 @@ def demonstration(bottle_volume: float, target_volume: float = TARGET_VOLUME, *,
 def demonstration_dmp(bottle_volume: float, target_volume: float = TARGET_VOLUME, *,
                       n_basis: int = 40, liquid_seed: int = 0,
                       cache_dir: str | os.PathLike[str] | None = None) -> Any:
-    """The DMP (N = 40, method.md §9.3) fitted to the scripted demonstration for ``bottle_volume``."""
+    """The DMP (N = 40, docs/method.md §9.3) fitted to the scripted demonstration for ``bottle_volume``."""
     from dmprs.dmp import DMP
 
     _, traj, _ = demonstration(bottle_volume, target_volume, liquid_seed=liquid_seed, cache_dir=cache_dir)
@@ -410,7 +410,7 @@ class Pouring(Task):
         return np.array([float(outcome.signals["poured_volume"])])
 
     def target(self, desired_query: NDArray[np.float64]) -> NDArray[np.float64]:
-        # Whatever the bottle holds, the task is to pour the same amount (method.md §9.1).
+        # Whatever the bottle holds, the task is to pour the same amount (docs/method.md §9.1).
         return np.array([self.target_volume])
 
     def demonstration(self, bottle_volume: float, *, cache_dir: str | os.PathLike[str] | None = None,
