@@ -168,7 +168,7 @@ def test_poured_volume_is_monotone_in_peak_tilt_near_the_target():
     poured = [float(pour(0.3, cal.peak_tilt + d * DEG).signals["poured_volume"]) for d in (-4, 0, 4)]
     assert poured[0] < poured[1] < poured[2], poured
     assert poured[1] == pytest.approx(cal.poured_volume)
-    # tens of ml per degree near 0.2 l (method.md §9.3 prototype: ~30 ml/deg)
+    # tens of ml per degree near 0.2 l (docs/method.md §9.3 prototype: ~30 ml/deg)
     slope = (poured[2] - poured[0]) / 8 * 1000
     assert 5 < slope < 80, slope
 

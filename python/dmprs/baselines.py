@@ -1,6 +1,11 @@
 """Learning in the full DMP weight space: the baselines the paper cites (PoWER, PI²) but
+<<<<<<< HEAD
 reports no numbers for (docs/method.md §7). They start from the same first trial as error
 learning, theta0 = the weights of G(q0), and every executed rollout counts as a trial.
+=======
+reports no numbers for (docs/method.md §7). They start from the same first trial as error learning,
+theta0 = the weights of G(q0), and every executed rollout counts as a trial.
+>>>>>>> docs
 
 The return is ``R = exp(-(eps / scale)^2)`` (PoWER, maximized) or the terminal cost
 ``(eps / scale)^2`` (PI², minimized), with the task's signed error eps (docs/method.md §7.1). A

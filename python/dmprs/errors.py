@@ -44,7 +44,7 @@ class LearnerStateError(DmprsError, RuntimeError):
 
 class ExtrapolationError(InvalidInputError):
     """A query too far from the demonstrations: its generalized DMP would be invalid (e.g. tau
-    would leave (0.2 x the shortest, 5 x the longest demonstration's duration); method.md §3.3).
+    would leave (0.2 x the shortest, 5 x the longest demonstration's duration); docs/method.md §3.3).
     The message names the query and the tau it would get."""
 
 

@@ -1,4 +1,4 @@
-"""The paper's learning loop in the query space (docs/method.md §4-§6): ask, generalize, run
+"""The paper's learning loop in the query space (docs/method.md §1, §4-§6): ask, generalize, run
 the trial, tell.
 
     learner.ask() = q -> Generalizer.predict(q) -> DMP -> run_trial (roll out, check, execute,
@@ -64,7 +64,7 @@ class LearningResult:
 
     @property
     def n_trials(self) -> int:
-        """Executed trials, counting the first, purely generalized one (method.md §11 #8)."""
+        """Executed trials, counting the first, purely generalized one (docs/method.md §11 #8)."""
         return sum(1 for t in self.trials if t.status == Status.OK.value)
 
     @property

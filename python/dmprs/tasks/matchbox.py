@@ -9,7 +9,7 @@ strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
   ``settle_time`` (2 s) more. Signals: the tilt history ``phi`` (rad, clipped to [0, pi]) with
   its times ``phi_t``, ``phi_max``, ``t0`` (first time phi >= pi/2, NaN if never),
   ``phi_after`` (phi(t0 + 0.05 s), NaN if no t0), ``outcome_angle``, ``eps18`` and ``regime``.
-* :class:`MatchboxFlip`: the query is the **outcome angle** (method.md §8.2): a demonstration is
+* :class:`MatchboxFlip`: the query is the **outcome angle** (docs/method.md §8.2): a demonstration is
   labelled phi_max if it flipped back and phi(t0 + 0.05 s) if it flipped over, and the desired
   query is pi/2. Then ``q_a = outcome_angle`` and the error is ``eps = pi/2 - q_a``
   (eq. 13). That is the **negative of eq. 18 as printed** (``eps18 = q_a - pi/2``): applied
@@ -37,10 +37,10 @@ from dmprs.tasks.base import Task
 from dmprs.trajectory import Trajectory
 
 CONTROL_PERIOD = 0.001
-#: strike durations (s) of the scripted demonstrations: method.md §8.1 (one flips back, one
+#: strike durations (s) of the scripted demonstrations: docs/method.md §8.1 (one flips back, one
 #: over) and Fig. 7 (both flip back). The upright window of the default scene is 0.097-0.113 s.
 #: "both_flipped_back" reuses the default's slow strike and adds the one 6 % slower than the
-#: window. How many trials learning needs depends on the demos, as method.md §8.3 found for its
+#: window. How many trials learning needs depends on the demos, as docs/method.md §8.3 found for its
 #: prototype: with 0.13 / 0.12 s instead, eq. 16 needed 18 trials and eq. 17 11 (the jump of
 #: the outcome across the window, paper Fig. 2c, makes error learning bounce); with 0.125 / 0.118
 #: s, 3 and 2. ``dmprs reproduce`` reports the sets it runs.

@@ -13,13 +13,13 @@ from dmprs.errors import InvalidInputError
 from dmprs.sim import pouring_scene as scene
 from dmprs.trajectory import Trajectory
 
-#: litres per simulated disc (method.md §9.3: 2 ml; 500 discs = 1.0 l)
+#: litres per simulated disc (docs/method.md §9.3: 2 ml; 500 discs = 1.0 l)
 PARTICLE_VOLUME = scene.PARTICLE_ML / 1000.0
 #: the most a simulated bottle holds (l): 550 discs, 1.1 l
 CAPACITY = scene.MAX_PARTICLES * PARTICLE_VOLUME
-#: the paper's task: pour 0.2 l (method.md §9.1)
+#: the paper's task: pour 0.2 l (docs/method.md §9.1)
 TARGET_VOLUME = 0.2
-#: success when |V_poured - V*| < 10 ml (method.md §9.2, deterministic simulator)
+#: success when |V_poured - V*| < 10 ml (docs/method.md §9.2, deterministic simulator)
 TOLERANCE = 0.010
 
 CONTROL_PERIOD = 0.005  #: s; the physics runs at 600 Hz and interpolates the command

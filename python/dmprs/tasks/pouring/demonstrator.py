@@ -1,5 +1,5 @@
 """The scripted demonstrator of the pouring task: the tilt profile whose peak is calibrated in
-the simulation to pour the target volume, for the demonstrations' bottles (method.md §9.1)."""
+the simulation to pour the target volume, for the demonstrations' bottles (docs/method.md §9.1)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from dmprs.tasks.pouring.calibration import Calibration, calibrate_peak_tilt
 from dmprs.tasks.pouring.profile import tilt_profile
 from dmprs.trajectory import Trajectory
 
-#: the demonstrations' bottle volumes (l) (method.md §9.1)
+#: the demonstrations' bottle volumes (l) (docs/method.md §9.1)
 DEMO_VOLUMES = (0.3, 1.0)
 
 
@@ -30,7 +30,7 @@ def demonstration(bottle_volume: float, target_volume: float = TARGET_VOLUME, *,
 def demonstration_dmp(bottle_volume: float, target_volume: float = TARGET_VOLUME, *,
                       n_basis: int = 40, liquid_seed: int = 0,
                       cache_dir: str | os.PathLike[str] | None = None) -> Any:
-    """The DMP (N = 40, method.md §9.3) fitted to the scripted demonstration for ``bottle_volume``."""
+    """The DMP (N = 40, docs/method.md §9.3) fitted to the scripted demonstration for ``bottle_volume``."""
     from dmprs.dmp import DMP
 
     _, traj, _ = demonstration(bottle_volume, target_volume, liquid_seed=liquid_seed, cache_dir=cache_dir)

@@ -1,5 +1,5 @@
 """The demonstrator's movement: a minimum-jerk tilt up, a hold, a minimum-jerk tilt back to
-upright (method.md §9.3)."""
+upright (docs/method.md §9.3)."""
 
 from __future__ import annotations
 
@@ -13,13 +13,13 @@ from dmprs.profiles import min_jerk
 from dmprs.tasks.pouring.adapter import CONTROL_PERIOD
 from dmprs.trajectory import Trajectory
 
-#: the demonstrations' timing (s): min-jerk up, hold, min-jerk down (method.md §9.3)
+#: the demonstrations' timing (s): min-jerk up, hold, min-jerk down (docs/method.md §9.3)
 DEMO_TIMING = (1.0, 1.0, 1.0)
 
 
 def tilt_profile(peak: float, timing: tuple[float, float, float] = DEMO_TIMING,
                  dt: float = CONTROL_PERIOD) -> Trajectory:
-    """Minimum-jerk up to ``peak`` rad, hold, minimum-jerk back to 0 (method.md §9.3), with exact
+    """Minimum-jerk up to ``peak`` rad, hold, minimum-jerk back to 0 (docs/method.md §9.3), with exact
     velocities and accelerations."""
     peak = float(peak)
     if not math.isfinite(peak):

@@ -1,4 +1,4 @@
-"""Scoring the pouring task: the poured volume against the target (method.md §9.2)."""
+"""Scoring the pouring task: the poured volume against the target (docs/method.md §9.2)."""
 
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ class Pouring(Task):
         return np.array([float(outcome.signals["poured_volume"])])
 
     def target(self, desired_query: NDArray[np.float64]) -> NDArray[np.float64]:
-        # Whatever the bottle holds, the task is to pour the same amount (method.md §9.1).
+        # Whatever the bottle holds, the task is to pour the same amount (docs/method.md §9.1).
         return np.array([self.target_volume])
 
     def demonstration(self, bottle_volume: float, *, cache_dir: str | os.PathLike[str] | None = None,
