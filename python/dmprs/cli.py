@@ -44,7 +44,7 @@ def main() -> None:
 
 @main.command("learn")
 @click.argument("task")
-@click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root (default: the paper's choice for the task)")
+@click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root, pg; pouring also fixed (default: the paper's choice for the task)")
 @click.option("--desired", type=float, default=None, help="desired query (task units)")
 @click.option("--max-trials", type=int, default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")

@@ -1,5 +1,5 @@
-"""A DMP demonstration: fit a 7-DOF reaching movement, reproduce it, and adapt it to a new goal
-and speed. Runs until the paper's experiments (``dmprs reproduce``) replace it as the main job."""
+"""A quick look at the DMP core (``dmprs demo``): fit a 7-DOF reaching movement, reproduce it,
+and adapt it to a new goal and speed."""
 
 from __future__ import annotations
 
