@@ -59,7 +59,7 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
     """Learn TASK (analytic, matchbox, pouring) from its demonstrations, one trial at a time."""
     from dmprs import experiments
 
-    options = {k: v for k, v in {"desired": desired, "noise": noise, "bottle_volume": volume,
+    options: dict[str, Any] = {k: v for k, v in {"desired": desired, "noise": noise, "bottle_volume": volume,
                                  "demos": demos}.items() if v is not None}
     console = _console()
     try:

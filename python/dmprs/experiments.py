@@ -215,7 +215,7 @@ def analytic(desired: float = 1.5, learner: str = "error", max_trials: int = 20,
 
 
 def matchbox(demos: str = "default", learner: str = "error", max_trials: int = 20,
-             log_dir: str | Path | None = None, seed: int = 0, **config: float) -> LearningResult:
+             log_dir: str | Path | None = None, seed: int = 0, **config: Any) -> LearningResult:
     """The matchbox flip-up end to end (see :mod:`dmprs.tasks.matchbox`)."""
     return run("matchbox", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
                demos=demos, **config)

@@ -10,6 +10,7 @@ rules, resuming from the trial log, and adding a success to the database.
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -143,7 +144,7 @@ def learn(
         if converged:
             learned = next(t.query for t in reversed(ok) if t.success)
         elif ok:
-            learned = min(ok, key=lambda t: float(np.linalg.norm(t.eps))).query
+            learned = min(ok, key=lambda t: float(np.linalg.norm(np.asarray(t.eps)))).query
         return LearningResult(trials, converged, learned, reason, None if log is None else log.directory, cut)
 
     if trials and trials[-1].success:
@@ -158,7 +159,7 @@ def learn(
                 return finish(f"the learner stopped without a successful trial ({learner.status_detail})", False)
             asked = learner.ask()
             q = as_query(asked, "the learner's query", task.query_names)
-            result = run_trial(task, len(trials), q, lambda: generalizer.predict(q), q0, seed=seed,
+            result = run_trial(task, len(trials), q, functools.partial(generalizer.predict, q), q0, seed=seed,
                                timeout_s=timeout_s, tol=tol, log=log)
             record = result.record
             trials.append(record)

@@ -15,7 +15,7 @@ def min_jerk(s: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], ND
     Divide the derivatives by the duration (squared) for time derivatives. m, m' and m'' are 0 at
     s = 0, and m = 1, m' = m'' = 0 at s = 1: the movement starts and ends at rest.
     """
-    s = np.clip(np.asarray(s, dtype=float), 0.0, 1.0)
-    return (10 * s**3 - 15 * s**4 + 6 * s**5,
-            30 * s**2 - 60 * s**3 + 30 * s**4,
-            60 * s - 180 * s**2 + 120 * s**3)
+    u: NDArray[np.float64] = np.clip(np.asarray(s, dtype=np.float64), 0.0, 1.0)
+    return (10 * u**3 - 15 * u**4 + 6 * u**5,
+            30 * u**2 - 60 * u**3 + 30 * u**4,
+            60 * u - 180 * u**2 + 120 * u**3)

@@ -30,8 +30,8 @@ def _trajectory_arrays(prefix: str, tr: Trajectory | None) -> dict[str, np.ndarr
 def _trajectory_from(arrays: Any, prefix: str) -> Trajectory | None:
     if f"{prefix}t" not in arrays:
         return None
-    get = lambda k: arrays[f"{prefix}{k}"] if f"{prefix}{k}" in arrays else None  # noqa: E731
-    return Trajectory(get("t"), get("y"), get("yd"), get("ydd"))
+    return Trajectory(arrays[f"{prefix}t"], arrays[f"{prefix}y"], arrays.get(f"{prefix}yd"),
+                      arrays.get(f"{prefix}ydd"))
 
 
 class RecordingAdapter(Adapter):

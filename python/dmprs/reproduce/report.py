@@ -60,10 +60,10 @@ def _cell(row: dict[str, Any]) -> str:
 
 def markdown(report: dict[str, Any], figures: list[Path]) -> str:
     lines = ["# dmprs reproduction of Nemec, Vuga, Ude (2013)", "",
-             f"Run {'--quick' if report.get('quick') else 'in full'} with backend "
-             f"`{report.get('backend')}` in {report.get('seconds')} s. Trials count every executed "
-             "trial, the first (purely generalized) one included. Deterministic simulators: a "
-             "query-space learner gives one run per setting; baselines vary their seed.", "",
+             (f"Run {'--quick' if report.get('quick') else 'in full'} with backend "
+              f"`{report.get('backend')}` in {report.get('seconds')} s. Trials count every executed "
+              "trial, the first (purely generalized) one included. Deterministic simulators: a "
+              "query-space learner gives one run per setting; baselines vary their seed."), "",
              "| experiment | learner | trials to success | paper |", "|---|---|---|---|"]
     for row in report["rows"]:
         lines.append(f"| {row['experiment']} | {row['learner']} | {_cell(row)} | {row['paper']} |")

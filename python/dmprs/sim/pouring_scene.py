@@ -27,6 +27,7 @@ Design (docs/method.md §9.3, checked there with a throw-away prototype):
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -212,7 +213,7 @@ class _Scene:
         bottle.position = PIVOT
         space.add(bottle)
         outline = bottle_outline()
-        for a, b in zip(outline[:-1], outline[1:], strict=True):
+        for a, b in itertools.pairwise(outline):
             seg = pymunk.Segment(bottle, a, b, WALL_RADIUS)
             seg.friction = 0.0
             seg.elasticity = 0.0

@@ -25,9 +25,10 @@ strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
@@ -35,6 +36,9 @@ from dmprs.errors import InvalidInputError
 from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
 from dmprs.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from dmprs.dmp import DMP
 
 CONTROL_PERIOD = 0.001
 #: strike durations (s) of the scripted demonstrations: docs/method.md §8.1 (one flips back, one
@@ -50,7 +54,7 @@ DEMO_SETS = {
 }
 
 
-def config(**overrides: float) -> _core.MatchboxConfig:
+def config(**overrides: Any) -> _core.MatchboxConfig:
     """The simulation's parameters (see ``MatchboxConfig`` in crates/learner): defaults are a
     15 g, 53 x 36 x 16 mm box overhanging the table edge by 14 mm, friction 0.3, restitution
     0.3, 1 ms steps with 8 solver iterations, 2 s of settling after the strike."""
@@ -76,7 +80,7 @@ class MatchboxAdapter(BaseAdapter):
 
     def __init__(self, **config_overrides: float) -> None:
         self.config = config(**config_overrides)
-        c = self.config.to_dict()
+        c: dict[str, Any] = self.config.to_dict()
         (x0, z0), _ = self.config.default_strike()
         super().__init__(AdapterSpec(
             name="matchbox",
@@ -139,14 +143,16 @@ class MatchboxFlip(Task):
     def __init__(self, **config_overrides: float) -> None:
         super().__init__(MatchboxAdapter(**config_overrides))
 
-    def trajectory(self, dmp):  # type: ignore[override]
+    adapter: MatchboxAdapter
+
+    def trajectory(self, dmp: DMP) -> Trajectory:
         """The DMP's rollout at 1 ms up to tau; the fingertip then holds still."""
         return dmp.rollout(dt=CONTROL_PERIOD)
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
         return np.array([outcome.signals["outcome_angle"]])
 
-    def success(self, desired_query, outcome: Outcome) -> bool:
+    def success(self, desired_query: ArrayLike, outcome: Outcome) -> bool:
         return outcome.ok and outcome.signals["regime"] == "upright"
 
     def demonstration(self, duration: float) -> tuple[NDArray[np.float64], Trajectory]:

@@ -65,6 +65,6 @@ __all__ = [
     "calibrate_peak_tilt",
     "demonstration",
     "demonstration_dmp",
-    "tilt_profile",
     "n_particles",
+    "tilt_profile",
 ]

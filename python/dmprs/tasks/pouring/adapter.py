@@ -56,7 +56,7 @@ def _check_volume(value: Any, name: str, *, capacity: float = CAPACITY) -> float
 
 def n_particles(volume: float) -> int:
     """Discs that stand for ``volume`` litres (rounded to whole discs of 2 ml)."""
-    return int(round(_check_volume(volume, "bottle_volume") / PARTICLE_VOLUME))
+    return round(_check_volume(volume, "bottle_volume") / PARTICLE_VOLUME)
 
 
 class PouringAdapter(BaseAdapter):
@@ -127,8 +127,8 @@ class PouringAdapter(BaseAdapter):
     def _extra_checks(self, trajectory: Trajectory) -> list[str]:
         end = float(trajectory.y[-1, 0])
         if abs(end) > END_TOLERANCE:
-            return [f"tilt ends at {end:.4g} rad; a pour must end upright (|tilt| <= {END_TOLERANCE:g} rad) "
-                    "because the poured volume is counted after the bottle is back upright"]
+            return [(f"tilt ends at {end:.4g} rad; a pour must end upright (|tilt| <= {END_TOLERANCE:g} rad) "
+                     "because the poured volume is counted after the bottle is back upright")]
         return []
 
     def check(self, trajectory: Trajectory) -> list[str]:

@@ -90,8 +90,8 @@ def calibrate_peak_tilt(bottle_volume: float, target_volume: float = TARGET_VOLU
 @functools.lru_cache(maxsize=32)
 def _calibrate(v: float, target: float, seed: int, tol: float, max_evals: int, lo: float, hi: float,
                cache_dir: str | None) -> Calibration:
-    params = dict(bottle_volume=v, target_volume=target, liquid_seed=seed, tol=tol,
-                  max_evaluations=max_evals, bracket=(lo, hi))
+    params = {"bottle_volume": v, "target_volume": target, "liquid_seed": seed, "tol": tol,
+              "max_evaluations": max_evals, "bracket": (lo, hi)}
     path = None
     if cache_dir is not None:
         path = Path(cache_dir) / f"pouring-demo-{_cache_key(**params)}.json"

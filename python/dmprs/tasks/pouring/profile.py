@@ -28,7 +28,7 @@ def tilt_profile(peak: float, timing: tuple[float, float, float] = DEMO_TIMING,
     if min(up, down) <= 0 or hold < 0:
         raise InvalidInputError(f"timing = {timing!r}: up and down must be > 0 s, hold >= 0 s")
     total = up + hold + down
-    n = int(round(total / dt)) + 1
+    n = round(total / dt) + 1
     t = np.linspace(0.0, total, n)
 
     def mj(s: NDArray[np.float64], d: float) -> tuple[NDArray[np.float64], ...]:

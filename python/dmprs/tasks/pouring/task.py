@@ -26,6 +26,7 @@ class Pouring(Task):
     ``hold``) are passed to :class:`PouringAdapter`.
     """
 
+    adapter: PouringAdapter
     name = "pouring"
     query_names = ("bottle_volume",)
     query_units = ("l",)
