@@ -18,9 +18,9 @@ from dmprs.adapters import Outcome, Status, check_adapter, load_adapter
 from dmprs.sim import pouring_scene as scene
 from dmprs.tasks import Pouring, PouringAdapter
 from dmprs.tasks import pouring as pouring_mod
+from dmprs.tasks.pouring import calibrate_peak_tilt, demonstration_dmp, tilt_profile
 from dmprs.tasks.pouring import calibration as calibration_mod
 from dmprs.tasks.pouring import demonstrator as demonstrator_mod
-from dmprs.tasks.pouring import calibrate_peak_tilt, demonstration_dmp, tilt_profile
 
 DEG = math.pi / 180
 
