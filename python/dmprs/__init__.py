@@ -4,7 +4,7 @@ trials (Nemec, Vuga, Ude, "Efficient sensorimotor learning from multiple demonst
 The numerical core is Rust (``dmprs._core``); this package is the API users import.
 """
 
-from dmprs import learners
+from dmprs import adapters, learners, tasks
 from dmprs._core import __version__
 from dmprs.database import Database, Demo
 from dmprs.dmp import DMP, rollout_batch
@@ -18,9 +18,8 @@ from dmprs.errors import (
 )
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
+from dmprs.loop import LearningResult, learn
 from dmprs.trajectory import Trajectory
-from dmprs.learning import LearningResult, learn
-from dmprs import adapters, tasks  # noqa: E402 - they build on the classes above
 
 __all__ = [
     "DMP",
@@ -32,14 +31,14 @@ __all__ = [
     "GaussianProcess",
     "Generalizer",
     "InvalidInputError",
-    "LearningResult",
     "LearnerStateError",
+    "LearningResult",
     "NumericalError",
     "Trajectory",
     "__version__",
     "adapters",
     "learn",
-    "tasks",
     "learners",
     "rollout_batch",
+    "tasks",
 ]

@@ -44,7 +44,7 @@ def main() -> None:
 
 @main.command("learn")
 @click.argument("task")
-@click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root (default: the paper's choice for the task)")
+@click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root, pg; pouring also fixed (default: the paper's choice for the task)")
 @click.option("--desired", type=float, default=None, help="desired query (task units)")
 @click.option("--max-trials", type=int, default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")
@@ -59,7 +59,7 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
     """Learn TASK (analytic, matchbox, pouring) from its demonstrations, one trial at a time."""
     from dmprs import experiments
 
-    options = {k: v for k, v in {"desired": desired, "noise": noise, "bottle_volume": volume,
+    options: dict[str, Any] = {k: v for k, v in {"desired": desired, "noise": noise, "bottle_volume": volume,
                                  "demos": demos}.items() if v is not None}
     console = _console()
     try:
@@ -77,7 +77,7 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
 def resume_cmd(run: Path, max_trials: int | None) -> None:
     """Continue the run logged in RUN where it stopped."""
     from dmprs import experiments
-    from dmprs.learning import learn
+    from dmprs.loop import learn
     from dmprs.runlog import RunLog
 
     console = _console()

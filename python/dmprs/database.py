@@ -7,7 +7,7 @@ On disk a database is a directory::
                            file, sha256, label and metadata
     demo_<sha256[:16]>.npz one per demo: query, t, y and optionally yd, ydd (float64)
 
-Saving never leaves a half-written database (design.md §5, "nothing is lost"): every file is
+Saving never leaves a half-written database: every file is
 written to a temporary file in the same directory, flushed, fsync'ed and renamed into place; the
 demo files are named by their content, so they never overwrite the files of the previous version;
 the manifest is replaced last, atomically, and only then are files no manifest refers to removed.

@@ -117,7 +117,7 @@ class DMP:
         alpha_x: float = 2.0,
         width_factor: float = 2.0,
     ) -> DMP:
-        """Fits a DMP to one demonstration by batch least squares (method.md §2.3).
+        """Fits a DMP to one demonstration by batch least squares (docs/method.md §2.3).
 
         ``tau = t[-1] - t[0]``, ``g = y[-1]``, ``y0 = y[0]``; with
         ``x_j = exp(-alpha_x (t_j - t_0) / tau)`` and

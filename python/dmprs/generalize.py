@@ -1,4 +1,4 @@
-"""Generalization from several demonstrations: the paper's G(q; Z) -> DMP (eq. 6, method.md §3),
+"""Generalization from several demonstrations: the paper's G(q; Z) -> DMP (eq. 6, docs/method.md §3),
 computed by the Rust core."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ class Generalizer:
     Each demonstration is first fitted as a DMP (:meth:`dmprs.DMP.fit`, with its own tau = its
     duration, its own goal and start, and its measured yd/ydd if the trajectory has them). Then:
 
-    ``method="linear"`` (method.md §3.3; the paper's matchbox setting): every parameter
+    ``method="linear"`` (docs/method.md §3.3; the paper's matchbox setting): every parameter
     (weights, tau, goal, start) is interpolated and extrapolated affinely in q. For two demos
     and a scalar query this is ``theta(q) = (1 - a) theta_1 + a theta_2`` with
     ``a = (q - q_1) / (q_2 - q_1)``. For an n-D query it uses barycentric coordinates, so it
@@ -34,7 +34,7 @@ class Generalizer:
     fewer than n + 1 it is constant along directions orthogonal to the demos' affine hull (it uses
     the projection of q onto it). It reproduces each demo exactly.
 
-    ``method="lwr-gp"`` (Ude et al. 2010, method.md §3.2): the weights by locally weighted
+    ``method="lwr-gp"`` (Ude et al. 2010, docs/method.md §3.2): the weights by locally weighted
     regression, one weighted least-squares problem over the data of all demos with one
     ``kernel`` weight per demo (tricube or Gaussian in the query distance scaled by the demos'
     query range; bandwidth ``bandwidth x`` the distance to the farthest of the n + 1 nearest
@@ -45,7 +45,7 @@ class Generalizer:
     by ``(d_min / d_k)^2`` (a Shepard-type factor) so that a demo's own query returns that demo:
     its weights exactly (the default ridge is the one :meth:`dmprs.DMP.fit` uses), tau, goal and
     start to the GP noise (1e-5 relative or better in our tests). ``interpolate=False`` gives the plain locally
-    constant blend of method.md §3.2, which mixes a demo with its neighbours even at its own
+    constant blend of docs/method.md §3.2, which mixes a demo with its neighbours even at its own
     query. LWR cannot extrapolate the weights: far from the demos they tend to those of the
     nearest ones (use "linear" to extrapolate, as the paper's Fig. 7 experiment needs).
 
@@ -119,7 +119,7 @@ class Generalizer:
         differences with step ``rel_step x`` the demos' query range per dimension. Exact up to
         rounding for ``"linear"`` (affine).
 
-        This is the "numerical derivative of the generalization function" of paper §3 / method.md
+        This is the "numerical derivative of the generalization function" of paper section 4 / docs/method.md
         §5.2; the learner's gain K = d(achieved query)/dq further needs the task's outcome map.
         """
         return self._core.jacobian(self._query(q), as_scalar(rel_step, "rel_step", positive=True))

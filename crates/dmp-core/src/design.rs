@@ -1,6 +1,6 @@
-//! The design matrix of the batch least-squares fit (method.md §2.3) and its normal equations,
+//! The design matrix of the batch least-squares fit (docs/method.md §2.3) and its normal equations,
 //! shared by the one-demonstration fit ([`crate::Dmp::fit`]) and the locally weighted regression
-//! over many demonstrations ([`crate::lwr`], method.md §3.2).
+//! over many demonstrations ([`crate::lwr`], docs/method.md §3.2).
 //!
 //! For a demonstration with duration `tau`, goal `g = y_T` and samples `(t_j, y_j, yd_j, ydd_j)`:
 //!

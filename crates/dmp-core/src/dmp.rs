@@ -1,5 +1,5 @@
 //! The discrete Dynamic Movement Primitive of the paper (eqs. 1-4) and its batch least-squares fit
-//! (method.md §2.3):
+//! (docs/method.md §2.3):
 //!
 //! ```text
 //! tau dz/dt = alpha_z (beta_z (g - y) - z) + f(x)      (1)
@@ -35,7 +35,7 @@ pub struct DmpConfig {
 }
 
 impl Default for DmpConfig {
-    /// The JSI lab's constants (method.md §2.2): alpha_z = 48, beta_z = alpha_z / 4 (critically
+    /// The JSI lab's constants (docs/method.md §2.2): alpha_z = 48, beta_z = alpha_z / 4 (critically
     /// damped), alpha_x = 2, width factor 2; 25 kernels.
     fn default() -> Self {
         Self {
@@ -137,7 +137,7 @@ impl Dmp {
         })
     }
 
-    /// Fits a DMP to one demonstration by batch least squares (method.md §2.3):
+    /// Fits a DMP to one demonstration by batch least squares (docs/method.md §2.3):
     /// `tau = t_T - t_1`, `g = y_T`, `y0 = y_1`, `x_j = exp(-alpha_x (t_j - t_1)/tau)`,
     /// `F_j = tau^2 ydd_j - alpha_z (beta_z (g - y_j) - tau yd_j)`, and `w = argmin |A w - F|`
     /// with `A_jk = Psi_k(x_j) x_j / sum_i Psi_i(x_j)`.

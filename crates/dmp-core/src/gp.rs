@@ -1,11 +1,11 @@
-//! Gaussian process regression (Rasmussen & Williams 2006, ch. 2 and 5; method.md §3.2): the
+//! Gaussian process regression (Rasmussen & Williams 2006, ch. 2 and 5; docs/method.md §3.2): the
 //! squared-exponential ARD covariance plus noise,
 //!
 //! ```text
 //! k(q, q') = signal_var * exp(-1/2 sum_d (q_d - q'_d)^2 / l_d^2) + noise_var * [q == q']
 //! ```
 //!
-//! with a constant prior mean equal to the mean of the training outputs (method.md §3.2: with a
+//! with a constant prior mean equal to the mean of the training outputs (docs/method.md §3.2: with a
 //! zero mean, extrapolated goals and durations would collapse towards 0). Prediction is the
 //! posterior mean (R&W eq. 2.25) and the standard deviation of the latent function (eq. 2.26,
 //! without the noise term). Hyperparameters are fitted by ML-II: maximizing the log marginal

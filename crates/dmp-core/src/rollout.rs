@@ -1,4 +1,4 @@
-//! Integration of the DMP (method.md §2.4): explicit Euler at a fixed step from `x = 1`,
+//! Integration of the DMP (docs/method.md §2.4): explicit Euler at a fixed step from `x = 1`,
 //! `y = y0`, `z = 0` (the movement starts at rest), for one DMP or many in parallel.
 
 use rayon::prelude::*;

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
-from dmprs.adapters.registry import register_builtin
+from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
 from dmprs.trajectory import Trajectory
 
@@ -33,7 +33,7 @@ def bump(amplitude: float, n: int = 501, duration: float = DURATION) -> Trajecto
     """A minimum-jerk go-and-return movement peaking at ``amplitude`` halfway."""
     t = np.linspace(0.0, duration, n)
     s = np.minimum(t / (duration / 2), 2 - t / (duration / 2))
-    y = amplitude * (10 * s**3 - 15 * s**4 + 6 * s**5)
+    y = amplitude * min_jerk(s)[0]
     return Trajectory(t, y)
 
 
@@ -68,7 +68,6 @@ class AnalyticAdapter(BaseAdapter):
         return Outcome(Status.OK, signals={"outcome": value, "peak": peak}, executed=trajectory)
 
 
-register_builtin("analytic", "dmprs.tasks.analytic:AnalyticAdapter")
 
 
 class AnalyticTask(Task):

@@ -9,7 +9,7 @@ strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
   ``settle_time`` (2 s) more. Signals: the tilt history ``phi`` (rad, clipped to [0, pi]) with
   its times ``phi_t``, ``phi_max``, ``t0`` (first time phi >= pi/2, NaN if never),
   ``phi_after`` (phi(t0 + 0.05 s), NaN if no t0), ``outcome_angle``, ``eps18`` and ``regime``.
-* :class:`MatchboxFlip`: the query is the **outcome angle** (method.md §8.2): a demonstration is
+* :class:`MatchboxFlip`: the query is the **outcome angle** (docs/method.md §8.2): a demonstration is
   labelled phi_max if it flipped back and phi(t0 + 0.05 s) if it flipped over, and the desired
   query is pi/2. Then ``q_a = outcome_angle`` and the error is ``eps = pi/2 - q_a``
   (eq. 13). That is the **negative of eq. 18 as printed** (``eps18 = q_a - pi/2``): applied
@@ -25,22 +25,26 @@ strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
-from dmprs.adapters.registry import register_builtin
 from dmprs.errors import InvalidInputError
+from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
 from dmprs.trajectory import Trajectory
 
+if TYPE_CHECKING:
+    from dmprs.dmp import DMP
+
 CONTROL_PERIOD = 0.001
-#: strike durations (s) of the scripted demonstrations: method.md §8.1 (one flips back, one
+#: strike durations (s) of the scripted demonstrations: docs/method.md §8.1 (one flips back, one
 #: over) and Fig. 7 (both flip back). The upright window of the default scene is 0.097-0.113 s.
 #: "both_flipped_back" reuses the default's slow strike and adds the one 6 % slower than the
-#: window. How many trials learning needs depends on the demos, as method.md §8.3 found for its
+#: window. How many trials learning needs depends on the demos, as docs/method.md §8.3 found for its
 #: prototype: with 0.13 / 0.12 s instead, eq. 16 needed 18 trials and eq. 17 11 (the jump of
 #: the outcome across the window, paper Fig. 2c, makes error learning bounce); with 0.125 / 0.118
 #: s, 3 and 2. ``dmprs reproduce`` reports the sets it runs.
@@ -50,7 +54,7 @@ DEMO_SETS = {
 }
 
 
-def config(**overrides: float) -> _core.MatchboxConfig:
+def config(**overrides: Any) -> _core.MatchboxConfig:
     """The simulation's parameters (see ``MatchboxConfig`` in crates/learner): defaults are a
     15 g, 53 x 36 x 16 mm box overhanging the table edge by 14 mm, friction 0.3, restitution
     0.3, 1 ms steps with 8 solver iterations, 2 s of settling after the strike."""
@@ -66,7 +70,7 @@ def strike(duration: float, cfg: _core.MatchboxConfig | None = None, dt: float =
     n = max(2, round(duration / dt))
     t = np.linspace(0.0, duration, n + 1)
     s = t / duration
-    m = 10 * s**3 - 15 * s**4 + 6 * s**5
+    m = min_jerk(s)[0]
     return Trajectory(t, np.stack([x0 + m * (x1 - x0), z0 + m * (z1 - z0)], axis=1))
 
 
@@ -76,7 +80,7 @@ class MatchboxAdapter(BaseAdapter):
 
     def __init__(self, **config_overrides: float) -> None:
         self.config = config(**config_overrides)
-        c = self.config.to_dict()
+        c: dict[str, Any] = self.config.to_dict()
         (x0, z0), _ = self.config.default_strike()
         super().__init__(AdapterSpec(
             name="matchbox",
@@ -126,7 +130,6 @@ def _signals(ep: dict) -> dict:
     }
 
 
-register_builtin("matchbox", "dmprs.tasks.matchbox:MatchboxAdapter")
 
 
 class MatchboxFlip(Task):
@@ -140,14 +143,16 @@ class MatchboxFlip(Task):
     def __init__(self, **config_overrides: float) -> None:
         super().__init__(MatchboxAdapter(**config_overrides))
 
-    def trajectory(self, dmp):  # type: ignore[override]
+    adapter: MatchboxAdapter
+
+    def trajectory(self, dmp: DMP) -> Trajectory:
         """The DMP's rollout at 1 ms up to tau; the fingertip then holds still."""
         return dmp.rollout(dt=CONTROL_PERIOD)
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
         return np.array([outcome.signals["outcome_angle"]])
 
-    def success(self, desired_query, outcome: Outcome) -> bool:
+    def success(self, desired_query: ArrayLike, outcome: Outcome) -> bool:
         return outcome.ok and outcome.signals["regime"] == "upright"
 
     def demonstration(self, duration: float) -> tuple[NDArray[np.float64], Trajectory]:
