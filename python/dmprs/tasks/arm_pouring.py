@@ -29,7 +29,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_float_array, check_increasing
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
-from dmprs.adapters.registry import register_builtin
 from dmprs.errors import InvalidInputError, NumericalError
 from dmprs.tasks.base import Task
 from dmprs.trajectory import Trajectory
@@ -328,9 +327,6 @@ class ArmPouringAdapter(BaseAdapter):
     def _mouth_quaternions(q: NDArray[np.float64]) -> NDArray[np.float64]:
         kin = _kinematics()
         return np.array([kin.pose(row)[3:] for row in q])
-
-
-register_builtin("arm-pouring", "dmprs.tasks.arm_pouring:ArmPouringAdapter")
 
 
 # --- the scripted demonstrator ------------------------------------------------------------------
