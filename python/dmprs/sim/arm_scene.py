@@ -149,10 +149,13 @@ def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOL
 
 def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np.float64],
                   liquid: SettledLiquid, *, hold: float = 1.0, sample_period: float = 0.02,
-                  should_stop: Callable[[], bool] | None = None) -> ArmPourResult:
+                  should_stop: Callable[[], bool] | None = None,
+                  on_sample: Callable[[Any, Any, float], None] | None = None) -> ArmPourResult:
     """Follows the joint trajectory ``q`` (T, 7) with velocities ``qd`` at times ``t`` (from its
     first sample, which must be the home configuration), then holds the last sample for
-    ``hold`` s, and counts. The caller validates the trajectory; this function trusts it."""
+    ``hold`` s, and counts. The caller validates the trajectory; this function trusts it.
+    ``on_sample(model, data, t)`` is called at every count (every ``sample_period`` s), e.g. to
+    render frames; it must not change ``data``."""
     import mujoco
 
     model, n = liquid.model, liquid.n
@@ -174,6 +177,8 @@ def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np
     sample_every = max(1, round(sample_period / dt))
     sample_t = [0.0]
     counts = [int(granular.in_glass(_particle_positions(data, n)).sum())]
+    if on_sample is not None:
+        on_sample(model, data, 0.0)
     interrupted = False
     k = 0
     for k in range(1, n_steps + 1):
@@ -183,6 +188,8 @@ def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np
         if k % sample_every == 0 or k == n_steps:
             sample_t.append(k * dt)
             counts.append(int(granular.in_glass(_particle_positions(data, n)).sum()))
+            if on_sample is not None:
+                on_sample(model, data, k * dt)
             _check_health(mujoco, data, k * dt)
         if should_stop is not None and k % STOP_CHECK_EVERY == 0 and should_stop():
             interrupted = True

@@ -87,6 +87,48 @@ class PoseTrajectory:
         object.__setattr__(self, "pose", pose)
 
 
+    @property
+    def y(self) -> NDArray[np.float64]:
+        """The poses, under the name run logs store a command's samples by."""
+        return self.pose
+
+
+def _quat_mul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Row-wise Hamilton product of scalar-first quaternions (T, 4)."""
+    w1, x1, y1, z1 = a.T
+    w2, x2, y2, z2 = b.T
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=1)
+
+
+def pose_to_tangent(pose: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Poses (T, 7) as (T, 6): the position, then the rotation vector ``2 log(q * conj(r))`` of each
+    orientation relative to the unit quaternion ``reference`` r (world frame). For rotations of
+    less than pi from r this is one-to-one and smooth, so a per-coordinate DMP of it is a pose DMP
+    in the tangent space at r: for a rotation about one fixed axis it is exactly the discrete DMP
+    of the angle, as the orientation DMP of Ude et al. 2014 is (docs/arm.md)."""
+    pose = np.asarray(pose, dtype=float)
+    conj = np.asarray(reference, dtype=float) * np.array([1.0, -1.0, -1.0, -1.0])
+    rel = _quat_mul(pose[:, 3:], np.broadcast_to(conj, (len(pose), 4)))
+    rel *= np.where(rel[:, :1] < 0, -1.0, 1.0)  # the short way round
+    v = rel[:, 1:]
+    norm = np.linalg.norm(v, axis=1)
+    angle = 2 * np.arctan2(norm, rel[:, 0])
+    scale = np.where(norm > 1e-12, angle / np.maximum(norm, 1e-300), 2.0)
+    return np.hstack([pose[:, :3], v * scale[:, None]])
+
+
+def tangent_to_pose(y: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The inverse of :func:`pose_to_tangent`: (T, 6) -> poses (T, 7) with unit quaternions."""
+    y = np.asarray(y, dtype=float)
+    r = y[:, 3:]
+    angle = np.linalg.norm(r, axis=1)
+    axis_scale = np.where(angle > 1e-12, np.sin(angle / 2) / np.maximum(angle, 1e-300), 0.5)
+    rel = np.hstack([np.cos(angle / 2)[:, None], r * axis_scale[:, None]])
+    quat = _quat_mul(rel, np.broadcast_to(np.asarray(reference, dtype=float), (len(y), 4)))
+    return np.hstack([y[:, :3], quat / np.linalg.norm(quat, axis=1, keepdims=True)])
+
+
 def _is_pose_trajectory(trajectory: Any) -> bool:
     return not isinstance(trajectory, Trajectory) and hasattr(trajectory, "pose") and hasattr(trajectory, "t")
 
@@ -410,6 +452,16 @@ def calibrate_peak_tilt(bottle_volume: float, target_volume: float = TARGET_VOLU
     return Calibration(v, target, int(liquid_seed), peak, poured, tuple(evals))
 
 
+def demonstration_tangent(peak_tilt: float) -> Trajectory:
+    """The scripted demonstration of :func:`pour_poses` as a 6-D trajectory of the position and the
+    rotation vector from the upright home orientation (:func:`pose_to_tangent`), with its exact
+    sampling, for encoding as DMPs with the library's generalizer."""
+    from dmprs.sim.arm_scene import HOME_POSE
+
+    poses = pour_poses(peak_tilt)
+    return Trajectory(poses.t, pose_to_tangent(poses.pose, np.asarray(HOME_POSE[3:])))
+
+
 # --- the task -----------------------------------------------------------------------------------
 
 class ArmPouring(Task):
@@ -441,6 +493,17 @@ class ArmPouring(Task):
         if q[0] <= 0:
             raise InvalidInputError(f"{name} = {q[0]:g} l: a bottle volume must be > 0")
         return q
+
+    def trajectory(self, dmp: Any) -> Any:
+        """The pose trajectory of a generalized DMP, rolled out at the adapter's control period: a
+        ``CartesianDMP``'s rollout as it is, or a 6-D DMP of :func:`demonstration_tangent`'s
+        coordinates (position, rotation vector from upright) turned back into poses."""
+        out = dmp.rollout(dt=self.adapter.spec.control_period)
+        if hasattr(out, "pose"):
+            return out
+        from dmprs.sim.arm_scene import HOME_POSE
+
+        return PoseTrajectory(out.t, tangent_to_pose(out.y, np.asarray(HOME_POSE[3:])))
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
         return np.array([float(outcome.signals["poured_volume"])])
