@@ -3,10 +3,10 @@ unknown volume, learned in the query space from two demonstrations.
 
 Two scripted "kinesthetic" demonstrations (:func:`dmprs.tasks.arm_pouring.pour_poses`: reach over
 the glass, tilt about the mouth, hold, tilt back) are calibrated with the library's Illinois root
-finder to pour 0.2 l from bottles of 0.3 l and 1.0 l, encoded as DMPs of the bottle's pose (the
-position and the rotation vector from upright, :func:`~dmprs.tasks.arm_pouring.pose_to_tangent`),
-generalized linearly in the bottle volume, and the assumed volume is learned by golden section (the
-paper's choice) or the root finder. Requires the ``robot`` extra (MuJoCo).
+finder to pour 0.2 l from bottles of 0.3 l and 1.0 l, each encoded as a :class:`~dmprs.CartesianDMP`,
+generalized linearly in the bottle volume (:class:`CartesianLinearGeneralizer`), and the assumed
+volume is learned by golden section (the paper's choice) or the root finder. Requires the
+``robot`` extra (MuJoCo).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from dmprs.experiments import ExperimentSetup, query_learners
 from dmprs.loop import LearningResult, learn
@@ -36,36 +37,77 @@ MAX_TRIALS = 6
 
 @functools.lru_cache(maxsize=4)
 def demonstrations(target_volume: float = 0.2, liquid_seed: int = 0) -> tuple[Any, ...]:
-    """The calibrated demonstrations: ((query, 6-D pose trajectory, calibration), ...) for the
+    """The calibrated demonstrations: ((query, pose trajectory, calibration), ...) for the
     bottles of :data:`~dmprs.tasks.arm_pouring.DEMO_VOLUMES`."""
-    from dmprs.tasks.arm_pouring import DEMO_VOLUMES, calibrate_peak_tilt, demonstration_tangent
+    from dmprs.tasks.arm_pouring import DEMO_VOLUMES, calibrate_peak_tilt, pour_poses
 
     out = []
     for volume in DEMO_VOLUMES:
         cal = calibrate_peak_tilt(volume, target_volume, liquid_seed=liquid_seed, bracket=DEMO_BRACKET)
-        out.append((np.array([cal.bottle_volume]), demonstration_tangent(cal.peak_tilt), cal))
+        out.append((np.array([cal.bottle_volume]), pour_poses(cal.peak_tilt), cal))
     return tuple(out)
+
+
+def _slerp(a: NDArray[np.float64], b: NDArray[np.float64], s: float) -> NDArray[np.float64]:
+    """Spherical interpolation of unit quaternions (s outside [0, 1] extrapolates along the
+    same great circle): exp(s log(b * conj(a))) * a, the linear map of the tangent space at a."""
+    from dmprs.tasks.arm_pouring import pose_to_tangent, tangent_to_pose
+
+    rel = pose_to_tangent(np.concatenate([np.zeros(3), b])[None], a)[0, 3:]
+    return tangent_to_pose(np.concatenate([np.zeros(3), s * rel])[None], a)[0, 3:]
+
+
+class CartesianLinearGeneralizer:
+    """The paper's linear generalization (eq. 6 with two demos, method.md §3.3) for
+    :class:`~dmprs.CartesianDMP` objects and a scalar query: ``theta(q) = (1 - a) theta_1 + a theta_2``
+    with ``a = (q - q_1) / (q_2 - q_1)`` for the weights, tau and the goal and start positions;
+    the goal and start orientations by slerp, i.e. linearly in the tangent space of the first
+    demo's. At a demo's query it returns that demo's DMP (to rounding).
+
+    Stands in until :class:`dmprs.Generalizer` takes pose demonstrations (issue 14, item 3),
+    which will replace it: same inputs, same ``predict``.
+    """
+
+    def __init__(self, demos: list[tuple[float, Any]]) -> None:
+        from dmprs.errors import InvalidInputError
+
+        if len(demos) != 2 or demos[0][0] == demos[1][0]:
+            raise InvalidInputError("CartesianLinearGeneralizer needs two demonstrations with distinct queries")
+        (self.q1, self.d1), (self.q2, self.d2) = ((float(q), d) for q, d in demos)
+
+    def predict(self, q: Any) -> Any:
+        from dmprs.cartesian import CartesianDMP
+
+        a = (float(np.atleast_1d(q)[0]) - self.q1) / (self.q2 - self.q1)
+        d1, d2 = self.d1, self.d2
+
+        def pose(p1: NDArray[np.float64], p2: NDArray[np.float64]) -> NDArray[np.float64]:
+            return np.concatenate([(1 - a) * p1[:3] + a * p2[:3], _slerp(p1[3:], p2[3:], a)])
+
+        return CartesianDMP((1 - a) * d1.weights + a * d2.weights, pose(d1.goal, d2.goal),
+                            pose(d1.start, d2.start), (1 - a) * d1.tau + a * d2.tau,
+                            alpha_z=d1.alpha_z, beta_z=d1.beta_z, alpha_x=d1.alpha_x, width_factor=d1.width_factor)
 
 
 def arm_pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: float = TOLERANCE,
                       liquid_seed: int = 0, demo_seed: int = 0, reseed_liquid: bool = False) -> ExperimentSetup:
     """Pour ``target_volume`` with the arm from a bottle holding ``bottle_volume`` l: the two
-    calibrated demonstrations in a :class:`~dmprs.Database`, ``Generalizer(db, "linear")`` with
-    N = 40, the desired query = the true volume; learners ``golden`` (default, paper mode,
-    bracket [0.3, 1.0] l), ``root`` (Illinois) and the other query learners."""
-    from dmprs.database import Database
-    from dmprs.generalize import Generalizer
+    calibrated demonstrations fitted as :class:`~dmprs.CartesianDMP` objects with N = 40 kernels and
+    generalized linearly (:class:`CartesianLinearGeneralizer`), the desired query = the true
+    volume; learners ``golden`` (default, paper mode, bracket [0.3, 1.0] l), ``root`` (Illinois)
+    and the other query learners. ``database`` is None: the library's Database does not hold pose
+    demonstrations yet."""
+    from dmprs.cartesian import CartesianDMP
     from dmprs.tasks.arm_pouring import DEMO_VOLUMES, ArmPouring
 
     task = ArmPouring(bottle_volume, target_volume=target_volume, tol=tol, liquid_seed=liquid_seed,
                       reseed_liquid=reseed_liquid)
-    db = Database(query_names=task.query_names, query_units=task.query_units)
-    for query, trajectory, _ in demonstrations(task.target_volume, demo_seed):
-        db.add(query, trajectory)
-    gen = Generalizer(db, method="linear", n_basis=N_BASIS)
+    demos = [(float(query[0]), CartesianDMP.fit(tr.t, tr.pose, n_basis=N_BASIS))
+             for query, tr, _ in demonstrations(task.target_volume, demo_seed)]
+    gen = CartesianLinearGeneralizer(demos)
     low, high = min(DEMO_VOLUMES), max(DEMO_VOLUMES)
     return ExperimentSetup(
-        task=task, database=db, generalizer=gen, desired_query=task.validate_query(bottle_volume),
+        task=task, database=None, generalizer=gen, desired_query=task.validate_query(bottle_volume),
         default_learner="golden", learners=query_learners(low, high, scale=0.05), low=low, high=high)
 
 
