@@ -206,3 +206,20 @@ def test_pour_geometry_constants_are_consistent():
     # the upright bottle passes over the glass's rim
     assert am.GLASS_HEIGHT + 2 * am.WALL < arm_scene.HOME_POSE[2] - am.BOTTLE_LENGTH - 2 * am.WALL
     assert math.isclose(am.PARTICLE_RADIUS ** 3 * 4 / 3 * math.pi, 2e-6)
+
+
+def test_calibration_finds_the_peak_and_is_cached_on_disk(tmp_path, monkeypatch):
+    from dmprs.tasks import arm_pouring
+
+    args = {"target_volume": 0.02, "bracket": (1.9, 2.6), "max_evaluations": 3, "cache_dir": tmp_path}
+    cal = arm_pouring.calibrate_peak_tilt(0.06, **args)
+    assert len(cal.evaluations) <= 3
+    assert cal.poured_volume == min((p for _, p in cal.evaluations), key=lambda p: abs(p - 0.02))
+    assert len(list(tmp_path.glob("arm-pouring-demo-*.json"))) == 1
+    arm_pouring._calibrate.cache_clear()
+
+    def no_pours(*args, **kwargs):
+        raise AssertionError("the cached calibration was recomputed")
+
+    monkeypatch.setattr(arm_pouring, "poured_volume", no_pours)
+    assert arm_pouring.calibrate_peak_tilt(0.06, **args) == cal

@@ -36,14 +36,17 @@ MAX_TRIALS = 6
 
 
 @functools.lru_cache(maxsize=4)
-def demonstrations(target_volume: float = 0.2, liquid_seed: int = 0) -> tuple[Any, ...]:
+def demonstrations(target_volume: float = 0.2, liquid_seed: int = 0,
+                   cache_dir: str | None = None) -> tuple[Any, ...]:
     """The calibrated demonstrations: ((query, pose trajectory, calibration), ...) for the
-    bottles of :data:`~dmprs.tasks.arm_pouring.DEMO_VOLUMES`."""
+    bottles of :data:`~dmprs.tasks.arm_pouring.DEMO_VOLUMES` (calibrations cached on disk in
+    ``cache_dir`` or ``$DMPRS_CACHE_DIR`` when given)."""
     from dmprs.tasks.arm_pouring import DEMO_VOLUMES, calibrate_peak_tilt, pour_poses
 
     out = []
     for volume in DEMO_VOLUMES:
-        cal = calibrate_peak_tilt(volume, target_volume, liquid_seed=liquid_seed, bracket=DEMO_BRACKET)
+        cal = calibrate_peak_tilt(volume, target_volume, liquid_seed=liquid_seed, bracket=DEMO_BRACKET,
+                                  cache_dir=cache_dir)
         out.append((np.array([cal.bottle_volume]), pour_poses(cal.peak_tilt), cal))
     return tuple(out)
 
@@ -90,7 +93,8 @@ class CartesianLinearGeneralizer:
 
 
 def arm_pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: float = TOLERANCE,
-                      liquid_seed: int = 0, demo_seed: int = 0, reseed_liquid: bool = False) -> ExperimentSetup:
+                      liquid_seed: int = 0, demo_seed: int = 0, reseed_liquid: bool = False,
+                      cache_dir: str | None = None) -> ExperimentSetup:
     """Pour ``target_volume`` with the arm from a bottle holding ``bottle_volume`` l: the two
     calibrated demonstrations fitted as :class:`~dmprs.CartesianDMP` objects with N = 40 kernels and
     generalized linearly (:class:`CartesianLinearGeneralizer`), the desired query = the true
@@ -103,7 +107,7 @@ def arm_pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, to
     task = ArmPouring(bottle_volume, target_volume=target_volume, tol=tol, liquid_seed=liquid_seed,
                       reseed_liquid=reseed_liquid)
     demos = [(float(query[0]), CartesianDMP.fit(tr.t, tr.pose, n_basis=N_BASIS))
-             for query, tr, _ in demonstrations(task.target_volume, demo_seed)]
+             for query, tr, _ in demonstrations(task.target_volume, demo_seed, cache_dir)]
     gen = CartesianLinearGeneralizer(demos)
     low, high = min(DEMO_VOLUMES), max(DEMO_VOLUMES)
     return ExperimentSetup(

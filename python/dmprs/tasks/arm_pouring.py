@@ -20,14 +20,19 @@ bottle holds (:mod:`dmprs.sim.arm_scene`, model in :mod:`dmprs.sim.arm_model`, d
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 import math
-from dataclasses import dataclass
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_float_array, check_increasing
+from dmprs._io import write_atomic
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError, NumericalError
 from dmprs.tasks.base import Task
@@ -424,19 +429,54 @@ def poured_volume(bottle_volume: float, trajectory: Any, liquid_seed: int = 0) -
     return float(outcome.signals["poured_volume"])
 
 
-@functools.lru_cache(maxsize=16)
+def _cache_path(cache_dir: str, params: dict[str, Any]) -> Path:
+    """The disk-cache file of a calibration: keyed by its parameters, the whole scene (its MJCF,
+    the liquid's and the demonstrator's constants) and the MuJoCo version."""
+    import mujoco
+
+    from dmprs.sim import arm_model, arm_scene, granular
+
+    blob = json.dumps({"params": params, "mjcf": arm_model.scene_xml(), "mujoco": mujoco.__version__,
+                       "home": arm_scene.HOME_POSE, "settle": arm_scene.SETTLE_TIME,
+                       "spawn": (granular.SPAWN_GAP, granular.MAX_PARTICLES), "timing": DEMO_TIMING,
+                       "pour": POUR_POSITION, "period": CONTROL_PERIOD, "schema": 1}, sort_keys=True, default=str)
+    return Path(cache_dir) / f"arm-pouring-demo-{hashlib.sha256(blob.encode()).hexdigest()[:24]}.json"
+
+
 def calibrate_peak_tilt(bottle_volume: float, target_volume: float = TARGET_VOLUME, *, liquid_seed: int = 0,
-                        tol: float = 0.004, max_evaluations: int = 10,
-                        bracket: tuple[float, float] = (1.2, 2.4)) -> Calibration:
+                        tol: float = 0.004, max_evaluations: int = 10, bracket: tuple[float, float] = (1.2, 2.4),
+                        cache_dir: str | os.PathLike[str] | None = None) -> Calibration:
     """The peak tilt of :func:`pour_poses` that pours ``target_volume`` from a bottle holding
     ``bottle_volume`` l, found by the library's Illinois root finder
     (:class:`dmprs.learners.IllinoisRootFinder`) on ``poured(peak) - target`` over ``bracket``
-    (rad), stopping at ``|error| <= tol`` l or after ``max_evaluations`` pours (then the best)."""
+    (rad), stopping at ``|error| <= tol`` l or after ``max_evaluations`` pours (then the best).
+
+    Cached per process; with ``cache_dir`` (default: ``$DMPRS_CACHE_DIR`` if set) also on disk
+    (see :func:`_cache_path`)."""
+    if cache_dir is None and os.environ.get("DMPRS_CACHE_DIR"):
+        cache_dir = os.environ["DMPRS_CACHE_DIR"]
+    return _calibrate(float(bottle_volume), float(target_volume), int(liquid_seed), float(tol),
+                      int(max_evaluations), (float(bracket[0]), float(bracket[1])),
+                      None if cache_dir is None else str(cache_dir))
+
+
+@functools.lru_cache(maxsize=16)
+def _calibrate(bottle_volume: float, target_volume: float, liquid_seed: int, tol: float, max_evaluations: int,
+               bracket: tuple[float, float], cache_dir: str | None) -> Calibration:
     from dmprs.learners import IllinoisRootFinder
 
     v = _check_volume(bottle_volume, "bottle_volume")
     target = _check_volume(target_volume, "target_volume", capacity=v)
-    lo, hi = (float(b) for b in bracket)
+    lo, hi = bracket
+    path = None
+    if cache_dir is not None:
+        path = _cache_path(cache_dir, {"v": v, "target": target, "seed": liquid_seed, "tol": tol,
+                                       "max": max_evaluations, "bracket": bracket})
+        try:
+            d = json.loads(path.read_text())
+            return Calibration(**{**d, "evaluations": tuple(tuple(e) for e in d["evaluations"])})
+        except (OSError, ValueError, TypeError):
+            pass  # absent or damaged: computed and (re)written
     # The root finder searches q with eps > 0 meaning "increase q": more tilt pours more, so
     # eps = target - poured (method.md §5.3).
     finder = IllinoisRootFinder(0.5 * (lo + hi), lo, hi, tol=tol, max_trials=max_evaluations)
@@ -449,7 +489,14 @@ def calibrate_peak_tilt(bottle_volume: float, target_volume: float = TARGET_VOLU
             break
         finder.tell(peak, target - poured)
     peak, poured = min(evals, key=lambda e: (abs(e[1] - target), e[0]))
-    return Calibration(v, target, int(liquid_seed), peak, poured, tuple(evals))
+    cal = Calibration(v, target, int(liquid_seed), peak, poured, tuple(evals))
+    if path is not None:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_atomic(path, json.dumps(asdict(cal)).encode())
+        except OSError:
+            pass  # the disk cache is an optimization only
+    return cal
 
 
 def demonstration_tangent(peak_tilt: float) -> Trajectory:
