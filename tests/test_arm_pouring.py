@@ -209,7 +209,7 @@ def test_pour_geometry_constants_are_consistent():
 
 
 def test_calibration_finds_the_peak_and_is_cached_on_disk(tmp_path, monkeypatch):
-    from dmprs.tasks import arm_pouring
+    from dmprs.tasks.arm_pouring import calibration as arm_pouring
 
     args = {"target_volume": 0.02, "bracket": (1.9, 2.6), "max_evaluations": 3, "cache_dir": tmp_path}
     cal = arm_pouring.calibrate_peak_tilt(0.06, **args)
