@@ -177,7 +177,8 @@ def test_rejects_the_wrong_kind_of_object():
     assert "7 DOFs" not in rejected(Trajectory(np.linspace(0, 1, 10), np.zeros((10, 3))))
 
 
-def test_a_diverging_simulation_is_an_error_outcome(monkeypatch):
+def test_a_diverging_simulation_is_an_error_outcome(monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warnings to ./MUJOCO_LOG.TXT
     adapter = ArmPouringAdapter(SMALL)
     liquid = arm_scene.settled_liquid(adapter.n_particles, 0)
     # a sphere shot at 1e30 m/s: finite, but the next steps are not
