@@ -22,9 +22,10 @@ from dmprs.experiments import ExperimentSetup, query_learners
 from dmprs.loop import LearningResult, learn
 
 #: l: success when |V_poured - 0.2 l| < this. Set from the measured noise floor of the granular
-#: outcome (docs/arm.md): a query change of +-5 ml moves the poured volume by up to ~10 ml, so the
-#: 2-D scene's 10 ml is the floor's size and 12 ml leaves a margin of one sphere.
-TOLERANCE = 0.012
+#: outcome (docs/arm.md): changes of the movement far too small to matter (1e-4 rad of peak tilt)
+#: move the poured volume with a standard deviation of 13-16 ml (a range of 28-36 ml), so the 2-D
+#: scene's 10 ml is below the floor; 20 ml is ~1.3 standard deviations.
+TOLERANCE = 0.020
 #: rad: the calibration's bracket of peak tilts (1.4 rad pours nothing from 0.3 l, 2.7 rad
 #: nearly everything from 1.0 l)
 DEMO_BRACKET = (1.4, 2.7)
