@@ -190,3 +190,30 @@ def figure(rows: list[dict[str, Any]], path: Path) -> Path:
     fig.savefig(path, dpi=120, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def frame_strip(out: str | Path, bottle_volume: float = 0.6, learner_query: float | None = None) -> Path | None:
+    """A frame strip ``out/arm_pouring_strip.png`` of the generalized pour for ``bottle_volume``
+    (at the assumed volume ``learner_query``, default the true one) through MuJoCo's offscreen
+    renderer; None, with a one-line note on stderr, where no OpenGL backend is available (set
+    ``MUJOCO_GL=egl`` or ``osmesa``)."""
+    import sys
+
+    from dmprs.errors import DmprsError
+    from dmprs.sim import arm_render, arm_scene
+    from dmprs.tasks.arm_pouring import ArmPouringAdapter
+
+    setup = arm_pouring_setup(bottle_volume)
+    q = setup.desired_query if learner_query is None else np.array([learner_query])
+    adapter = setup.task.adapter
+    assert isinstance(adapter, ArmPouringAdapter)
+    joints, _, _, problems = adapter.plan(setup.task.trajectory(setup.generalizer.predict(q)))
+    if problems or joints is None or joints.yd is None:
+        raise DmprsError(f"the pour to render was refused: {'; '.join(problems)}")
+    liquid = arm_scene.settled_liquid(adapter.n_particles, adapter.liquid_seed)
+    try:
+        return arm_render.frame_strip(joints.t, joints.y, joints.yd, liquid,
+                                      (0.0, 0.5, 1.4, 2.2, 2.8, 3.6, 4.6), Path(out) / "arm_pouring_strip.png")
+    except DmprsError as exc:
+        print(f"arm pouring: no frame strip ({exc})", file=sys.stderr)
+        return None
