@@ -38,9 +38,10 @@ def generalizers():
 def test_cartesian_generalization_equals_the_angle_dmp(generalizers, q):
     cart, angle, _ = generalizers
     task = ArmPouring(0.5)
+    assert isinstance(cart.predict([q]), CartesianDMP)  # two code paths: CartesianDMP, 6-D DMP
+    assert not isinstance(angle.predict([q]), CartesianDMP)
     a = task.trajectory(cart.predict([q]))
     b = task.trajectory(angle.predict([q]))
-    assert not isinstance(b, type(a))  # two different code paths: CartesianDMP and the 6-D DMP
     np.testing.assert_allclose(a.pose, b.pose, atol=1e-12)
 
 
@@ -94,3 +95,19 @@ def test_pose_trajectory_validates():
         PoseTrajectory(t, np.zeros((5, 6)))
     with pytest.raises(ValueError, match="increasing"):
         PoseTrajectory(t[::-1], np.tile(HOME_POSE, (5, 1)))
+
+
+def test_a_generalized_pose_trajectory_can_be_logged_and_recorded(generalizers, tmp_path):
+    from dmprs.adapters import RecordingAdapter
+    from dmprs.runlog import RunLog, TrialRecord
+
+    cart, _, _ = generalizers
+    task = ArmPouring(0.5)
+    command = task.trajectory(cart.predict([0.6]))
+    log = RunLog.create(tmp_path / "run", {"task": task.name})
+    log.append(TrialRecord(0, np.array([0.6]), "rejected"), command, None)
+    recorder = RecordingAdapter(task.adapter, tmp_path / "rec")
+    with recorder:
+        out = recorder.execute(command, dry_run=True)
+    assert out.status.value == "dry_run"
+    assert len(list((tmp_path / "rec").glob("trial_*.npz"))) == 1

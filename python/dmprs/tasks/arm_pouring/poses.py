@@ -45,8 +45,17 @@ class PoseTrajectory:
 
     @property
     def y(self) -> NDArray[np.float64]:
-        """The poses, under the name run logs store a command's samples by."""
+        """The poses, under the name run logs and recordings store a command's samples by."""
         return self.pose
+
+    @property
+    def yd(self) -> None:
+        """No derivatives are stored (the IK differentiates the joint solution)."""
+        return None
+
+    @property
+    def ydd(self) -> None:
+        return None
 
 
 def _quat_mul(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:

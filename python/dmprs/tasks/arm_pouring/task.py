@@ -48,11 +48,11 @@ class ArmPouring(Task):
 
     def trajectory(self, dmp: Any) -> Any:
         """The pose trajectory of a generalized DMP, rolled out at the adapter's control period: a
-        ``CartesianDMP``'s rollout as it is, or a 6-D DMP of :func:`demonstration_tangent`'s
+        ``CartesianDMP``'s rollout's poses, or a 6-D DMP of :func:`demonstration_tangent`'s
         coordinates (position, rotation vector from upright) turned back into poses."""
         out = dmp.rollout(dt=self.adapter.spec.control_period)
-        if hasattr(out, "pose"):
-            return out
+        if hasattr(out, "pose"):  # as a PoseTrajectory, which run logs and recordings can store
+            return PoseTrajectory(out.t, out.pose)
         from dmprs.sim.arm_scene import HOME_POSE
 
         return PoseTrajectory(out.t, tangent_to_pose(out.y, np.asarray(HOME_POSE[3:])))
