@@ -183,6 +183,7 @@ def figure(rows: list[dict[str, Any]], path: Path) -> Path:
         ml = [1000 * p for p in row["poured_volume"]]
         ax.plot(range(1, len(ml) + 1), ml, marker="o", label=f"{row['bottle_volume']:g} l ({row['learner']})")
     ax.set_xlabel("trial")
+    ax.xaxis.get_major_locator().set_params(integer=True)
     ax.set_ylabel("poured volume (ml)")
     ax.set_title("Arm pouring (MuJoCo, iiwa 14): learning the assumed bottle volume")
     ax.legend(fontsize=7, ncol=2)
