@@ -77,7 +77,7 @@ def rollout_batch(
 ) -> list[_TrajectoryArrays]: ...
 
 class Learner:
-    """Every ask/tell learner of crates/learner; built and documented by dmprs.learners."""
+    """Every ask/tell learner of crates/learners; built and documented by dmprs.learners."""
 
     @staticmethod
     def error_learning(

@@ -45,7 +45,7 @@ impl<T> IntoPyResult<T> for Result<T, dmp_core::Error> {
 
 /// Bad input becomes `InvalidInputError`, calls in the wrong order (tell without ask, tell of
 /// another query, ask after the stop) `LearnerStateError`, a failed computation `NumericalError`.
-pub fn learner_error(err: learner::LearnerError) -> PyErr {
+pub fn learner_error(err: learners::LearnerError) -> PyErr {
     let class = if err.is_input_error() {
         "InvalidInputError"
     } else if err.is_state_error() {
@@ -56,14 +56,14 @@ pub fn learner_error(err: learner::LearnerError) -> PyErr {
     raise(class, err.to_string())
 }
 
-impl<T> IntoPyResult<T> for Result<T, learner::LearnerError> {
+impl<T> IntoPyResult<T> for Result<T, learners::LearnerError> {
     fn py_err(self) -> PyResult<T> {
         self.map_err(learner_error)
     }
 }
 
 /// Every matchbox error is bad input (a bad configuration or fingertip trajectory).
-impl<T> IntoPyResult<T> for Result<T, learner::matchbox::Error> {
+impl<T> IntoPyResult<T> for Result<T, matchbox::Error> {
     fn py_err(self) -> PyResult<T> {
         self.map_err(|e| raise("InvalidInputError", e.to_string()))
     }

@@ -1,8 +1,8 @@
-//! `dmprs._core.Learner`: one thin wrapper around every ask/tell learner of the `learner` crate.
+//! `dmprs._core.Learner`: one thin wrapper around every ask/tell learner of the `learners` crate.
 //! `dmprs.learners` (Python) validates and converts the arguments, documents the learners and
 //! builds them through the static constructors below.
 
-use learner::{
+use learners::{
     AskTell, ErrorLearning, ErrorLearningConfig, GoldenConfig, GoldenMode, GoldenSection,
     IllinoisRootFinder, Jacobian, Pi2, Pi2Config, PolicyGradient, PolicyGradientConfig, Power,
     PowerConfig, RootFinderConfig, Status,

@@ -1,5 +1,5 @@
 //! PyO3 bindings: the module `dmprs._core`. Thin wrappers only; the algorithms live in
-//! `dmp-core` and `learner`, the user-facing classes and docs in `python/dmprs`.
+//! `dmp-core`, `learners` and `matchbox`, the user-facing classes and docs in `python/dmprs`.
 
 mod dmp;
 mod errors;

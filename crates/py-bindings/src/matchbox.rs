@@ -1,7 +1,7 @@
 //! `dmprs._core.MatchboxConfig`, `matchbox_simulate`, `matchbox_simulate_batch`, `matchbox_check`:
-//! the Rapier matchbox simulation of `learner::matchbox`, numpy in and out, GIL released.
+//! the Rapier matchbox simulation of the `matchbox` crate, numpy in and out, GIL released.
 
-use learner::matchbox::{Episode, FingerPath, MatchboxConfig, simulate, simulate_batch};
+use matchbox::{Episode, FingerPath, MatchboxConfig, simulate, simulate_batch};
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

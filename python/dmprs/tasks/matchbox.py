@@ -1,5 +1,5 @@
 """Matchbox flip-up (the paper's first experiment, section 5, Fig. 3) in the Rust/Rapier 3-D
-simulation of ``crates/learner/src/matchbox``.
+simulation of ``crates/matchbox``.
 
 A fingertip strikes up under the overhanging edge of a matchbox lying on a table; depending on the
 strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
@@ -55,7 +55,7 @@ DEMO_SETS = {
 
 
 def config(**overrides: Any) -> _core.MatchboxConfig:
-    """The simulation's parameters (see ``MatchboxConfig`` in crates/learner): defaults are a
+    """The simulation's parameters (see ``MatchboxConfig`` in crates/matchbox): defaults are a
     15 g, 53 x 36 x 16 mm box overhanging the table edge by 14 mm, friction 0.3, restitution
     0.3, 1 ms steps with 8 solver iterations, 2 s of settling after the strike."""
     return _core.MatchboxConfig(**overrides)

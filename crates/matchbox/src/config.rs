@@ -27,7 +27,7 @@ pub type Result<T> = std::result::Result<T, Error>;
 /// Rapier scene stands the box up only for strike durations within about +-1.5 % of 0.099 s, and
 /// not contiguously; with 0.3 / 0.3 the upright window is contiguous and spans strike durations
 /// 0.097-0.113 s (peak fingertip speed 0.70-0.81 m/s, +-7 %), like the +-6 % the pymunk
-/// prototype of docs/method.md §8.3 found. `cargo run --release -p learner --example matchbox_sweep`
+/// prototype of docs/method.md §8.3 found. `cargo run --release -p matchbox --example matchbox_sweep`
 /// prints the sweep.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MatchboxConfig {

@@ -1,6 +1,6 @@
 //! The matchbox simulation has the paper's structure, is deterministic and rejects bad input.
 
-use learner::matchbox::{
+use matchbox::{
     FingerPath, MatchboxConfig, Measures, Regime, min_jerk_strike, simulate, simulate_batch,
 };
 

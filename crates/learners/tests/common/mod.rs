@@ -2,7 +2,7 @@
 
 #![allow(dead_code)]
 
-use learner::{AskTell, Status};
+use learners::{AskTell, Status};
 
 /// Runs `learner` with `feedback(q)` until it stops; returns the number of trials.
 pub fn run<L: AskTell>(learner: &mut L, mut feedback: impl FnMut(&[f64]) -> Vec<f64>) -> usize {

@@ -1,10 +1,10 @@
-//! # learner
+//! # learners
 //!
 //! Learners of Nemec, Vuga and Ude (2013) in the query space — error learning (eqs. 16, 17),
 //! golden-section error learning, a superlinear bracketing root finder (beyond the paper),
 //! constrained-domain policy gradient (eq. 12) — and the full-parameter baselines PoWER and PI²,
-//! all behind one ask/tell interface (`AskTell`); and the Rapier matchbox flip-up simulation
-//! (`matchbox`, the only module with physics). Pure Rust; no Python.
+//! all behind one ask/tell interface (`AskTell`). Pure Rust: no Python, no physics (the matchbox
+//! simulation is the `matchbox` crate).
 
 pub mod ask_tell;
 pub mod bounds;
@@ -25,5 +25,3 @@ pub use pi2::{Pi2, Pi2Config};
 pub use policy_gradient::{PolicyGradient, PolicyGradientConfig};
 pub use power::{Power, PowerConfig};
 pub use root::{IllinoisRootFinder, RootFinderConfig};
-
-pub mod matchbox;

@@ -4,7 +4,7 @@
 
 mod common;
 
-use learner::{
+use learners::{
     AskTell, GoldenConfig, GoldenMode, GoldenSection, IllinoisRootFinder, RootFinderConfig, Status,
 };
 use proptest::prelude::*;

@@ -3,7 +3,7 @@
 
 mod common;
 
-use learner::{AskTell, Pi2, Pi2Config, Power, PowerConfig, Status};
+use learners::{AskTell, Pi2, Pi2Config, Power, PowerConfig, Status};
 
 fn target(dim: usize) -> Vec<f64> {
     (0..dim).map(|i| (i as f64 * 0.7).sin()).collect()

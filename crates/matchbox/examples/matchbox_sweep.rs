@@ -1,6 +1,6 @@
 //! Sweeps the strike duration of the scripted demonstrator and prints the regimes:
-//! `cargo run --release -p learner --example matchbox_sweep [T_min T_max steps]`.
-use learner::matchbox::{FingerPath, MatchboxConfig, min_jerk_strike, simulate};
+//! `cargo run --release -p matchbox --example matchbox_sweep [T_min T_max steps]`.
+use matchbox::{FingerPath, MatchboxConfig, min_jerk_strike, simulate};
 
 fn main() {
     let args: Vec<f64> = std::env::args()

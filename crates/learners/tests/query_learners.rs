@@ -4,7 +4,7 @@
 mod common;
 
 use common::{Noise, bisect, eps1, run};
-use learner::{
+use learners::{
     AskTell, ErrorLearning, ErrorLearningConfig, GoldenConfig, GoldenMode, GoldenSection,
     IllinoisRootFinder, Jacobian, LearnerError, PolicyGradient, PolicyGradientConfig,
     RootFinderConfig, Status,
