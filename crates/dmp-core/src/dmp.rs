@@ -15,7 +15,7 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use crate::basis::Basis;
-use crate::design::{PreparedDemo, normal_equations, solve_ridge};
+use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::error::{Error, Result, check_scalar};
 
 /// Relative ridge added to the normal equations of the fit. It keeps a kernel that no sample
@@ -142,7 +142,7 @@ impl Dmp {
     /// `F_j = tau^2 ydd_j - alpha_z (beta_z (g - y_j) - tau yd_j)`, and `w = argmin |A w - F|`
     /// with `A_jk = Psi_k(x_j) x_j / sum_i Psi_i(x_j)`.
     ///
-    /// Missing derivatives are computed with [`crate::diff::gradient`] (second order, non-uniform grid).
+    /// Missing derivatives are computed with [`crate::finite_difference::gradient`] (second order, non-uniform grid).
     pub fn fit(demo: &Demonstration<'_>, config: DmpConfig) -> Result<Self> {
         config.validate()?;
         let prepared = PreparedDemo::new(demo)?;

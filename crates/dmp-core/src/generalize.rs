@@ -20,7 +20,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::basis::Basis;
-use crate::design::{PreparedDemo, normal_equations, solve_ridge};
+use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
 use crate::error::{Error, Result, check_scalar};
 use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
@@ -281,7 +281,7 @@ impl Generalizer {
 
     fn lwr_gp_model(
         queries: &[Vec<f64>],
-        normal: Vec<crate::design::NormalEquations>,
+        normal: Vec<crate::design_matrix::NormalEquations>,
         dmps: &[Dmp],
         opts: &LwrGpOptions,
     ) -> Result<LwrGp> {
