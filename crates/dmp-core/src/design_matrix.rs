@@ -143,6 +143,11 @@ pub fn normal_equations(
                 nz.end = k + 1;
             }
         }
+        // A row whose every entry fell below the cut-off (a large alpha_x leaves the late
+        // samples' phase far past the last centre) adds nothing; `nz` is still inverted there.
+        if nz.is_empty() {
+            continue;
+        }
         let yj = y.column(j);
         for d in 0..n_dof {
             force[d] = tau * tau * demo.ydd[(d, j)]
