@@ -23,6 +23,9 @@ use crate::error::{Error, Result, check_scalar};
 /// about 1e-10 relative.
 pub(crate) const FIT_RIDGE: f64 = 1e-10;
 
+/// The most kernels a DMP may have (see [`DmpConfig::validate`]).
+pub const MAX_BASIS: usize = 1000;
+
 /// The meta-parameters of a DMP: its constants and the size of its basis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DmpConfig {
@@ -59,6 +62,14 @@ impl DmpConfig {
                 name: "n_basis",
                 value: self.n_basis.to_string(),
                 requirement: "must be at least 2",
+            });
+        }
+        if self.n_basis > MAX_BASIS {
+            return Err(Error::InvalidParameter {
+                name: "n_basis",
+                value: self.n_basis.to_string(),
+                requirement: "must be at most 1000: the fit solves an n_basis x n_basis system \
+                              (10000 kernels take minutes and gigabytes; 25-40 shape a movement)",
             });
         }
         Ok(())
