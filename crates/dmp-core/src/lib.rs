@@ -7,10 +7,10 @@
 //! interpolation). Pure Rust on nalgebra; no Python, no learners.
 
 pub mod basis;
-pub mod design;
-pub mod diff;
+pub mod design_matrix;
 pub mod dmp;
 pub mod error;
+pub mod finite_difference;
 pub mod generalize;
 pub mod gp;
 pub mod linalg;

@@ -1,11 +1,11 @@
 //! `dmprs._core.Generalizer`: the generalizers of `dmp_core::generalize` over demonstrations
 //! passed as numpy arrays. `dmprs.Generalizer` (Python) builds it from a `dmprs.Database`.
 
-use dmp_core::{Demonstration, DmpConfig, Generalizer, Kernel, LwrGpOptions, LwrOptions, Method};
+use dmp_core::{Generalizer, Kernel, LwrGpOptions, LwrOptions, Method};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::dmp::{PyDmp, time_major};
+use crate::dmp::{PyDmp, contiguous, demonstration, dmp_config, time_major};
 use crate::errors::{IntoPyResult, raise};
 
 type DemoArrays<'py> = (
@@ -16,8 +16,7 @@ type DemoArrays<'py> = (
 );
 
 fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    q.as_slice()
-        .map_err(|_| raise("InvalidInputError", "q must be a contiguous array".into()))
+    contiguous("q", q)
 }
 
 #[pyclass(name = "Generalizer", module = "dmprs._core", frozen)]
@@ -87,23 +86,9 @@ impl PyGeneralizer {
             .collect();
         let mut views = Vec::with_capacity(demos.len());
         for (t, y, yd, ydd) in &demos {
-            let t = t
-                .as_slice()
-                .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
-            views.push(Demonstration {
-                t,
-                y: time_major("y", y)?,
-                yd: yd.as_ref().map(|a| time_major("yd", a)).transpose()?,
-                ydd: ydd.as_ref().map(|a| time_major("ydd", a)).transpose()?,
-            });
+            views.push(demonstration(t, y, yd.as_ref(), ydd.as_ref())?);
         }
-        let config = DmpConfig {
-            n_basis,
-            alpha_z,
-            beta_z,
-            alpha_x,
-            width_factor,
-        };
+        let config = dmp_config(n_basis, alpha_z, beta_z, alpha_x, width_factor);
         let inner = py
             .detach(|| Generalizer::new(&qs, &views, config, method))
             .py_err()?;
