@@ -6,6 +6,7 @@ The numerical core is Rust (``dmprs._core``); this package is the API users impo
 
 from dmprs import adapters, learners, tasks
 from dmprs._core import __version__
+from dmprs.cartesian import CartesianDMP
 from dmprs.database import Database, Demo
 from dmprs.dmp import DMP, rollout_batch
 from dmprs.errors import (
@@ -19,9 +20,11 @@ from dmprs.errors import (
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
 from dmprs.loop import LearningResult, learn
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = [
+    "CartesianDMP",
+    "CartesianTrajectory",
     "DMP",
     "Database",
     "DatabaseError",

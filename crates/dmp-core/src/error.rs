@@ -86,6 +86,18 @@ pub enum Error {
     /// The caller asked a long computation to stop (e.g. Ctrl-C in Python).
     #[error("{context} was cancelled")]
     Cancelled { context: &'static str },
+    /// A quaternion that is not a rotation: zero, or (unless asked to normalize) not unit norm.
+    #[error(
+        "{name}[{index}] has the quaternion (w, x, y, z) = {value} of norm {norm}: {requirement}"
+    )]
+    Quaternion {
+        name: &'static str,
+        /// The sample (row) index.
+        index: usize,
+        value: String,
+        norm: f64,
+        requirement: &'static str,
+    },
     /// The input was valid but the computation failed (e.g. a matrix that is not positive definite).
     #[error("numerical failure in {context}: {detail}")]
     Numerical {
