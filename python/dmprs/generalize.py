@@ -85,6 +85,11 @@ class Generalizer:
             raise InvalidInputError(
                 f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
             )
+        if method == "lwr-gp" and len(np.unique(db.queries, axis=0)) < len(db):
+            raise InvalidInputError(
+                "method 'lwr-gp' cannot use repeated queries (its GP needs distinct inputs); add "
+                "repeats with on_duplicate='replace', or use method 'linear', which averages them"
+            )
         demos = [
             (d.trajectory.t, d.trajectory.y, d.trajectory.yd, d.trajectory.ydd) for d in db
         ]
