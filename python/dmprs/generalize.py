@@ -13,11 +13,18 @@ from dmprs._arrays import as_count, as_query, as_scalar
 from dmprs.database import Database
 from dmprs.dmp import DMP, _constants
 from dmprs.errors import InvalidInputError
+from dmprs.triangulation import PiecewiseLinear
 
 __all__ = ["Generalizer"]
 
 _METHODS = ("linear", "lwr-gp")
 _KERNELS = ("tricube", "gaussian")
+
+
+def _needs_triangulation(queries: NDArray[np.float64]) -> bool:
+    """More demos than one simplex (n + 1), or repeated queries: the core's "linear" cannot."""
+    distinct = len(np.unique(queries, axis=0))
+    return distinct > queries.shape[1] + 1 or distinct < len(queries)
 
 
 class Generalizer:
@@ -32,7 +39,11 @@ class Generalizer:
     ``a = (q - q_1) / (q_2 - q_1)``. For an n-D query it uses barycentric coordinates, so it
     needs 2 to n + 1 demos with affinely independent queries (a segment, a triangle, ...); with
     fewer than n + 1 it is constant along directions orthogonal to the demos' affine hull (it uses
-    the projection of q onto it). It reproduces each demo exactly.
+    the projection of q onto it). It reproduces each demo exactly. With more than n + 1 demos
+    (a growing database), repeated queries, or ``triangulate=True``, it is piecewise linear on a
+    triangulation of the queries (sorted intervals in 1-D, Delaunay in n-D), extrapolated
+    affinely from the nearest interval or simplex, and averages repeats
+    (:mod:`dmprs.triangulation`, docs/growing.md); for <= n + 1 distinct demos both agree.
 
     ``method="lwr-gp"`` (Ude et al. 2010, docs/method.md §3.2): the weights by locally weighted
     regression, one weighted least-squares problem over the data of all demos with one
@@ -72,6 +83,7 @@ class Generalizer:
         gp_noise: float = 1e-4,
         gp_optimize: bool | None = None,
         gp_restarts: int = 4,
+        triangulate: bool | None = None,
     ) -> None:
         if not isinstance(db, Database):
             raise InvalidInputError(f"db is a {type(db).__name__}; expected a dmprs.Database")
@@ -93,6 +105,13 @@ class Generalizer:
         demos = [
             (d.trajectory.t, d.trajectory.y, d.trajectory.yd, d.trajectory.ydd) for d in db
         ]
+        self._core: _core.Generalizer | PiecewiseLinear
+        if method == "linear" and (triangulate or (triangulate is None and _needs_triangulation(db.queries))):
+            dmps = [DMP.fit(t, y, as_count(n_basis, "n_basis", 2), yd, ydd, alpha_z=alpha_z, beta_z=beta_z,
+                            alpha_x=alpha_x, width_factor=width_factor) for t, y, yd, ydd in demos]
+            self._core = PiecewiseLinear(db.queries, dmps)
+            self._db_names = db.query_names
+            return
         self._core = _core.Generalizer(
             db.queries, demos, method,
             n_basis=as_count(n_basis, "n_basis", 2),
