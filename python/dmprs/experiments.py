@@ -62,7 +62,19 @@ def query_learners(low: float | None, high: float | None, scale: float = 1.0,
         "root": lambda q0, **kw: L.IllinoisRootFinder(float(q0[0]), *bracket(), max_trials=max_trials, **kw),
         # constrained-domain policy gradient (eq. 12): finite differences in q, every trial counted
         "pg": lambda q0, **kw: L.PolicyGradient(q0, scale=scale, max_trials=max_trials, **kw),
+        # black-box baseline (dmprs.cmaes): from the same first trial q0, step a quarter of the
+        # search range (or ``scale``), within the search limits when there are any
+        "cma": lambda q0, **kw: _cma(q0, low, high, scale, max_trials, **kw),
     }
+
+
+def _cma(q0: NDArray[np.float64], low: float | None, high: float | None, scale: float, max_trials: int,
+         **kw: Any) -> Any:
+    from dmprs.cmaes import CMAES
+
+    sigma = 0.25 * (high - low) if low is not None and high is not None else scale
+    kw.setdefault("max_trials", max_trials)
+    return CMAES(q0, sigma, first_x0=True, **kw)
 
 
 # --- the analytic task ------------------------------------------------------------------------
