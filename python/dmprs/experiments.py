@@ -72,7 +72,7 @@ def _cma(q0: NDArray[np.float64], low: float | None, high: float | None, scale: 
          **kw: Any) -> Any:
     from dmprs.cmaes import CMAES
 
-    sigma = 0.25 * (high - low) if low is not None and high is not None else scale
+    sigma = kw.pop("sigma0", 0.25 * (high - low) if low is not None and high is not None else scale)
     kw.setdefault("max_trials", max_trials)
     return CMAES(q0, sigma, first_x0=True, **kw)
 
