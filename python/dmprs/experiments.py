@@ -80,14 +80,14 @@ def _cma(q0: NDArray[np.float64], low: float | None, high: float | None, scale: 
 # --- the analytic task ------------------------------------------------------------------------
 
 def analytic_setup(noise: float = 0.0, tol: float = 0.01, desired: float = 1.5,
-                   amplitudes: tuple[float, float] = (0.5, 2.5)) -> ExperimentSetup:
+                   amplitudes: tuple[float, float] = (0.5, 2.5), execution_noise: float = 0.0) -> ExperimentSetup:
     """Two demonstrations (bumps of the given amplitudes, labelled with their outcomes), linear
     generalization, desired outcome ``desired``."""
     from dmprs.database import Database
     from dmprs.generalize import Generalizer
     from dmprs.tasks.analytic import AnalyticTask
 
-    task = AnalyticTask(noise=noise, tol=tol)
+    task = AnalyticTask(noise=noise, tol=tol, execution_noise=execution_noise)
     db = Database(query_names=task.query_names, query_units=task.query_units)
     labels = []
     for a in amplitudes:
@@ -117,7 +117,7 @@ POURING_FIXED_GAIN = 1.0
 
 def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: float = 0.010,
                   liquid_seed: int = 0, demo_seed: int = 0, fixed_gain: float = POURING_FIXED_GAIN,
-                  reseed_liquid: bool = False, cache_dir: str | None = None) -> ExperimentSetup:
+                  reseed_liquid: bool = False, cache_dir: str | None = None, noise: Any = None) -> ExperimentSetup:
     """Pour ``target_volume`` (0.2 l) from a bottle holding ``bottle_volume`` l (docs/method.md §9).
 
     Two scripted demonstrations pour ``target_volume`` from bottles of 0.3 l and 1.0 l (their
@@ -127,13 +127,14 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
     Learners: ``golden`` (default, the paper's choice, paper mode, bracket [0.3, 1.0] l),
     ``fixed`` (eq. 16 with the scalar gain ``fixed_gain`` in l/l) and the generic query learners
     (``error``, ``weighted`` with scale 0.05 l, ``secant``, ``golden-robust``, ``root``).
+    ``noise``: a :class:`dmprs.tasks.noise.Noise` for the trials (the demonstrations stay exact).
     """
     from dmprs.database import Database
     from dmprs.generalize import Generalizer
     from dmprs.tasks.pouring import DEMO_VOLUMES, Pouring, demonstration
 
     task = Pouring(bottle_volume, target_volume=target_volume, tol=tol,
-                   liquid_seed=liquid_seed, reseed_liquid=reseed_liquid)
+                   liquid_seed=liquid_seed, reseed_liquid=reseed_liquid, noise=noise)
     gain = float(fixed_gain)
     if not (np.isfinite(gain) and gain > 0):
         raise InvalidInputError(f"fixed_gain = {fixed_gain!r} must be > 0 l/l")
@@ -163,7 +164,7 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
 
 # --- matchbox flip-up --------------------------------------------------------------------------
 
-def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
+def matchbox_setup(demos: str = "default", noise: Any = None, **config: float) -> ExperimentSetup:
     """Stand the matchbox upright (docs/method.md §8): two scripted strikes labelled with their
     measured outcome angles, linear generalization with N = 25 kernels (the paper's matchbox
     setting), desired query pi/2.
@@ -172,7 +173,8 @@ def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
     ``"both_flipped_back"``: two that flip back, so pi/2 lies outside the demos and the
     generalizer extrapolates (Fig. 7). Learners: ``error`` (default; eq. 16, K = I, the paper's),
     ``weighted`` (eq. 17 with scale 1 rad, recommended for extrapolation), ``secant``, and the
-    bracketing ones between the demos' labels. ``config`` overrides simulation parameters.
+    bracketing ones between the demos' labels. ``config`` overrides simulation parameters;
+    ``noise`` is a :class:`dmprs.tasks.noise.Noise` for the trials (the demos are measured exactly).
     """
     from dmprs.database import Database
     from dmprs.generalize import Generalizer
@@ -180,7 +182,7 @@ def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
 
     if demos not in DEMO_SETS:
         raise InvalidInputError(f"unknown demonstration set {demos!r}; choose from {', '.join(DEMO_SETS)}")
-    task = MatchboxFlip(**config)
+    task = MatchboxFlip(noise, **config)
     db = Database(query_names=task.query_names, query_units=task.query_units)
     labels = []
     for duration in DEMO_SETS[demos]:
