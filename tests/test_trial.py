@@ -106,7 +106,7 @@ def test_a_database_that_refuses_the_success_does_not_lose_the_run():
     s = setup()
 
     class Refusing:
-        def add(self, query, trajectory):
+        def add(self, query, trajectory, *, on_duplicate="refuse"):
             from dmprs.errors import DatabaseError
 
             raise DatabaseError("the database is read-only")

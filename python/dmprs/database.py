@@ -55,6 +55,8 @@ _POSE_KEYS = {
     "query", "t", "position", "quaternion", "velocity", "angular_velocity", "acceleration",
     "angular_acceleration",
 }
+#: what :meth:`Database.add` can do with a query already present
+DUPLICATE_POLICIES = ("refuse", "replace", "keep")
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,10 +87,10 @@ class Database:
     """Demonstrations ``(query, trajectory)`` with named, unit-labelled query dimensions.
 
     ``Database(query_names=("bottle_volume",), query_units=("l",))``: the query of every demo has
-    ``len(query_names)`` entries. All demos must have the same number of DOFs and distinct
-    queries (a generalizer could not tell two demos at the same query apart). The demos are
-    either all joint-space :class:`~dmprs.Trajectory` s or all pose
-    :class:`~dmprs.CartesianTrajectory` s (then :attr:`is_cartesian`).
+    ``len(query_names)`` entries. All demos must have the same number of DOFs. A query that is
+    already present is handled by :meth:`add`'s ``on_duplicate`` policy. The demos are either all
+    joint-space :class:`~dmprs.Trajectory` s or all pose :class:`~dmprs.CartesianTrajectory` s
+    (then :attr:`is_cartesian`).
     """
 
     def __init__(self, query_names: Sequence[str], query_units: Sequence[str] | None = None) -> None:
@@ -139,8 +141,25 @@ class Database:
         *,
         label: str | None = None,
         metadata: Mapping[str, Any] | None = None,
+        on_duplicate: str = "refuse",
     ) -> Demo:
-        """Appends a demonstration and returns its record. ``metadata`` must be JSON-serializable."""
+        """Appends a demonstration and returns its record. ``metadata`` must be JSON-serializable.
+
+        ``on_duplicate`` says what happens when a demo with exactly this query is present:
+
+        * ``"refuse"`` (default): raise :class:`~dmprs.errors.InvalidInputError` and change
+          nothing. The default because the other two silently change what the database means
+          (replace drops a demonstration, keep gives generalizers a repeat to deal with); a
+          caller that grows a database on purpose picks one (``dmprs.learn`` uses "replace").
+        * ``"replace"``: the new demo takes the place (and index) of every demo at that query.
+        * ``"keep"``: both are kept, in order. Generalizer ``"linear"`` averages the DMP
+          parameters of repeats (their mean is the least-squares estimate at that query);
+          ``"lwr-gp"`` refuses repeats with a message saying so.
+        """
+        if on_duplicate not in DUPLICATE_POLICIES:
+            raise InvalidInputError(
+                f"on_duplicate = {on_duplicate!r} is invalid: use one of {DUPLICATE_POLICIES}"
+            )
         q = self._check_query(query)
         if not isinstance(trajectory, (Trajectory, CartesianTrajectory)):
             raise InvalidInputError(
@@ -158,12 +177,12 @@ class Database:
                 f"the trajectory has {trajectory.n_dof} DOFs, but the demonstrations in this "
                 f"database have {self.n_dof}"
             )
-        for k, d in enumerate(self._demos):
-            if np.array_equal(d.query, q):
-                raise InvalidInputError(
-                    f"demonstration {k} already has the query {q.tolist()}; two demonstrations at "
-                    "the same query cannot be generalized"
-                )
+        same = [k for k, d in enumerate(self._demos) if np.array_equal(d.query, q)]
+        if same and on_duplicate == "refuse":
+            raise InvalidInputError(
+                f"demonstration {same[0]} already has the query {q.tolist()}; pass "
+                "on_duplicate='replace' or 'keep' to add another demonstration at the same query"
+            )
         if label is not None and not isinstance(label, str):
             raise InvalidInputError(f"label must be a string or None; got {label!r}")
         meta = dict(metadata or {})
@@ -173,7 +192,12 @@ class Database:
             raise InvalidInputError(f"metadata must be JSON-serializable: {exc}") from None
         q.setflags(write=False)
         demo = Demo(q, trajectory, label, meta)
-        self._demos.append(demo)
+        if same and on_duplicate == "replace":
+            self._demos[same[0]] = demo
+            for k in reversed(same[1:]):
+                del self._demos[k]
+        else:
+            self._demos.append(demo)
         return demo
 
     def __len__(self) -> int:
@@ -289,7 +313,8 @@ class Database:
         for k, entry in enumerate(entries):
             demo = _read_demo(root, mpath, k, entry, db.n_query)
             try:
-                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata)
+                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata,
+                       on_duplicate="keep")  # as saved
             except DmprsError as exc:
                 raise DatabaseError(f"{root / entry['file']}: {exc}") from None
         return db

@@ -15,11 +15,18 @@ from dmprs.database import Database
 from dmprs.dmp import DMP, _constants
 from dmprs.errors import InvalidInputError
 from dmprs.trajectory import CartesianTrajectory, Trajectory
+from dmprs.triangulation import PiecewiseLinear
 
 __all__ = ["Generalizer"]
 
 _METHODS = ("linear", "lwr-gp")
 _KERNELS = ("tricube", "gaussian")
+
+
+def _needs_triangulation(queries: NDArray[np.float64]) -> bool:
+    """More demos than one simplex (n + 1), or repeated queries: the core's "linear" cannot."""
+    distinct = len(np.unique(queries, axis=0))
+    return distinct > queries.shape[1] + 1 or distinct < len(queries)
 
 
 class Generalizer:
@@ -34,7 +41,11 @@ class Generalizer:
     ``a = (q - q_1) / (q_2 - q_1)``. For an n-D query it uses barycentric coordinates, so it
     needs 2 to n + 1 demos with affinely independent queries (a segment, a triangle, ...); with
     fewer than n + 1 it is constant along directions orthogonal to the demos' affine hull (it uses
-    the projection of q onto it). It reproduces each demo exactly.
+    the projection of q onto it). It reproduces each demo exactly. With more than n + 1 demos
+    (a growing database), repeated queries, or ``triangulate=True``, it is piecewise linear on a
+    triangulation of the queries (sorted intervals in 1-D, Delaunay in n-D), extrapolated
+    affinely from the nearest interval or simplex, and averages repeats
+    (:mod:`dmprs.triangulation`, docs/growing.md); for <= n + 1 distinct demos both agree.
 
     ``method="lwr-gp"`` (Ude et al. 2010, docs/method.md §3.2): the weights by locally weighted
     regression, one weighted least-squares problem over the data of all demos with one
@@ -79,6 +90,7 @@ class Generalizer:
         gp_noise: float = 1e-4,
         gp_optimize: bool | None = None,
         gp_restarts: int = 4,
+        triangulate: bool | None = None,
     ) -> None:
         if not isinstance(db, Database):
             raise InvalidInputError(f"db is a {type(db).__name__}; expected a dmprs.Database")
@@ -92,6 +104,24 @@ class Generalizer:
             raise InvalidInputError(
                 f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
             )
+        if method == "lwr-gp" and len(np.unique(db.queries, axis=0)) < len(db):
+            raise InvalidInputError(
+                "method 'lwr-gp' cannot use repeated queries (its GP needs distinct inputs); add "
+                "repeats with on_duplicate='replace', or use method 'linear', which averages them"
+            )
+        self._core: _core.Generalizer | _core.CartesianGeneralizer | PiecewiseLinear
+        self._db_names = db.query_names
+        if method == "linear" and (triangulate or (triangulate is None and _needs_triangulation(db.queries))):
+            if db.is_cartesian:
+                raise InvalidInputError(
+                    f"method 'linear' over {len(db)} pose demonstrations needs a triangulation, which "
+                    f"is implemented for joint-space demonstrations only; use at most "
+                    f"{db.queries.shape[1] + 1} distinct queries or method 'lwr-gp'")
+            dmps = [DMP.fit(tr.t, tr.y, as_count(n_basis, "n_basis", 2), tr.yd, tr.ydd, alpha_z=alpha_z,
+                            beta_z=beta_z, alpha_x=alpha_x, width_factor=width_factor)
+                    for tr in (d.trajectory for d in db) if isinstance(tr, Trajectory)]
+            self._core = PiecewiseLinear(db.queries, dmps)
+            return
         options: dict[str, Any] = dict(
             n_basis=as_count(n_basis, "n_basis", 2),
             **_constants(alpha_z, beta_z, alpha_x, width_factor),
@@ -103,7 +133,6 @@ class Generalizer:
             gp_optimize=None if gp_optimize is None else bool(gp_optimize),
             gp_restarts=as_count(gp_restarts, "gp_restarts", 0),
         )
-        self._core: _core.Generalizer | _core.CartesianGeneralizer
         if db.is_cartesian:
             poses = [
                 (tr.t, tr.pose, tr.velocity, tr.acceleration, tr.angular_velocity, tr.angular_acceleration)

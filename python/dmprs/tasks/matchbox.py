@@ -35,6 +35,7 @@ from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
 from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
+from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
 if TYPE_CHECKING:
@@ -75,10 +76,15 @@ def strike(duration: float, cfg: _core.MatchboxConfig | None = None, dt: float =
 
 
 class MatchboxAdapter(BaseAdapter):
-    """The Rapier matchbox scene behind the adapter interface (deterministic: ``reset``'s seed
-    has nothing to vary)."""
+    """The Rapier matchbox scene behind the adapter interface. Deterministic unless ``noise``
+    (:class:`dmprs.tasks.noise.Noise`: fingertip tracking error in m, friction and restitution
+    perturbed by ``contact``, ``outcome_angle`` and ``eps18`` measured with ``measurement`` rad),
+    drawn from ``reset``'s seed."""
 
-    def __init__(self, **config_overrides: float) -> None:
+    def __init__(self, noise: Noise | None = None, **config_overrides: float) -> None:
+        self.noise = noise or Noise()
+        self._overrides = config_overrides
+        self._rng = Noise.rng(0)
         self.config = config(**config_overrides)
         c: dict[str, Any] = self.config.to_dict()
         (x0, z0), _ = self.config.default_strike()
@@ -114,10 +120,24 @@ class MatchboxAdapter(BaseAdapter):
         return list(_core.matchbox_check(trajectory.t, np.ascontiguousarray(trajectory.y[:, 0]),
                                          np.ascontiguousarray(trajectory.y[:, 1]), self.config))
 
+    def _reset(self, seed: int | None) -> None:
+        self._rng = Noise.rng(seed)
+
     def _execute(self, trajectory: Trajectory) -> Outcome:
+        cfg, noise = self.config, self.noise
+        if not noise.off:
+            trajectory = noise.track(trajectory, self._rng)
+            if noise.contact:
+                base: dict[str, Any] = cfg.to_dict()
+                cfg = config(**{**self._overrides, "friction": base["friction"] * noise.factor(self._rng),
+                                "restitution": base["restitution"] * noise.factor(self._rng)})
         ep = _core.matchbox_simulate(trajectory.t, np.ascontiguousarray(trajectory.y[:, 0]),
-                                     np.ascontiguousarray(trajectory.y[:, 1]), self.config)
-        return Outcome(Status.OK, signals=_signals(ep), executed=trajectory)
+                                     np.ascontiguousarray(trajectory.y[:, 1]), cfg)
+        signals = _signals(ep)
+        if noise.measurement:
+            signals["outcome_angle"] = noise.measure(signals["outcome_angle"], self._rng)
+            signals["eps18"] = signals["outcome_angle"] - math.pi / 2
+        return Outcome(Status.OK, signals=signals, executed=trajectory)
 
 
 def _signals(ep: dict) -> dict:
@@ -140,8 +160,8 @@ class MatchboxFlip(Task):
     query_units = ("rad",)
     sign = 1.0
 
-    def __init__(self, **config_overrides: float) -> None:
-        super().__init__(MatchboxAdapter(**config_overrides))
+    def __init__(self, noise: Noise | None = None, **config_overrides: float) -> None:
+        super().__init__(MatchboxAdapter(noise, **config_overrides))
 
     adapter: MatchboxAdapter
 
@@ -158,9 +178,13 @@ class MatchboxFlip(Task):
     def demonstration(self, duration: float) -> tuple[NDArray[np.float64], Trajectory]:
         """A scripted strike and its label, the outcome angle it measurably produced."""
         traj = strike(duration, self.adapter.config)
-        with self.adapter:
-            self.adapter.reset(seed=0)
-            outcome = self.adapter.execute(traj)
+        noise, self.adapter.noise = self.adapter.noise, Noise()  # a demonstration is measured exactly
+        try:
+            with self.adapter:
+                self.adapter.reset(seed=0)
+                outcome = self.adapter.execute(traj)
+        finally:
+            self.adapter.noise = noise
         if not outcome.ok:
             raise InvalidInputError(f"the demonstration strike of {duration} s was {outcome.status.value}: {outcome.message}")
         return self.measure(outcome), traj
