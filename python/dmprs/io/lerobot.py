@@ -56,7 +56,7 @@ def _jsonl(path: Path) -> list[dict[str, Any]]:
 
 
 def _parquet_rows(paths: Sequence[Path]) -> list[dict[str, Any]]:
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # type: ignore[import-untyped]
 
     rows: list[dict[str, Any]] = []
     for p in paths:
@@ -108,7 +108,7 @@ def read_lerobot(root: str | Path, column: str = "observation.state", *,
     ``dims`` picks its components by the names ``meta/info.json`` gives them; ``episodes`` picks
     episodes by index.
     """
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # type: ignore[import-untyped]
 
     base = Path(root)
     info_path = base / "meta" / "info.json"

@@ -33,12 +33,11 @@ def resample(trajectory: Trajectory, rate: float, *, start_at_zero: bool = True)
             "demonstration needs at least 3 (raise the rate)")
     t_new = t[0] + np.arange(n) * dt
 
-    def interp(y: NDArray[np.float64] | None) -> NDArray[np.float64] | None:
-        if y is None:
-            return None
+    def interp(y: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.stack([np.interp(t_new, t, y[:, d]) for d in range(y.shape[1])], axis=1)
 
-    return Trajectory(t_new - t[0] if start_at_zero else t_new, interp(trajectory.y), interp(trajectory.yd))
+    yd = None if trajectory.yd is None else interp(trajectory.yd)
+    return Trajectory(t_new - t[0] if start_at_zero else t_new, interp(trajectory.y), yd)
 
 
 def from_zero(trajectory: Trajectory) -> Trajectory:
