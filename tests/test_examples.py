@@ -24,7 +24,7 @@ def test_bag_to_skill(tmp_path):
     out = load("bag_to_skill").main(tmp_path)
     assert out["movements"] == 2 and out["rms"] < 0.01
     np.testing.assert_allclose(out["end"], out["goal"], atol=2e-3)
-    back, names = read_csv_trajectory(out["csv"], "time", ["shoulder", "elbow", "wrist"])
+    back, _ = read_csv_trajectory(out["csv"], "time", ["shoulder", "elbow", "wrist"])
     np.testing.assert_allclose(back.y[-1], out["end"], rtol=0, atol=0)
     assert (out["bag"] / "metadata.yaml").is_file()
 
