@@ -11,7 +11,8 @@ from dmprs.io.lasa import lasa_demos, lasa_shapes
 
 N_BASIS = 50
 #: reproduction RMS (Euclidean, mm) every demonstration stays within, and the median's bound;
-#: the shapes span about 40-90 mm (measured: max 1.42 mm, median 0.024 mm)
+#: the shapes span a few tens of mm (measured: max 1.42 mm, WShape #2, which starts at its peak
+#: speed while a DMP starts at rest; median 0.024 mm)
 MAX_RMS_MM, MEDIAN_RMS_MM = 2.0, 0.05
 
 
