@@ -7,6 +7,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import dmprs
+import dmprs.io
 from dmprs.errors import InvalidInputError
 from dmprs.io import (
     bag_topics,
@@ -60,8 +61,8 @@ def test_joint_states_round_trip_exactly_and_segment(tmp_path, fmt):
     assert bag_topics(path)["/joint_states"] == "sensor_msgs/msg/JointState"
     rec = read_joint_states(path, "/joint_states", joints=JOINTS)
     assert rec.names == JOINTS
-    # header stamps, relative to the bag's first message (the first receive time, 2 ms after t0)
-    np.testing.assert_allclose(rec.trajectory.t, t - 0.0, atol=2e-9)  # bag start = first stamp here
+    # header stamps, in s since the bag's first message (received at T0, as the first stamp)
+    np.testing.assert_allclose(rec.trajectory.t, t, atol=2e-9)
     np.testing.assert_array_equal(rec.trajectory.y, y)  # float64 round trip, reordered by name
     ranges = motion_ranges(rec.trajectory.t, rec.trajectory.y, speed_tol=0.02)
     assert len(ranges) == 2
@@ -147,3 +148,19 @@ def test_tf_chain_and_pose_topic(tmp_path, fmt):
     assert np.all(np.abs(np.sum(half.quaternions * mid.as_quat(scalar_first=True), axis=1)) > 1 - 1e-12)
     with pytest.raises(InvalidInputError, match="no frame 'hand'.*base, tool, world"):
         read_tf(path, "world", "hand")
+
+
+def test_receive_times_when_stamps_are_unset_and_cut_by_ranges(tmp_path):
+    path = bag_path(tmp_path, "ros2-sqlite3")
+    t = np.linspace(0.0, 2.0, 201)
+    with BagWriter(path, "ros2-sqlite3") as w:
+        for tk in t:
+            msg = w.joint_state(0, ["a"], [np.sin(tk)])  # a driver that leaves the stamp at zero
+            w.write("/joint_states", msg, T0 + round(tk * 1e9))
+    rec = read_joint_states(path)
+    np.testing.assert_allclose(rec.trajectory.t, t, atol=2e-9)
+    (first, second) = dmprs.io.cut(rec.trajectory, [(0.0, 0.5), (1.0, 2.0)])
+    assert first.t[0] == 0.0 and len(first) == 51 and len(second) == 101
+    np.testing.assert_array_equal(second.y[:, 0], np.sin(t[100:]))
+    with pytest.raises(InvalidInputError, match="holds 0 samples"):
+        dmprs.io.cut(rec.trajectory, [(5.0, 6.0)])
