@@ -88,6 +88,24 @@ def _metadata(root: Path, version: str) -> tuple[dict[int, dict[str, Any]], dict
     return {int(e["episode_index"]): e for e in episodes}, tasks
 
 
+def _matrix(col: Any, base: Path, column: str) -> np.ndarray:
+    """A frame column as (frames, components) float64: a list column of equal-length lists, or a
+    numeric scalar column."""
+    import pyarrow as pa  # type: ignore[import-untyped]
+    import pyarrow.compute as pc  # type: ignore[import-untyped]
+
+    col = col.combine_chunks()
+    if pa.types.is_list(col.type) or pa.types.is_fixed_size_list(col.type) or pa.types.is_large_list(col.type):
+        lengths = np.unique(pc.list_value_length(col).to_numpy(zero_copy_only=False))
+        if len(lengths) != 1:
+            raise InvalidInputError(f"{base}: column {column!r} has rows of lengths {lengths.tolist()}")
+        flat = pc.list_flatten(col).to_numpy(zero_copy_only=False).astype(np.float64)
+        return flat.reshape(len(col), int(lengths[0]))
+    if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
+        raise InvalidInputError(f"{base}: column {column!r} holds {col.type}, not numbers")
+    return col.to_numpy(zero_copy_only=False).astype(np.float64).reshape(-1, 1)
+
+
 def _scalar_labels(record: dict[str, Any]) -> dict[str, Any]:
     """The JSON-safe scalar fields of an episode record (v3's per-file bookkeeping and
     statistics, "data/chunk_index", "stats/...", are left out)."""
@@ -108,6 +126,7 @@ def read_lerobot(root: str | Path, column: str = "observation.state", *,
     ``dims`` picks its components by the names ``meta/info.json`` gives them; ``episodes`` picks
     episodes by index.
     """
+    import pyarrow as pa  # type: ignore[import-untyped]
     import pyarrow.parquet as pq  # type: ignore[import-untyped]
 
     base = Path(root)
@@ -129,10 +148,16 @@ def read_lerobot(root: str | Path, column: str = "observation.state", *,
         if needed not in schema.names:
             raise InvalidInputError(f"{files[0]}: no {needed!r} column; is this a LeRobot dataset?")
     wanted = [c for c in (column, "timestamp", "episode_index", "frame_index", "task_index") if c in schema.names]
-    frames: dict[int, list[dict[str, Any]]] = {}
-    for p in files:
-        for row in pq.read_table(p, columns=wanted).to_pylist():
-            frames.setdefault(int(row["episode_index"]), []).append(row)
+    table = pa.concat_tables([pq.read_table(p, columns=wanted) for p in files])
+    values = _matrix(table.column(column), base, column)
+    ep_of = table.column("episode_index").to_numpy()
+    frame_of = table.column("frame_index").to_numpy() if "frame_index" in wanted else np.arange(len(ep_of))
+    order = np.lexsort((frame_of, ep_of))  # by episode, then frame
+    ep_of, values = ep_of[order], values[order]
+    times = table.column("timestamp").to_numpy().astype(np.float64)[order]
+    task_of = table.column("task_index").to_numpy()[order] if "task_index" in wanted else None
+    starts = np.flatnonzero(np.concatenate([[True], np.diff(ep_of) != 0]))
+    spans = {int(ep_of[a]): (int(a), int(b)) for a, b in zip(starts, [*starts[1:], len(ep_of)])}
     names = _feature_names(info, column)
     index: list[int] | None = None
     if dims is not None:
@@ -144,26 +169,24 @@ def read_lerobot(root: str | Path, column: str = "observation.state", *,
         index = [names.index(d) for d in dims]
         names = tuple(dims)
     if episodes is not None:
-        absent = [e for e in episodes if e not in frames]
+        absent = [e for e in episodes if e not in spans]
         if absent:
             raise InvalidInputError(
-                f"{base}: no episode {absent[0]}; the dataset has episodes {sorted(frames)}")
+                f"{base}: no episode {absent[0]}; the dataset has episodes {sorted(spans)}")
     records, tasks = _metadata(base, version)
     out = []
-    for ep in sorted(frames) if episodes is None else list(episodes):
-        rows = sorted(frames[ep], key=lambda r: r.get("frame_index", 0))
-        y = np.asarray([np.atleast_1d(np.asarray(r[column], dtype=np.float64)) for r in rows])
-        if index is not None:
-            y = y[:, index]
-        t = np.asarray([r["timestamp"] for r in rows], dtype=np.float64)
+    for ep in sorted(spans) if episodes is None else list(episodes):
+        lo, hi = spans[ep]
+        y = values[lo:hi] if index is None else values[lo:hi][:, index]
+        t = times[lo:hi]
         try:
             traj = Trajectory(t - t[0], y)
         except DmprsError as exc:
             raise InvalidInputError(f"{base}: episode {ep}: {exc}") from None
         labels = _scalar_labels(records.get(ep, {}))
         labels["episode_index"] = ep
-        if "task_index" in rows[0]:
-            labels["task_index"] = int(rows[0]["task_index"])
+        if task_of is not None:
+            labels["task_index"] = int(task_of[lo])
             if labels["task_index"] in tasks:
                 labels["task"] = tasks[labels["task_index"]]
         if "task" not in labels and records.get(ep, {}).get("tasks"):
