@@ -176,7 +176,9 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
         db.save(out)
     except DmprsError as exc:
         raise click.ClickException(str(exc)) from None
-    click.echo(f"{len(db)} demonstrations ({', '.join(d.label or '' for d in db)}) written to {out}")
+    labels = [d.label or "" for d in db]
+    shown = ", ".join(labels[:8]) + (f", ... {labels[-1]}" if len(labels) > 8 else "")
+    click.echo(f"{len(db)} demonstrations ({shown}) written to {out}")
 
 
 @main.command("plot")
