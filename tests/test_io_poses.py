@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation, Slerp
 
 from dmprs.errors import InvalidInputError
-from dmprs.io.poses import PoseTrajectory, quat_multiply, quat_rotate
+from dmprs.io.poses import PoseTrajectory, quat_multiply, quat_rotate, split_poses_at_rest
 
 
 def smooth_rotations(seed: int, n: int = 40) -> Rotation:
@@ -60,3 +60,19 @@ def test_bad_poses_are_named():
         PoseTrajectory([0, 1], np.zeros((2, 7)))
     with pytest.raises(InvalidInputError, match="strictly increasing"):
         PoseTrajectory([0, 0], np.tile([0, 0, 0, 1.0, 0, 0, 0], (2, 1)))
+
+
+def test_pose_recordings_are_cut_at_rests_in_position_and_orientation():
+    t = np.arange(0.0, 5.0, 0.01)
+    s1 = np.clip((t - 0.5) / 1.0, 0, 1)
+    s2 = np.clip((t - 2.5) / 1.5, 0, 1)
+    m1, m2 = (10 * s**3 - 15 * s**4 + 6 * s**5 for s in (s1, s2))
+    # first a translation, then a pure rotation (no translation at all)
+    rot = Rotation.from_euler("z", 1.2 * m2[:, None]).as_quat(scalar_first=True)
+    pt = PoseTrajectory(t, np.hstack([np.stack([0.3 * m1, 0 * t, 0 * t], 1), rot]))
+    pieces = split_poses_at_rest(pt, speed_tol=0.01, angular_speed_tol=0.02)
+    assert len(pieces) == 2 and all(p.t[0] == 0.0 for p in pieces)
+    assert abs(pieces[0].duration - 1.0) < 0.1 and abs(pieces[1].duration - 1.5) < 0.1
+    np.testing.assert_allclose(np.ptp(pieces[1].positions, axis=0), 0.0, atol=1e-15)
+    with pytest.raises(InvalidInputError, match="no movement faster"):
+        split_poses_at_rest(pt, speed_tol=10.0, angular_speed_tol=10.0)

@@ -139,3 +139,36 @@ class PoseTrajectory:
     def __repr__(self) -> str:
         frames = f", {self.child_frame} in {self.frame}" if self.frame or self.child_frame else ""
         return f"PoseTrajectory(n_samples={self.n_samples}, duration={self.duration:.6g} s{frames})"
+
+
+def angular_speed(t: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """|omega| (rad/s) per sample from consecutive unit quaternions: the rotation angle between
+    neighbours over their time step (averaged at inner samples)."""
+    step = 2 * np.arccos(np.abs(np.sum(q[1:] * q[:-1], axis=1)).clip(0.0, 1.0)) / np.diff(t)
+    return np.concatenate([[step[0]], (step[1:] + step[:-1]) / 2, [step[-1]]])
+
+
+def split_poses_at_rest(poses: PoseTrajectory, *, speed_tol: float, angular_speed_tol: float,
+                        min_rest: float = 0.2, min_duration: float = 0.3) -> list[PoseTrajectory]:
+    """The movements of a long pose recording: where the linear speed exceeds ``speed_tol`` (m/s)
+    or the angular speed ``angular_speed_tol`` (rad/s), cut as :func:`dmprs.io.split_at_rest`
+    cuts joint recordings; each with times from 0."""
+    from dmprs.io.segment import moving_ranges
+
+    tol = as_scalar(speed_tol, "speed_tol", positive=True)
+    ang = as_scalar(angular_speed_tol, "angular_speed_tol", positive=True)
+    if poses.n_samples < 3:
+        raise InvalidInputError(f"a pose recording of {poses.n_samples} samples has no movement to cut")
+    linear = np.linalg.norm(np.gradient(poses.positions, poses.t, axis=0), axis=1)
+    moving = (linear > tol) | (angular_speed(poses.t, poses.quaternions) > ang)
+    ranges = moving_ranges(poses.t, moving, as_scalar(min_rest, "min_rest"),
+                           as_scalar(min_duration, "min_duration"))
+    if not ranges:
+        raise InvalidInputError(
+            f"no movement faster than {tol:g} m/s or {ang:g} rad/s for at least {min_duration:g} s "
+            f"in a pose recording of {poses.duration:.4g} s")
+    out = []
+    for start, stop in ranges:
+        piece = poses.between(start, stop)
+        out.append(PoseTrajectory(piece.t - piece.t[0], piece.poses, poses.frame, poses.child_frame))
+    return out

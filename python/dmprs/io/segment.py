@@ -76,7 +76,13 @@ def motion_ranges(t: NDArray[np.float64], y: NDArray[np.float64], *, speed_tol: 
     if len(tt) < 3:
         return []
     speed = np.linalg.norm(np.gradient(yy, tt, axis=0), axis=1)
-    moving = np.concatenate([[False], speed > tol, [False]])
+    return moving_ranges(tt, speed > tol, rest, shortest)
+
+
+def moving_ranges(tt: NDArray[np.float64], is_moving: NDArray[np.bool_], rest: float,
+                  shortest: float) -> list[tuple[float, float]]:
+    """The ranges of :func:`motion_ranges` from a per-sample moving flag."""
+    moving = np.concatenate([[False], is_moving, [False]])
     edges = np.flatnonzero(np.diff(moving.astype(np.int8)))
     runs = [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2])]  # inclusive indices
     merged: list[tuple[int, int]] = []
