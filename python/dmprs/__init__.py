@@ -6,6 +6,7 @@ The numerical core is Rust (``dmprs._core``); this package is the API users impo
 
 from dmprs import learners
 from dmprs._core import __version__
+from dmprs.cartesian import CartesianDMP
 from dmprs.database import Database, Demo
 from dmprs.dmp import DMP, rollout_batch
 from dmprs.errors import (
@@ -18,11 +19,13 @@ from dmprs.errors import (
 )
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 from dmprs.learning import LearningResult, learn
 from dmprs import adapters, tasks  # noqa: E402 - they build on the classes above
 
 __all__ = [
+    "CartesianDMP",
+    "CartesianTrajectory",
     "DMP",
     "Database",
     "DatabaseError",

@@ -1,6 +1,6 @@
 # Type stubs for the Rust extension dmprs._core (crates/py-bindings). The documented API is in
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
-from typing import Any
+from typing import Any, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -75,6 +75,87 @@ def rollout_batch(
     until_rest: bool = False,
     rest_tol: float = 1e-4,
 ) -> list[_TrajectoryArrays]: ...
+
+_CartesianArrays = tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+]
+
+@final
+class CartesianDmp:
+    """Position + unit-quaternion DMP of crates/dmp-core/src/cartesian.rs; documented by
+    dmprs.cartesian. Rollouts give (t, position, quaternion, velocity, angular_velocity,
+    acceleration, angular_acceleration)."""
+
+    def __new__(
+        cls,
+        weights: NDArray[np.float64],
+        goal: NDArray[np.float64],
+        start: NDArray[np.float64],
+        tau: float,
+        *,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+    ) -> CartesianDmp: ...
+    @staticmethod
+    def fit(
+        t: NDArray[np.float64],
+        pose: NDArray[np.float64],
+        velocity: NDArray[np.float64] | None,
+        acceleration: NDArray[np.float64] | None,
+        angular_velocity: NDArray[np.float64] | None,
+        angular_acceleration: NDArray[np.float64] | None,
+        *,
+        normalize: bool,
+        n_basis: int,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+    ) -> CartesianDmp: ...
+    def rollout(
+        self, dt: float, duration: float | None = None, until_rest: bool = False, rest_tol: float = 1e-4
+    ) -> _CartesianArrays: ...
+    def with_goal(self, goal: NDArray[np.float64]) -> CartesianDmp: ...
+    def with_start(self, start: NDArray[np.float64]) -> CartesianDmp: ...
+    def with_tau(self, tau: float) -> CartesianDmp: ...
+    @property
+    def weights(self) -> NDArray[np.float64]: ...
+    @property
+    def goal(self) -> NDArray[np.float64]: ...
+    @property
+    def start(self) -> NDArray[np.float64]: ...
+    @property
+    def tau(self) -> float: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def alpha_z(self) -> float: ...
+    @property
+    def beta_z(self) -> float: ...
+    @property
+    def alpha_x(self) -> float: ...
+    @property
+    def width_factor(self) -> float: ...
+    @property
+    def centers(self) -> NDArray[np.float64]: ...
+    @property
+    def widths(self) -> NDArray[np.float64]: ...
+
+def rollout_batch_cartesian(
+    dmps: list[CartesianDmp],
+    dt: float,
+    duration: float | None = None,
+    until_rest: bool = False,
+    rest_tol: float = 1e-4,
+) -> list[_CartesianArrays]: ...
 
 class Learner:
     """Every ask/tell learner of crates/learner; built and documented by dmprs.learners."""

@@ -81,6 +81,18 @@ pub enum Error {
     /// An error in the data of one demonstration.
     #[error("demonstration {index}: {source}")]
     InDemo { index: usize, source: Box<Error> },
+    /// A quaternion that is not a rotation: zero, or (unless asked to normalize) not unit norm.
+    #[error(
+        "{name}[{index}] has the quaternion (w, x, y, z) = {value} of norm {norm}: {requirement}"
+    )]
+    Quaternion {
+        name: &'static str,
+        /// The sample (row) index.
+        index: usize,
+        value: String,
+        norm: f64,
+        requirement: &'static str,
+    },
     /// The input was valid but the computation failed (e.g. a matrix that is not positive definite).
     #[error("numerical failure in {context}: {detail}")]
     Numerical {

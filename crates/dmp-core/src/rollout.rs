@@ -12,7 +12,7 @@ pub const MAX_VALUES: usize = 20_000_000;
 /// How far past `duration` an `until_rest` rollout may run, in units of tau. The spring settles
 /// with time constant tau / 24 and the forcing decays as exp(-alpha_x t / tau), so rest within the
 /// default tolerance comes long before this.
-const REST_HORIZON_TAUS: f64 = 50.0;
+pub(crate) const REST_HORIZON_TAUS: f64 = 50.0;
 
 /// When and how finely to integrate.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,7 +66,7 @@ impl Trajectory {
 
 /// Number of Euler steps covering `duration`: `duration / dt` rounded when it is an integer up to
 /// rounding error, else rounded up, so the rollout never stops short.
-fn n_steps(duration: f64, dt: f64) -> f64 {
+pub(crate) fn n_steps(duration: f64, dt: f64) -> f64 {
     let r = duration / dt;
     if (r - r.round()).abs() <= 1e-9 * r.max(1.0) {
         r.round()
