@@ -16,6 +16,7 @@ from dmprs.io import (
     read_poses,
     read_tf,
     resample,
+    resample_poses,
     split_at_rest,
 )
 from tests.bag_writers import FORMATS, BagWriter, bag_path
@@ -133,19 +134,18 @@ def test_tf_chain_and_pose_topic(tmp_path, fmt):
     r_tool = Rotation.from_quat(tool[:, 3:], scalar_first=True)
     want_pos = base[:3] + r_base.apply(tool[:, :3])
     want_rot = r_base * r_tool
-    np.testing.assert_allclose(got.positions, want_pos, atol=1e-12)
+    np.testing.assert_allclose(got.position, want_pos, atol=1e-12)
     # same rotation (q and -q are equal), and the stored signs are continuous
-    assert np.all(np.abs(np.sum(got.quaternions * want_rot.as_quat(scalar_first=True), axis=1)) > 1 - 1e-12)
-    assert np.all(np.sum(got.quaternions[1:] * got.quaternions[:-1], axis=1) > 0)
+    assert np.all(np.abs(np.sum(got.quaternion * want_rot.as_quat(scalar_first=True), axis=1)) > 1 - 1e-12)
+    assert np.all(np.sum(got.quaternion[1:] * got.quaternion[:-1], axis=1) > 0)
     back = read_tf(path, "tool", "world")  # the inverse chain
     inv = want_rot.inv()
-    np.testing.assert_allclose(back.positions, -inv.apply(want_pos), atol=1e-12)
+    np.testing.assert_allclose(back.position, -inv.apply(want_pos), atol=1e-12)
     poses = read_poses(path, "/tool_pose")
-    assert poses.frame == "world"
-    np.testing.assert_allclose(poses.poses, tool * np.sign(tool[:, 3:4]), atol=1e-15)
-    half = poses.resample(40.0)  # interpolates between samples (every 50 ms) at 25 ms
+    np.testing.assert_allclose(poses.pose, tool * np.sign(tool[:, 3:4]), atol=1e-15)
+    half = resample_poses(poses, 40.0)  # interpolates between samples (every 50 ms) at 25 ms
     mid = Rotation.from_euler("x", 0.8 * half.t[:, None])
-    assert np.all(np.abs(np.sum(half.quaternions * mid.as_quat(scalar_first=True), axis=1)) > 1 - 1e-12)
+    assert np.all(np.abs(np.sum(half.quaternion * mid.as_quat(scalar_first=True), axis=1)) > 1 - 1e-12)
     with pytest.raises(InvalidInputError, match="no frame 'hand'.*base, tool, world"):
         read_tf(path, "world", "hand")
 
@@ -164,3 +164,30 @@ def test_receive_times_when_stamps_are_unset_and_cut_by_ranges(tmp_path):
     np.testing.assert_array_equal(second.y[:, 0], np.sin(t[100:]))
     with pytest.raises(InvalidInputError, match="holds 0 samples"):
         dmprs.io.cut(rec.trajectory, [(5.0, 6.0)])
+
+
+def test_a_tf_recording_fitted_by_a_cartesian_dmp(tmp_path):
+    """Poses read from TF are what CartesianDMP fits: it reproduces them and moves its goal."""
+    t = np.linspace(0.0, 2.0, 201)
+    s = min_jerk(t / 2.0)
+    base, _ = true_chain(t)
+    rot = Rotation.from_rotvec(np.outer(s, [0.3, -0.6, 0.9]))
+    tool = np.hstack([np.stack([0.2 * s, 0.1 * s, -0.05 * s], axis=1), rot.as_quat(scalar_first=True)])
+    path = bag_path(tmp_path, "ros2-mcap")
+    with BagWriter(path, "ros2-mcap") as w:
+        w.write("/tf_static", w.tf_message(T0, [("world", "base", base)]), T0)
+        for tk, pk in zip(t, tool):
+            ns = T0 + round(tk * 1e9)
+            w.write("/tf", w.tf_message(ns, [("base", "tool", pk)]), ns)
+    demo = read_tf(path, "world", "tool")
+    assert isinstance(demo, dmprs.CartesianTrajectory)
+    dmp = dmprs.CartesianDMP.fit(demo.t, demo.pose, n_basis=30)
+    out = dmp.rollout(dt=0.001, duration=demo.duration)
+    idx = np.searchsorted(out.t, demo.t - 1e-9).clip(0, len(out.t) - 1)
+    assert np.sqrt(np.mean(np.sum((out.position[idx] - demo.position) ** 2, axis=1))) < 2e-3  # m
+    angle = 2 * np.arccos(np.abs(np.sum(out.quaternion[idx] * demo.quaternion, axis=1)).clip(0, 1))
+    assert angle.max() < 0.02  # rad
+    goal = demo.pose[-1].copy()
+    goal[:3] += [0.05, 0.0, 0.02]
+    moved = dmp.with_goal(goal).rollout(dt=0.001, until_rest=True)
+    np.testing.assert_allclose(moved.position[-1], goal[:3], atol=1e-3)

@@ -1,22 +1,26 @@
-"""Pose trajectories: positions and unit quaternions over time, as ``(T, 7)`` arrays
-``x, y, z, qw, qx, qy, qz`` (the layout :class:`dmprs.CartesianDMP` fits).
+"""Recorded poses as :class:`~dmprs.CartesianTrajectory` (what :class:`dmprs.CartesianDMP`
+fits): positions and unit quaternions, ``pose`` (T, 7) = ``x, y, z, qw, qx, qy, qz``.
 
-Quaternions are stored scalar first, normalized, and on one hemisphere from sample to sample
-(``q`` and ``-q`` are the same rotation; a sign flip between two samples would look like a jump
-of 2 pi to anything that differentiates the orientation). ROS messages store them scalar last.
+Readers build them with :func:`pose_trajectory`, which normalizes the quaternions and puts them
+on one hemisphere from sample to sample (``q`` and ``-q`` are the same rotation; a sign flip
+between two samples would look like a jump of 2 pi to anything that differentiates the
+orientation). ROS messages store quaternions scalar last; dmprs scalar first. The quaternion
+helpers here are for resampling (slerp) and composing TF chains.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_float_array, as_scalar, check_finite, check_increasing
 from dmprs.errors import InvalidInputError
+from dmprs.trajectory import CartesianTrajectory
 
-__all__ = ["PoseTrajectory", "quat_conjugate", "quat_multiply", "quat_rotate", "slerp"]
+__all__ = [
+    "pose_trajectory", "poses_between", "quat_conjugate", "quat_multiply", "quat_rotate", "resample_poses", "slerp",
+    "split_poses_at_rest",
+]
 
 
 def quat_multiply(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -74,71 +78,41 @@ def interpolate_poses(t: NDArray[np.float64], poses: NDArray[np.float64],
     return np.hstack([pos, slerp(poses[j, 3:], poses[j + 1, 3:], s)])
 
 
-@dataclass(frozen=True, eq=False)
-class PoseTrajectory:
-    """Poses ``(T, 7)`` = x, y, z (m), qw, qx, qy, qz at times ``t`` (T,) (s), of ``child_frame``
-    in ``frame``. Quaternions are normalized and made sign-continuous on construction."""
+def pose_trajectory(t: ArrayLike, poses: ArrayLike) -> CartesianTrajectory:
+    """A :class:`~dmprs.CartesianTrajectory` from recorded poses (T, 7) ``x, y, z, qw, qx, qy,
+    qz``: quaternions normalized (recordings store them to a few digits) and made sign-continuous."""
+    tt = as_float_array(t, "t", 1)
+    check_increasing(tt)
+    p = as_float_array(poses, "poses", 2)
+    if p.shape != (tt.shape[0], 7):
+        raise InvalidInputError(
+            f"poses has shape {p.shape}, expected ({tt.shape[0]}, 7): x, y, z, qw, qx, qy, qz per sample")
+    check_finite(p, "poses")
+    norms = np.linalg.norm(p[:, 3:], axis=1)
+    if (norms < 1e-9).any():
+        j = int(np.argmax(norms < 1e-9))
+        raise InvalidInputError(f"poses[{j}] has a zero quaternion; orientations must be rotations")
+    return CartesianTrajectory(tt, p[:, :3], _continuous(p[:, 3:] / norms[:, None]))
 
-    t: NDArray[np.float64]
-    poses: NDArray[np.float64]
-    frame: str = ""
-    child_frame: str = ""
 
-    def __post_init__(self) -> None:
-        t = as_float_array(self.t, "t", 1)
-        check_increasing(t)
-        p = as_float_array(self.poses, "poses", 2)
-        if p.shape != (t.shape[0], 7):
-            raise InvalidInputError(
-                f"poses has shape {p.shape}, expected ({t.shape[0]}, 7): x, y, z, qw, qx, qy, qz per sample")
-        check_finite(p, "poses")
-        norms = np.linalg.norm(p[:, 3:], axis=1)
-        if (norms < 1e-9).any():
-            j = int(np.argmax(norms < 1e-9))
-            raise InvalidInputError(f"poses[{j}] has a zero quaternion; orientations must be rotations")
-        p = np.hstack([p[:, :3], _continuous(p[:, 3:] / norms[:, None])])
-        for name, arr in (("t", t), ("poses", p)):
-            arr = arr.copy()
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
+def resample_poses(trajectory: CartesianTrajectory, rate: float) -> CartesianTrajectory:
+    """Uniform samples at ``rate`` Hz from the first one (positions linearly, orientations by
+    slerp), times from 0; recorded velocities are dropped."""
+    dt = 1.0 / as_scalar(rate, "rate", positive=True)
+    t = trajectory.t
+    t_new = t[0] + np.arange(int(np.floor(trajectory.duration / dt + 1e-9)) + 1) * dt
+    return pose_trajectory(t_new - t[0], interpolate_poses(t, trajectory.pose, t_new))
 
-    @property
-    def positions(self) -> NDArray[np.float64]:
-        """(T, 3) in m."""
-        return self.poses[:, :3]
 
-    @property
-    def quaternions(self) -> NDArray[np.float64]:
-        """(T, 4) scalar first."""
-        return self.poses[:, 3:]
-
-    @property
-    def n_samples(self) -> int:
-        return int(self.t.shape[0])
-
-    @property
-    def duration(self) -> float:
-        return float(self.t[-1] - self.t[0])
-
-    def __len__(self) -> int:
-        return self.n_samples
-
-    def resample(self, rate: float) -> PoseTrajectory:
-        """Uniform samples at ``rate`` Hz from t[0] (positions linear, orientations slerp), times
-        from 0."""
-        dt = 1.0 / as_scalar(rate, "rate", positive=True)
-        t_new = self.t[0] + np.arange(int(np.floor(self.duration / dt + 1e-9)) + 1) * dt
-        return PoseTrajectory(t_new - self.t[0], interpolate_poses(self.t, self.poses, t_new),
-                              self.frame, self.child_frame)
-
-    def between(self, start: float, stop: float) -> PoseTrajectory:
-        """The samples with start <= t <= stop."""
-        keep = (self.t >= start) & (self.t <= stop)
-        return PoseTrajectory(self.t[keep], self.poses[keep], self.frame, self.child_frame)
-
-    def __repr__(self) -> str:
-        frames = f", {self.child_frame} in {self.frame}" if self.frame or self.child_frame else ""
-        return f"PoseTrajectory(n_samples={self.n_samples}, duration={self.duration:.6g} s{frames})"
+def poses_between(trajectory: CartesianTrajectory, start: float, stop: float) -> CartesianTrajectory:
+    """The samples with start <= t <= stop, with times from 0."""
+    keep = (trajectory.t >= start) & (trajectory.t <= stop)
+    if keep.sum() < 2:
+        raise InvalidInputError(
+            f"({start:g}, {stop:g}) s holds {int(keep.sum())} samples of a pose recording from "
+            f"{trajectory.t[0]:g} to {trajectory.t[-1]:g} s")
+    t = trajectory.t[keep]
+    return pose_trajectory(t - t[0], trajectory.pose[keep])
 
 
 def angular_speed(t: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -148,8 +122,8 @@ def angular_speed(t: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.
     return np.concatenate([[step[0]], (step[1:] + step[:-1]) / 2, [step[-1]]])
 
 
-def split_poses_at_rest(poses: PoseTrajectory, *, speed_tol: float, angular_speed_tol: float,
-                        min_rest: float = 0.2, min_duration: float = 0.3) -> list[PoseTrajectory]:
+def split_poses_at_rest(poses: CartesianTrajectory, *, speed_tol: float, angular_speed_tol: float,
+                        min_rest: float = 0.2, min_duration: float = 0.3) -> list[CartesianTrajectory]:
     """The movements of a long pose recording: where the linear speed exceeds ``speed_tol`` (m/s)
     or the angular speed ``angular_speed_tol`` (rad/s), cut as :func:`dmprs.io.split_at_rest`
     cuts joint recordings; each with times from 0."""
@@ -159,16 +133,12 @@ def split_poses_at_rest(poses: PoseTrajectory, *, speed_tol: float, angular_spee
     ang = as_scalar(angular_speed_tol, "angular_speed_tol", positive=True)
     if poses.n_samples < 3:
         raise InvalidInputError(f"a pose recording of {poses.n_samples} samples has no movement to cut")
-    linear = np.linalg.norm(np.gradient(poses.positions, poses.t, axis=0), axis=1)
-    moving = (linear > tol) | (angular_speed(poses.t, poses.quaternions) > ang)
+    linear = np.linalg.norm(np.gradient(poses.position, poses.t, axis=0), axis=1)
+    moving = (linear > tol) | (angular_speed(poses.t, poses.quaternion) > ang)
     ranges = moving_ranges(poses.t, moving, as_scalar(min_rest, "min_rest"),
                            as_scalar(min_duration, "min_duration"))
     if not ranges:
         raise InvalidInputError(
             f"no movement faster than {tol:g} m/s or {ang:g} rad/s for at least {min_duration:g} s "
             f"in a pose recording of {poses.duration:.4g} s")
-    out = []
-    for start, stop in ranges:
-        piece = poses.between(start, stop)
-        out.append(PoseTrajectory(piece.t - piece.t[0], piece.poses, poses.frame, poses.child_frame))
-    return out
+    return [poses_between(poses, start, stop) for start, stop in ranges]

@@ -4,7 +4,7 @@ installation needed). ROS 2 bags may be sqlite3 or mcap; ROS 1 bags are ``.bag``
 * ``sensor_msgs/JointState`` topics -> :class:`JointRecording` (a :class:`~dmprs.Trajectory` of
   the chosen joints, in the order asked for),
 * ``geometry_msgs/PoseStamped`` topics and TF (``/tf``, ``/tf_static``) between two frames ->
-  :class:`~dmprs.io.poses.PoseTrajectory`.
+  :class:`~dmprs.CartesianTrajectory` (what :class:`~dmprs.CartesianDMP` fits).
 
 Times are in seconds since the bag's first message (so they keep nanosecond precision and match
 the offsets ``ros2 bag info`` shows). Header stamps are used when the messages have them, the
@@ -25,8 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError
-from dmprs.io.poses import PoseTrajectory, interpolate_poses, quat_conjugate, quat_multiply, quat_rotate
-from dmprs.trajectory import Trajectory
+from dmprs.io.poses import interpolate_poses, pose_trajectory, quat_conjugate, quat_multiply, quat_rotate
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = ["JointRecording", "bag_topics", "read_joint_states", "read_poses", "read_tf"]
 
@@ -158,8 +158,8 @@ def _pose_row(position: Any, orientation: Any) -> list[float]:
     return [position.x, position.y, position.z, orientation.w, orientation.x, orientation.y, orientation.z]
 
 
-def read_poses(path: str | Path, topic: str) -> PoseTrajectory:
-    """The poses of a ``geometry_msgs/PoseStamped`` topic: (T, 7) x, y, z, qw, qx, qy, qz."""
+def read_poses(path: str | Path, topic: str) -> CartesianTrajectory:
+    """The poses of a ``geometry_msgs/PoseStamped`` topic (in the messages' ``header.frame_id``)."""
     with _reader(path) as reader:
         conns = _connections(reader, path, topic, (POSE_STAMPED,))
         msgs = _messages(reader, conns)
@@ -169,8 +169,7 @@ def read_poses(path: str | Path, topic: str) -> PoseTrajectory:
         t = _times(reader, msgs)
     poses = np.array([_pose_row(m.pose.position, m.pose.orientation) for _, m in msgs], dtype=np.float64)
     order = _increasing(t)
-    frame = msgs[0][1].header.frame_id
-    return PoseTrajectory(t[order], poses[order], frame=frame, child_frame=topic)
+    return pose_trajectory(t[order], poses[order])
 
 
 # --- TF ----------------------------------------------------------------------------------------
@@ -216,7 +215,7 @@ def _frame_path(edges: dict[tuple[str, str], Any], frame: str, child: str,
 
 
 def read_tf(path: str | Path, frame: str, child_frame: str,
-            topics: Sequence[str] = ("/tf", "/tf_static")) -> PoseTrajectory:
+            topics: Sequence[str] = ("/tf", "/tf_static")) -> CartesianTrajectory:
     """The pose of ``child_frame`` in ``frame`` over time, from TF messages, through any chain of
     transforms between them (each one interpolated: translations linearly, rotations by slerp).
 
@@ -260,4 +259,4 @@ def read_tf(path: str | Path, frame: str, child_frame: str,
         norm = np.linalg.norm(edge[:, 3:], axis=1, keepdims=True)
         edge = np.hstack([edge[:, :3], edge[:, 3:] / norm])
         pose = _compose(pose, edge if forward else _invert(edge))
-    return PoseTrajectory(times, pose, frame=frame, child_frame=child_frame)
+    return pose_trajectory(times, pose)
