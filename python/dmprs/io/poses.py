@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_float_array, as_scalar, check_finite, check_increasing
 from dmprs.errors import InvalidInputError
+from dmprs.io.segment import moving_ranges
 from dmprs.trajectory import CartesianTrajectory
 
 __all__ = [
@@ -127,8 +128,6 @@ def split_poses_at_rest(poses: CartesianTrajectory, *, speed_tol: float, angular
     """The movements of a long pose recording: where the linear speed exceeds ``speed_tol`` (m/s)
     or the angular speed ``angular_speed_tol`` (rad/s), cut as :func:`dmprs.io.split_at_rest`
     cuts joint recordings; each with times from 0."""
-    from dmprs.io.segment import moving_ranges
-
     tol = as_scalar(speed_tol, "speed_tol", positive=True)
     ang = as_scalar(angular_speed_tol, "angular_speed_tol", positive=True)
     if poses.n_samples < 3:
