@@ -351,3 +351,56 @@ class Generalizer:
     def n_parameters(self) -> int: ...
     @property
     def tau_bounds(self) -> tuple[float, float]: ...
+
+_PoseDemoArrays = tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+]
+
+@final
+class CartesianGeneralizer:
+    """crates/dmp-core/src/cartesian_generalize.rs; built and documented by dmprs.Generalizer.
+    Demos are (t, pose, velocity, acceleration, angular_velocity, angular_acceleration)."""
+
+    def __new__(
+        cls,
+        queries: NDArray[np.float64],
+        demos: list[_PoseDemoArrays],
+        method: str,
+        *,
+        n_basis: int,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+        kernel: str,
+        bandwidth: float,
+        ridge: float,
+        interpolate: bool,
+        gp_noise: float,
+        gp_optimize: bool | None,
+        gp_restarts: int,
+    ) -> CartesianGeneralizer: ...
+    def predict(self, q: NDArray[np.float64]) -> CartesianDmp: ...
+    def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]: ...
+    def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]: ...
+    @property
+    def demo_dmps(self) -> list[CartesianDmp]: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def n_query(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_demos(self) -> int: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def n_parameters(self) -> int: ...
+    @property
+    def tau_bounds(self) -> tuple[float, float]: ...

@@ -10,9 +10,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs._arrays import as_count, as_query, as_scalar
+from dmprs.cartesian import CartesianDMP
 from dmprs.database import Database
 from dmprs.dmp import DMP, _constants
 from dmprs.errors import InvalidInputError
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = ["Generalizer"]
 
@@ -48,6 +50,11 @@ class Generalizer:
     constant blend of method.md §3.2, which mixes a demo with its neighbours even at its own
     query. LWR cannot extrapolate the weights: far from the demos they tend to those of the
     nearest ones (use "linear" to extrapolate, as the paper's Fig. 7 experiment needs).
+
+    Pose demonstrations (:class:`~dmprs.CartesianTrajectory`) work the same way and give a
+    :class:`~dmprs.CartesianDMP`: weights and tau as above, positions like goals and starts, and
+    the goal and start orientations as rotation vectors in the tangent space of demonstration
+    0's goal and start (linear: slerp for two demos; lwr-gp: a GP per tangent coordinate).
 
     Either way, tau(q) must stay within ``(0.2 x`` the shortest, ``5 x`` the longest demo
     duration); a query outside raises :class:`~dmprs.errors.ExtrapolationError`.
@@ -85,11 +92,7 @@ class Generalizer:
             raise InvalidInputError(
                 f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
             )
-        demos = [
-            (d.trajectory.t, d.trajectory.y, d.trajectory.yd, d.trajectory.ydd) for d in db
-        ]
-        self._core = _core.Generalizer(
-            db.queries, demos, method,
+        options: dict[str, Any] = dict(
             n_basis=as_count(n_basis, "n_basis", 2),
             **_constants(alpha_z, beta_z, alpha_x, width_factor),
             kernel=kernel,
@@ -100,18 +103,44 @@ class Generalizer:
             gp_optimize=None if gp_optimize is None else bool(gp_optimize),
             gp_restarts=as_count(gp_restarts, "gp_restarts", 0),
         )
+        self._core: _core.Generalizer | _core.CartesianGeneralizer
+        if db.is_cartesian:
+            poses = [
+                (tr.t, tr.pose, tr.velocity, tr.acceleration, tr.angular_velocity, tr.angular_acceleration)
+                for tr in (d.trajectory for d in db)
+                if isinstance(tr, CartesianTrajectory)
+            ]
+            self._core = _core.CartesianGeneralizer(db.queries, poses, method, **options)
+        else:
+            demos = [
+                (tr.t, tr.y, tr.yd, tr.ydd)
+                for tr in (d.trajectory for d in db)
+                if isinstance(tr, Trajectory)
+            ]
+            self._core = _core.Generalizer(db.queries, demos, method, **options)
         self._db_names = db.query_names
 
     def _query(self, q: ArrayLike) -> NDArray[np.float64]:
         return as_query(q, "q", self._db_names)
 
-    def predict(self, q: ArrayLike) -> DMP:
-        """The DMP for query ``q`` (n,) (a scalar for n = 1)."""
+    @property
+    def is_cartesian(self) -> bool:
+        """True when the demonstrations are poses (:class:`~dmprs.CartesianTrajectory`)."""
+        return isinstance(self._core, _core.CartesianGeneralizer)
+
+    def predict(self, q: ArrayLike) -> DMP | CartesianDMP:
+        """The DMP for query ``q`` (n,) (a scalar for n = 1): a :class:`~dmprs.CartesianDMP`
+        when the demonstrations are poses."""
+        if isinstance(self._core, _core.CartesianGeneralizer):
+            return CartesianDMP._wrap(self._core.predict(self._query(q)))
         return DMP._wrap(self._core.predict(self._query(q)))
 
     def parameters(self, q: ArrayLike) -> NDArray[np.float64]:
         """The generalized parameters flattened as ``[w.ravel() (D*N, row d = DOF d), tau,
-        goal (D), y0 (D)]``, without the tau validity check."""
+        goal (D), y0 (D)]``, without the tau validity check. For poses: ``[w.ravel() (6*N),
+        tau, goal position (3), goal rotation vector (3), start position (3), start rotation
+        vector (3)]``, the rotation vectors in the tangent space of demonstration 0's goal and
+        start orientations (docs/cartesian.md)."""
         return self._core.parameters(self._query(q))
 
     def jacobian(self, q: ArrayLike, rel_step: float = 1e-4) -> NDArray[np.float64]:
@@ -125,8 +154,10 @@ class Generalizer:
         return self._core.jacobian(self._query(q), as_scalar(rel_step, "rel_step", positive=True))
 
     @property
-    def demo_dmps(self) -> list[DMP]:
+    def demo_dmps(self) -> list[DMP] | list[CartesianDMP]:
         """The DMP fitted to each demonstration, in database order."""
+        if isinstance(self._core, _core.CartesianGeneralizer):
+            return [CartesianDMP._wrap(c) for c in self._core.demo_dmps]
         return [DMP._wrap(d) for d in self._core.demo_dmps]
 
     @property
@@ -151,7 +182,7 @@ class Generalizer:
 
     @property
     def n_parameters(self) -> int:
-        """``D * N + 1 + 2 * D``."""
+        """``D * N + 1 + 2 * D``; for poses ``6 * N + 1 + 12`` (see :meth:`parameters`)."""
         return self._core.n_parameters
 
     @property

@@ -9,6 +9,7 @@
 
 pub mod basis;
 pub mod cartesian;
+pub mod cartesian_generalize;
 pub mod design;
 pub mod diff;
 pub mod dmp;
@@ -25,6 +26,7 @@ pub use basis::Basis;
 pub use cartesian::{
     CartesianDemonstration, CartesianDmp, CartesianTrajectory, rollout_batch_cartesian,
 };
+pub use cartesian_generalize::CartesianGeneralizer;
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
 pub use generalize::{Generalizer, LwrGpOptions, Method};

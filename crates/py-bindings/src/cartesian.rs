@@ -1,10 +1,10 @@
-//! `dmprs._core.CartesianDmp` and `rollout_batch_cartesian`: numpy in, numpy out.
-//! `dmprs.CartesianDMP` (Python) wraps these and documents them.
+//! `dmprs._core.CartesianDmp`, `rollout_batch_cartesian` and `CartesianGeneralizer`: numpy in,
+//! numpy out. `dmprs.CartesianDMP` and `dmprs.Generalizer` (Python) wrap these and document them.
 
 use dmp_core::cartesian::POSE_WIDTH;
 use dmp_core::{
-    CartesianDemonstration, CartesianDmp, CartesianTrajectory, DmpConfig, RolloutOptions,
-    rollout_batch_cartesian,
+    CartesianDemonstration, CartesianDmp, CartesianGeneralizer, CartesianTrajectory, DmpConfig,
+    RolloutOptions, rollout_batch_cartesian,
 };
 use nalgebra::{DMatrix, DMatrixView};
 use numpy::{
@@ -15,6 +15,7 @@ use pyo3::prelude::*;
 
 use crate::dmp::time_major;
 use crate::errors::{IntoPyResult, raise};
+use crate::generalize::{parse_method, parse_queries, query, row_major};
 
 /// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
 type CartesianArrays<'py> = (
@@ -261,4 +262,147 @@ pub fn py_rollout_batch_cartesian<'py>(
         .into_iter()
         .map(|tr| trajectory_arrays(py, tr))
         .collect()
+}
+
+/// `(t, pose, velocity, acceleration, angular_velocity, angular_acceleration)` of one demo.
+type PoseDemoArrays<'py> = (
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray2<'py, f64>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+);
+
+#[pyclass(name = "CartesianGeneralizer", module = "dmprs._core", frozen)]
+pub struct PyCartesianGeneralizer {
+    inner: CartesianGeneralizer,
+}
+
+#[pymethods]
+impl PyCartesianGeneralizer {
+    /// `queries` `(M, n)`; `demos` a list of [`PoseDemoArrays`] with `pose` `(T, 7)`.
+    #[new]
+    #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
+                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        queries: PyReadonlyArray2<'_, f64>,
+        demos: Vec<PoseDemoArrays<'_>>,
+        method: &str,
+        n_basis: usize,
+        alpha_z: f64,
+        beta_z: f64,
+        alpha_x: f64,
+        width_factor: f64,
+        kernel: &str,
+        bandwidth: f64,
+        ridge: f64,
+        interpolate: bool,
+        gp_noise: f64,
+        gp_optimize: Option<bool>,
+        gp_restarts: usize,
+    ) -> PyResult<Self> {
+        let method = parse_method(
+            method,
+            kernel,
+            bandwidth,
+            ridge,
+            interpolate,
+            gp_noise,
+            gp_optimize,
+            gp_restarts,
+        )?;
+        let qs = parse_queries(&queries)?;
+        let mut views = Vec::with_capacity(demos.len());
+        for (t, pose, v, a, w, wd) in &demos {
+            let t = t
+                .as_slice()
+                .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
+            views.push(CartesianDemonstration {
+                t,
+                pose: time_major("pose", pose)?,
+                velocity: optional("velocity", v)?,
+                acceleration: optional("acceleration", a)?,
+                angular_velocity: optional("angular_velocity", w)?,
+                angular_acceleration: optional("angular_acceleration", wd)?,
+                normalize: false,
+            });
+        }
+        let config = DmpConfig {
+            n_basis,
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        let inner = py
+            .detach(|| CartesianGeneralizer::new(&qs, &views, config, method))
+            .py_err()?;
+        Ok(Self { inner })
+    }
+
+    fn predict(&self, q: PyReadonlyArray1<'_, f64>) -> PyResult<PyCartesianDmp> {
+        Ok(PyCartesianDmp {
+            inner: self.inner.predict(query(&q)?).py_err()?,
+        })
+    }
+
+    fn parameters<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let p = self.inner.parameters(query(&q)?).py_err()?;
+        Ok(p.as_slice().to_vec().into_pyarray(py))
+    }
+
+    /// `(n_parameters, n)`.
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+        rel_step: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
+        row_major(py, &jac)
+    }
+
+    #[getter]
+    fn demo_dmps(&self) -> Vec<PyCartesianDmp> {
+        self.inner
+            .demo_dmps()
+            .iter()
+            .map(|d| PyCartesianDmp { inner: d.clone() })
+            .collect()
+    }
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.method()
+    }
+    #[getter]
+    fn n_query(&self) -> usize {
+        self.inner.n_query()
+    }
+    #[getter]
+    fn n_dof(&self) -> usize {
+        6
+    }
+    #[getter]
+    fn n_demos(&self) -> usize {
+        self.inner.n_demos()
+    }
+    #[getter]
+    fn n_basis(&self) -> usize {
+        self.inner.config().n_basis
+    }
+    #[getter]
+    fn n_parameters(&self) -> usize {
+        self.inner.n_parameters()
+    }
+    #[getter]
+    fn tau_bounds(&self) -> (f64, f64) {
+        self.inner.tau_bounds()
+    }
 }

@@ -15,9 +15,75 @@ type DemoArrays<'py> = (
     Option<PyReadonlyArray2<'py, f64>>,
 );
 
-fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
+pub(crate) fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
     q.as_slice()
         .map_err(|_| raise("InvalidInputError", "q must be a contiguous array".into()))
+}
+
+/// The generalization method and its options, from the keyword arguments of the constructors.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn parse_method(
+    method: &str,
+    kernel: &str,
+    bandwidth: f64,
+    ridge: f64,
+    interpolate: bool,
+    gp_noise: f64,
+    gp_optimize: Option<bool>,
+    gp_restarts: usize,
+) -> PyResult<Method> {
+    let kernel = match kernel {
+        "tricube" => Kernel::Tricube,
+        "gaussian" => Kernel::Gaussian,
+        other => {
+            return Err(raise(
+                "InvalidInputError",
+                format!("kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"),
+            ));
+        }
+    };
+    Ok(match method {
+        "linear" => Method::Linear,
+        "lwr-gp" => Method::LwrGp(LwrGpOptions {
+            lwr: LwrOptions {
+                kernel,
+                bandwidth,
+                ridge,
+                interpolate,
+            },
+            gp_noise,
+            gp_optimize,
+            gp_restarts,
+        }),
+        other => {
+            return Err(raise(
+                "InvalidInputError",
+                format!("method = {other:?} is invalid: use 'linear' or 'lwr-gp'"),
+            ));
+        }
+    })
+}
+
+/// `(M, n)` queries as one `Vec` per demonstration.
+pub(crate) fn parse_queries(queries: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Vec<f64>>> {
+    let qv = time_major("queries", queries)?;
+    Ok(qv
+        .column_iter()
+        .map(|c| c.iter().copied().collect())
+        .collect())
+}
+
+/// A `p x n` matrix as a C-ordered `(p, n)` array.
+pub(crate) fn row_major<'py>(
+    py: Python<'py>,
+    m: &nalgebra::DMatrix<f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (p, n) = m.shape();
+    let data: Vec<f64> = (0..p)
+        .flat_map(|i| (0..n).map(move |j| (i, j)))
+        .map(|ij| m[ij])
+        .collect();
+    data.into_pyarray(py).reshape([p, n])
 }
 
 #[pyclass(name = "Generalizer", module = "dmprs._core", frozen)]
@@ -50,41 +116,17 @@ impl PyGeneralizer {
         gp_optimize: Option<bool>,
         gp_restarts: usize,
     ) -> PyResult<Self> {
-        let kernel = match kernel {
-            "tricube" => Kernel::Tricube,
-            "gaussian" => Kernel::Gaussian,
-            other => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!("kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"),
-                ));
-            }
-        };
-        let method = match method {
-            "linear" => Method::Linear,
-            "lwr-gp" => Method::LwrGp(LwrGpOptions {
-                lwr: LwrOptions {
-                    kernel,
-                    bandwidth,
-                    ridge,
-                    interpolate,
-                },
-                gp_noise,
-                gp_optimize,
-                gp_restarts,
-            }),
-            other => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!("method = {other:?} is invalid: use 'linear' or 'lwr-gp'"),
-                ));
-            }
-        };
-        let qv = time_major("queries", &queries)?;
-        let qs: Vec<Vec<f64>> = qv
-            .column_iter()
-            .map(|c| c.iter().copied().collect())
-            .collect();
+        let method = parse_method(
+            method,
+            kernel,
+            bandwidth,
+            ridge,
+            interpolate,
+            gp_noise,
+            gp_optimize,
+            gp_restarts,
+        )?;
+        let qs = parse_queries(&queries)?;
         let mut views = Vec::with_capacity(demos.len());
         for (t, y, yd, ydd) in &demos {
             let t = t
@@ -138,12 +180,7 @@ impl PyGeneralizer {
         rel_step: f64,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
-        let (p, n) = jac.shape();
-        let row_major: Vec<f64> = (0..p)
-            .flat_map(|i| (0..n).map(move |j| (i, j)))
-            .map(|ij| jac[ij])
-            .collect();
-        row_major.into_pyarray(py).reshape([p, n])
+        row_major(py, &jac)
     }
 
     #[getter]

@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 #[pymodule]
 mod _core {
     #[pymodule_export]
-    use super::cartesian::{PyCartesianDmp, py_rollout_batch_cartesian};
+    use super::cartesian::{PyCartesianDmp, PyCartesianGeneralizer, py_rollout_batch_cartesian};
     #[pymodule_export]
     use super::dmp::PyDmp;
     #[pymodule_export]
