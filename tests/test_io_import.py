@@ -128,3 +128,36 @@ def test_export_joint_trajectory_bag_reads_back_with_rosbags(tmp_path, storage):
     np.testing.assert_array_equal(back.t, traj.t)
     with pytest.raises(InvalidInputError, match="2 distinct names"):
         write_trajectory_csv(tmp_path / "o.csv", traj, ["j1"])
+
+
+def test_import_poses_from_tf_into_a_database_of_pose_demonstrations(tmp_path):
+    from scipy.spatial.transform import Rotation
+
+    from tests.bag_writers import BagWriter, bag_path
+    from tests.conftest import min_jerk
+    from tests.test_io_rosbag import T0
+
+    t = np.arange(0.0, 5.0, 0.02)
+    a, b = min_jerk(np.clip((t - 0.5) / 1.5, 0, 1)), min_jerk(np.clip((t - 3.0) / 1.5, 0, 1))
+    s = a - b  # reach out, rest, come back
+    rot = Rotation.from_rotvec(np.outer(s, [0.0, 0.0, 0.8])).as_quat(scalar_first=True)
+    poses = np.hstack([np.stack([0.3 * s, 0.1 * s, 0 * s], axis=1), rot])
+    bag = bag_path(tmp_path, "ros1", "pour")
+    with BagWriter(bag, "ros1") as w:
+        for tk, pk in zip(t, poses):
+            ns = T0 + round(tk * 1e9)
+            w.write("/tf", w.tf_message(ns, [("world", "tool", pk)]), ns)
+    table = tmp_path / "q.csv"
+    table.write_text("demo,reach [m]\npour#0,0.3\npour#1,0.0\n")
+    out = tmp_path / "db"
+    res = run("demos", "import", bag, "--tf", "world:tool", "--rest-speed", 0.01, "--rate", 50,
+              "--queries", table, "--out", out)
+    assert res.exit_code == 0, res.output
+    db = dmprs.Database.load(out)
+    assert db.is_cartesian and len(db) == 2 and db[0].metadata["tf"] == ["world", "tool"]
+    np.testing.assert_allclose(db[0].trajectory.pose[-1], poses[np.searchsorted(t, 2.5)], atol=1e-3)
+    dmp = dmprs.Generalizer(db).predict([0.3])  # a demo's own query gives back its movement
+    assert isinstance(dmp, dmprs.CartesianDMP)
+    np.testing.assert_allclose(dmp.goal, db[0].trajectory.pose[-1], atol=1e-9)
+    res = run("demos", "import", bag, "--tf", "world", "--queries", table, "--out", tmp_path / "x")
+    assert res.exit_code != 0 and "FRAME:CHILD" in res.output

@@ -155,23 +155,35 @@ def _names(text: str | None) -> list[str] | None:
               show_default=True)
 @click.option("--topic", default="/joint_states", show_default=True, help="sensor_msgs/JointState topic (bags)")
 @click.option("--joints", default=None, help="joints to keep, in order (comma-separated; bags)")
+@click.option("--pose-topic", default=None, help="read poses from this geometry_msgs/PoseStamped topic instead (bags)")
+@click.option("--tf", "tf_frames", default=None, help="read poses of CHILD in FRAME from TF instead, as FRAME:CHILD (bags)")
 @click.option("--column", default="observation.state", show_default=True, help="frame column (LeRobot)")
 @click.option("--dims", default=None, help="components of the column to keep, by name (LeRobot)")
 @click.option("--time-column", default="t", show_default=True, help="time column (CSV)")
 @click.option("--ranges", default=None, help="cut each recording at START:STOP,... (s of its own clock)")
 @click.option("--rest-speed", type=float, default=None, help="cut each recording where its speed falls below this")
+@click.option("--rest-angular-speed", type=float, default=0.05, show_default=True,
+              help="rad/s; with poses, a rest also needs the angular speed below this")
 @click.option("--rate", type=float, default=None, help="resample every demonstration at this rate (Hz)")
 def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None, query_fields: str | None,
-                     units: str | None, fmt: str, topic: str, joints: str | None, column: str,
-                     dims: str | None, time_column: str, ranges: str | None, rest_speed: float | None,
+                     units: str | None, fmt: str, topic: str, joints: str | None, pose_topic: str | None,
+                     tf_frames: str | None, column: str, dims: str | None, time_column: str,
+                     ranges: str | None, rest_speed: float | None, rest_angular_speed: float,
                      rate: float | None) -> None:
     """Build a database from SOURCES: ROS bags, LeRobot datasets, CSV or npz files."""
     from dmprs.io.importer import build_database, load_demos
 
+    tf = None
+    if tf_frames is not None:
+        frame, _, child = tf_frames.partition(":")
+        if not frame or not child:
+            raise click.BadParameter(f"{tf_frames!r}: expected FRAME:CHILD", param_hint="--tf")
+        tf = (frame, child)
     try:
         demos = load_demos(sources, format=fmt, topic=topic, joints=_names(joints), column=column,
                            dims=_names(dims), time_column=time_column, ranges=_ranges(ranges),
-                           rest_speed=rest_speed, rate=rate)
+                           rest_speed=rest_speed, rest_angular_speed=rest_angular_speed, rate=rate,
+                           pose_topic=pose_topic, tf=tf)
         db = build_database(demos, queries=queries, query_fields=_names(query_fields), query_units=_names(units))
         db.save(out)
     except DmprsError as exc:

@@ -74,11 +74,13 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
         task.adapter.reset(seed=int(self.np_random.integers(2**31)))
         return ctx.copy(), {"desired_query": self.scenario.desired_query(ctx)}
 
-    def _dmp(self, action: NDArray[np.float64], desired: NDArray[np.float64]) -> tuple[DMP, NDArray[np.float64]]:
+    def _dmp(self, action: NDArray[np.float64], desired: NDArray[np.float64]) -> tuple[Any, NDArray[np.float64]]:
         gen = self.scenario.generalizer
         if self.action_kind == "query":
             return gen.predict(action), action
         ref = gen.predict(desired)
+        if not isinstance(ref, DMP):
+            raise InvalidInputError(f"{self.scenario.name}: weight actions are for joint-space DMPs")
         w = ref.weights + action.reshape(self._shape) * self._half
         dmp = DMP(w, ref.goal, ref.y0, ref.tau, alpha_z=ref.alpha_z, beta_z=ref.beta_z, alpha_x=ref.alpha_x,
                   width_factor=ref.width_factor)

@@ -2,8 +2,10 @@
 
 Every source becomes one or more named demonstrations (:class:`ImportedDemo`):
 
-* a ROS bag (a ROS 2 bag directory or a ROS 1 ``.bag``) -> its joint-state topic, named by the
-  bag's file name; cut by time ranges or at rests, the pieces are ``<name>#0``, ``<name>#1``...
+* a ROS bag (a ROS 2 bag directory or a ROS 1 ``.bag``) -> its joint-state topic, or poses (a
+  ``PoseStamped`` topic, or TF between two frames) for a database of pose demonstrations, named
+  by the bag's file name; cut by time ranges or at rests, the pieces are ``<name>#0``,
+  ``<name>#1``...
 * a LeRobot dataset directory -> one demonstration per episode, named by the episode index;
 * a CSV or npz file -> one demonstration named by the file name without its suffix.
 
@@ -21,14 +23,16 @@ from typing import Any
 from dmprs.database import Database
 from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.io.lerobot import read_lerobot
-from dmprs.io.rosbag import read_joint_states
+from dmprs.io.poses import poses_between, resample_poses, split_poses_at_rest
+from dmprs.io.rosbag import read_joint_states, read_poses, read_tf
 from dmprs.io.segment import cut, from_zero, resample, split_at_rest
 from dmprs.io.tables import QueryTable, read_csv_trajectory, read_npz_trajectory, read_query_table
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = ["FORMATS", "ImportedDemo", "build_database", "detect_format", "load_demos"]
 
 FORMATS = ("rosbag", "lerobot", "csv", "npz")
+POSE_NAMES = ("x", "y", "z", "qw", "qx", "qy", "qz")
 
 
 @dataclass(frozen=True)
@@ -37,7 +41,7 @@ class ImportedDemo:
     serve as its query, and where it came from (JSON-safe, kept as the database's metadata)."""
 
     name: str
-    trajectory: Trajectory
+    trajectory: Trajectory | CartesianTrajectory
     labels: Mapping[str, Any] = field(default_factory=dict)
     metadata: Mapping[str, Any] = field(default_factory=dict)
 
@@ -73,12 +77,18 @@ def load_demos(
     columns: Sequence[str] | None = None,
     ranges: Sequence[tuple[float, float]] | None = None,
     rest_speed: float | None = None,
+    rest_angular_speed: float = 0.05,
     rate: float | None = None,
+    pose_topic: str | None = None,
+    tf: tuple[str, str] | None = None,
 ) -> list[ImportedDemo]:
     """The demonstrations in ``sources``.
 
     ``topic``/``joints`` select joint states in bags, ``column``/``dims`` the LeRobot feature,
-    ``time_column``/``columns`` the CSV columns. A recording is cut into pieces by ``ranges``
+    ``time_column``/``columns`` the CSV columns. From bags, ``pose_topic`` (a
+    ``geometry_msgs/PoseStamped`` topic) or ``tf=(frame, child_frame)`` read pose trajectories
+    instead of joint states; they rest when their linear speed is below ``rest_speed`` (m/s) and
+    their angular speed below ``rest_angular_speed`` (rad/s). A recording is cut into pieces by ``ranges``
     (``(start, stop)`` in s of the recording's own clock; bags: since the bag's start) or where it
     rests (speed below ``rest_speed``, in units of y per s). ``rate`` (Hz) resamples every
     demonstration onto a uniform grid; by default the recorded times are kept.
@@ -101,7 +111,17 @@ def load_demos(
                                          "labels": dict(ep.labels)}))
             continue
         labels: dict[str, Any] = {}
-        if kind == "rosbag":
+        traj: Trajectory | CartesianTrajectory
+        names: tuple[str, ...]
+        if kind == "rosbag" and pose_topic is not None and tf is not None:
+            raise InvalidInputError("read poses from a pose topic or from TF, not both")
+        if kind == "rosbag" and pose_topic is not None:
+            traj, names = read_poses(p, pose_topic), POSE_NAMES
+            meta.update(pose_topic=pose_topic)
+        elif kind == "rosbag" and tf is not None:
+            traj, names = read_tf(p, *tf), POSE_NAMES
+            meta.update(tf=list(tf))
+        elif kind == "rosbag":
             rec = read_joint_states(p, topic, joints)
             traj, names = rec.trajectory, rec.names
             meta.update(topic=topic)
@@ -112,12 +132,7 @@ def load_demos(
             names = ()
         meta["names"] = list(names)
         stem = p.name[: -len(p.suffix)] if p.suffix else p.name
-        if ranges is None and rest_speed is None:
-            pieces = [from_zero(traj)]
-        elif rest_speed is not None:
-            pieces = split_at_rest(traj, speed_tol=rest_speed)
-        else:
-            pieces = cut(traj, ranges or [])
+        pieces = _pieces(traj, ranges, rest_speed, rest_angular_speed)
         for k, piece in enumerate(pieces):
             name = stem if len(pieces) == 1 and ranges is None and rest_speed is None else f"{stem}#{k}"
             out.append(ImportedDemo(name, _resampled(piece, rate), labels, {**meta, "labels": labels}))
@@ -131,8 +146,22 @@ def load_demos(
     return out
 
 
-def _resampled(traj: Trajectory, rate: float | None) -> Trajectory:
-    return traj if rate is None else resample(traj, rate)
+def _pieces(traj: Trajectory | CartesianTrajectory, ranges: Sequence[tuple[float, float]] | None,
+            rest_speed: float | None, rest_angular_speed: float) -> list[Any]:
+    """The demonstrations in one recording: all of it, its time ranges, or its movements between rests."""
+    if isinstance(traj, CartesianTrajectory):
+        if rest_speed is not None:
+            return split_poses_at_rest(traj, speed_tol=rest_speed, angular_speed_tol=rest_angular_speed)
+        return [poses_between(traj, a, b) for a, b in (ranges or [(traj.t[0], traj.t[-1])])]
+    if rest_speed is not None:
+        return split_at_rest(traj, speed_tol=rest_speed)
+    return [from_zero(traj)] if ranges is None else cut(traj, ranges)
+
+
+def _resampled(traj: Any, rate: float | None) -> Any:
+    if rate is None:
+        return traj
+    return resample_poses(traj, rate) if isinstance(traj, CartesianTrajectory) else resample(traj, rate)
 
 
 def build_database(
