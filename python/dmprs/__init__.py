@@ -23,9 +23,9 @@ from dmprs.loop import LearningResult, learn
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = [
+    "DMP",
     "CartesianDMP",
     "CartesianTrajectory",
-    "DMP",
     "Database",
     "DatabaseError",
     "Demo",

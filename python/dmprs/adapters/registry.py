@@ -23,6 +23,7 @@ ENTRY_POINT_GROUP = "dmprs.adapters"
 #: task modules happen to have been imported.
 BUILTIN: dict[str, str] = {
     "analytic": "dmprs.tasks.analytic:AnalyticAdapter",
+    "arm-pouring": "dmprs.tasks.arm_pouring:ArmPouringAdapter",
     "matchbox": "dmprs.tasks.matchbox:MatchboxAdapter",
     "pouring": "dmprs.tasks.pouring:PouringAdapter",
 }
