@@ -24,6 +24,7 @@ from dmprs._arrays import as_query
 from dmprs._core import __version__
 from dmprs.adapters.spec import Status
 from dmprs.database import DUPLICATE_POLICIES
+from dmprs.cartesian import CartesianDMP
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError, RunLogError
 from dmprs.runlog import RunLog, TrialRecord
@@ -49,7 +50,7 @@ class AskTell(Protocol):
 
 
 class GeneralizerLike(Protocol):
-    def predict(self, q: Any) -> DMP: ...
+    def predict(self, q: Any) -> DMP | CartesianDMP: ...
 
 
 @dataclass(frozen=True)

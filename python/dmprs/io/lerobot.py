@@ -56,7 +56,7 @@ def _jsonl(path: Path) -> list[dict[str, Any]]:
 
 
 def _parquet_rows(paths: Sequence[Path]) -> list[dict[str, Any]]:
-    import pyarrow.parquet as pq  # type: ignore[import-untyped]
+    import pyarrow.parquet as pq
 
     rows: list[dict[str, Any]] = []
     for p in paths:
@@ -91,8 +91,8 @@ def _metadata(root: Path, version: str) -> tuple[dict[int, dict[str, Any]], dict
 def _matrix(col: Any, base: Path, column: str) -> np.ndarray:
     """A frame column as (frames, components) float64: a list column of equal-length lists, or a
     numeric scalar column."""
-    import pyarrow as pa  # type: ignore[import-untyped]
-    import pyarrow.compute as pc  # type: ignore[import-untyped]
+    import pyarrow as pa
+    import pyarrow.compute as pc
 
     col = col.combine_chunks()
     if pa.types.is_list(col.type) or pa.types.is_fixed_size_list(col.type) or pa.types.is_large_list(col.type):
@@ -126,8 +126,8 @@ def read_lerobot(root: str | Path, column: str = "observation.state", *,
     ``dims`` picks its components by the names ``meta/info.json`` gives them; ``episodes`` picks
     episodes by index.
     """
-    import pyarrow as pa  # type: ignore[import-untyped]
-    import pyarrow.parquet as pq  # type: ignore[import-untyped]
+    import pyarrow as pa
+    import pyarrow.parquet as pq
 
     base = Path(root)
     info_path = base / "meta" / "info.json"
