@@ -18,7 +18,7 @@ pub mod root;
 
 pub use ask_tell::{AskTell, Record, Status, Trial};
 pub use dmp_core::{Dmp, DmpConfig, Trajectory};
-pub use error::{LearnerError, Result};
+pub use error::{ErrorKind, LearnerError, Result};
 pub use error_learning::{ErrorLearning, ErrorLearningConfig, Jacobian};
 pub use golden::{GoldenConfig, GoldenMode, GoldenSection};
 pub use pi2::{Pi2, Pi2Config};

@@ -9,7 +9,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 /// A C-ordered `(T, D)` array viewed as the `D x T` matrix the core expects (no copy).
 pub(crate) fn time_major<'a>(
@@ -17,22 +17,16 @@ pub(crate) fn time_major<'a>(
     a: &'a PyReadonlyArray2<'_, f64>,
 ) -> PyResult<DMatrixView<'a, f64>> {
     let (t, d) = (a.shape()[0], a.shape()[1]);
-    let slice = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a C-contiguous array"),
-        )
-    })?;
+    let slice = a
+        .as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a C-contiguous array")))?;
     Ok(DMatrixView::from_slice(slice, d, t))
 }
 
 pub(crate) fn vector(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<DVector<f64>> {
-    let slice = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a contiguous array"),
-        )
-    })?;
+    let slice = a
+        .as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a contiguous array")))?;
     Ok(DVector::from_column_slice(slice))
 }
 
@@ -111,7 +105,7 @@ impl PyDmp {
     ) -> PyResult<Self> {
         let t_slice = t
             .as_slice()
-            .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
+            .map_err(|_| invalid_input("t must be a contiguous array"))?;
         let demo = Demonstration {
             t: t_slice,
             y: time_major("y", &y)?,

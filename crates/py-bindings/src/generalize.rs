@@ -6,7 +6,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, P
 use pyo3::prelude::*;
 
 use crate::dmp::{PyDmp, time_major};
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 type DemoArrays<'py> = (
     PyReadonlyArray1<'py, f64>,
@@ -17,7 +17,7 @@ type DemoArrays<'py> = (
 
 fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
     q.as_slice()
-        .map_err(|_| raise("InvalidInputError", "q must be a contiguous array".into()))
+        .map_err(|_| invalid_input("q must be a contiguous array"))
 }
 
 #[pyclass(name = "Generalizer", module = "dmprs._core", frozen)]
@@ -54,10 +54,9 @@ impl PyGeneralizer {
             "tricube" => Kernel::Tricube,
             "gaussian" => Kernel::Gaussian,
             other => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!("kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"),
-                ));
+                return Err(invalid_input(format!(
+                    "kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"
+                )));
             }
         };
         let method = match method {
@@ -74,10 +73,9 @@ impl PyGeneralizer {
                 gp_restarts,
             }),
             other => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!("method = {other:?} is invalid: use 'linear' or 'lwr-gp'"),
-                ));
+                return Err(invalid_input(format!(
+                    "method = {other:?} is invalid: use 'linear' or 'lwr-gp'"
+                )));
             }
         };
         let qv = time_major("queries", &queries)?;
@@ -89,7 +87,7 @@ impl PyGeneralizer {
         for (t, y, yd, ydd) in &demos {
             let t = t
                 .as_slice()
-                .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
+                .map_err(|_| invalid_input("t must be a contiguous array"))?;
             views.push(Demonstration {
                 t,
                 y: time_major("y", y)?,

@@ -6,30 +6,23 @@ use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntyped
 use pyo3::prelude::*;
 
 use crate::dmp::time_major;
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 fn slice<'a>(name: &str, a: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a contiguous array"),
-        )
-    })
+    a.as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a contiguous array")))
 }
 
 fn pairs(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
     if a.shape()[1] != 2 {
-        return Err(raise(
-            "InvalidInputError",
-            format!("{name} must have shape (n, 2); got {:?}", a.shape()),
-        ));
+        return Err(invalid_input(format!(
+            "{name} must have shape (n, 2); got {:?}",
+            a.shape()
+        )));
     }
-    let s = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a C-contiguous array"),
-        )
-    })?;
+    let s = a
+        .as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a C-contiguous array")))?;
     Ok(s.chunks(2).map(|c| (c[0], c[1])).collect())
 }
 

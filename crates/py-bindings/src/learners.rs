@@ -15,7 +15,7 @@ use numpy::{
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 enum Inner {
     ErrorLearning(ErrorLearning),
@@ -55,12 +55,8 @@ pub struct PyLearner {
 }
 
 fn slice<'a>(name: &str, a: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a contiguous array"),
-        )
-    })
+    a.as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a contiguous array")))
 }
 
 fn opt_vec(name: &str, a: &Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option<Vec<f64>>> {
@@ -72,12 +68,9 @@ fn opt_vec(name: &str, a: &Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option
 /// A C-ordered (r, c) array as an nalgebra matrix.
 fn matrix(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<DMatrix<f64>> {
     let (r, c) = (a.shape()[0], a.shape()[1]);
-    let s = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a contiguous array"),
-        )
-    })?;
+    let s = a
+        .as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a contiguous array")))?;
     Ok(DMatrix::from_row_slice(r, c, s))
 }
 
@@ -110,12 +103,9 @@ impl PyLearner {
             ("finite-difference", _) => Jacobian::FiniteDifference { delta },
             ("matrix", Some(m)) => Jacobian::Fixed(matrix("jacobian", &m)?),
             (other, _) => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!(
-                        "jacobian = {other:?} is invalid: use \"identity\", \"secant\", \"finite-difference\" or an (n, n) array"
-                    ),
-                ));
+                return Err(invalid_input(format!(
+                    "jacobian = {other:?} is invalid: use \"identity\", \"secant\", \"finite-difference\" or an (n, n) array"
+                )));
             }
         };
         let cfg = ErrorLearningConfig {
@@ -151,10 +141,9 @@ impl PyLearner {
             "paper" => GoldenMode::Paper,
             "robust" => GoldenMode::Robust,
             other => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!("mode = {other:?} is invalid: use \"paper\" or \"robust\""),
-                ));
+                return Err(invalid_input(format!(
+                    "mode = {other:?} is invalid: use \"paper\" or \"robust\""
+                )));
             }
         };
         let cfg = GoldenConfig {
