@@ -143,19 +143,20 @@ impl Record {
         &self.history
     }
 
-    /// The start of every `ask`: refuses after a stop, repeats a pending query.
-    pub(crate) fn pending_or_running(&self) -> Result<Option<Vec<f64>>> {
+    /// Every learner's `ask`: refuses after a stop, repeats a pending query, else makes `next()`
+    /// the pending query.
+    pub(crate) fn ask_with(&mut self, next: impl FnOnce() -> Vec<f64>) -> Result<Vec<f64>> {
         if !self.status.is_running() {
             return Err(LearnerError::Finished {
                 status: self.status.to_string(),
             });
         }
-        Ok(self.pending.clone())
-    }
-
-    pub(crate) fn set_pending(&mut self, q: Vec<f64>) -> Vec<f64> {
+        if let Some(q) = &self.pending {
+            return Ok(q.clone());
+        }
+        let q = next();
         self.pending = Some(q.clone());
-        q
+        Ok(q)
     }
 
     /// The start of every `tell`: the order of calls, the query, and the feedback's size and

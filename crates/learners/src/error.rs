@@ -144,3 +144,28 @@ pub(crate) fn check_max_trials(max_trials: usize) -> Result<()> {
     }
     Ok(())
 }
+
+/// A query vector of at least one entry, all finite.
+pub(crate) fn check_query(name: &'static str, q: &[f64]) -> Result<()> {
+    if q.is_empty() {
+        return Err(LearnerError::Dimension {
+            name,
+            expected: "at least 1 entry".into(),
+            got: "0 entries".into(),
+        });
+    }
+    check_finite(name, q)
+}
+
+/// The one entry of a one-dimensional query (or limit) given as a slice: the bindings pass
+/// every query as a 1-D array, the bracketing learners take a scalar.
+pub fn scalar_entry(name: &'static str, values: &[f64]) -> Result<f64> {
+    match values {
+        [v] => Ok(*v),
+        _ => Err(LearnerError::Dimension {
+            name,
+            expected: "1 entry (this learner searches a one-dimensional query)".into(),
+            got: format!("{} entries", values.len()),
+        }),
+    }
+}
