@@ -350,3 +350,34 @@ def test_out_of_range_counts_are_clear_errors():
     with pytest.raises(InvalidInputError, match="tol must be a real number"):
         L.IllinoisRootFinder(0.5, low=0.0, high=1.0, tol="abc")
 
+
+def test_a_bracket_whose_width_overflows_is_named():
+    with pytest.raises(InvalidInputError, match="width overflows") as info:
+        L.GoldenSection(0.5, low=-1e308, high=1e308)
+    assert "q_tol" not in str(info.value)
+
+
+# ---- never a non-finite query (issue 13) ------------------------------------------------------
+
+
+def test_a_learner_never_asks_a_non_finite_query():
+    p = L.PoWER(np.zeros(3), 0.3)
+    p.tell(p.ask(), 1e308)  # overflows the return-weighted mean
+    assert p.status == "diverged" and p.done
+    with pytest.raises(LearnerStateError, match="diverged"):
+        p.ask()
+    with pytest.raises(InvalidInputError, match="sigma = 1e200 .* overflows"):
+        L.PoWER(np.zeros(3), 1e200)
+    el = L.ErrorLearning(1.0, gain=1e308)
+    el.tell(el.ask(), 10.0)
+    assert el.status == "diverged"
+    pg = L.PolicyGradient(0.0, delta=1e300)
+    run(pg, lambda q: 0.5 - q[0])
+    assert pg.status == "diverged"
+    assert all(np.isfinite(t.q).all() for t in pg.history)
+
+
+def test_pi2_refuses_sizes_that_cannot_be_meant():
+    for n_steps in (2**40, 10**9):
+        with pytest.raises(InvalidInputError, match="n_steps x n_basis"):
+            L.PI2(np.zeros(5), 0.1, n_steps=n_steps)

@@ -40,7 +40,8 @@ option left at ``None`` takes the default of the learner's configuration in the 
 
 Common properties: ``status`` (``"running"``, ``"converged"``, ``"bracketed"``,
 ``"trial-cap"``, ``"hit-bound"``, ``"diverged"``), ``status_detail``, ``done``, ``converged``,
-``best`` and ``history`` (:class:`Trial` tuples), ``n_trials``.
+``best`` and ``history`` (:class:`Trial` tuples), ``n_trials``. A learner never asks a
+non-finite query: when a step, a gain or a return overflows it stops with ``"diverged"``.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 //! The checks the bracketing learners (golden section, the Illinois root finder) share: a finite
-//! start q0, finite limits low < high, and the stopping tolerances.
+//! start q0, finite limits low < high whose width is representable, and the stopping tolerances.
 
 use crate::error::{Result, check_scalar, invalid};
 
@@ -19,6 +19,14 @@ pub(crate) fn check_bracket(
     check_scalar("high", high, false)?;
     if low >= high {
         return Err(invalid("low", low, &format!("must be < high = {high}")));
+    }
+    // The learners search [min(low, q0), max(high, q0)] (robust mode widens it to contain q0).
+    if !(high.max(q0) - low.min(q0)).is_finite() {
+        return Err(invalid(
+            "[low, high]",
+            format!("[{low:e}, {high:e}] with q0 = {q0:e}"),
+            "the bracket's width overflows: give limits (and q0) whose differences are finite",
+        ));
     }
     check_scalar("tol", tol, true)?;
     match q_tol {

@@ -19,7 +19,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::ask_tell::{AskTell, Record, Status, max_abs};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite, max_abs};
 use crate::bounds::Bounds;
 use crate::error::{LearnerError, Result, check_finite, check_query, check_scalar, invalid};
 
@@ -352,7 +352,8 @@ impl AskTell for ErrorLearning {
         if stop.is_none() && self.growth >= GROWTH_TRIALS && score > GROWTH_FACTOR * h[0].score {
             stop = Some(Status::Diverged);
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(self.next.as_slice())));
         Ok(())
     }
 

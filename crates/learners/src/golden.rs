@@ -23,7 +23,7 @@
 //!
 //! eps > 0 means the query must increase (method.md §5.3).
 
-use crate::ask_tell::{AskTell, Record, Status};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::bracket::check_bracket;
 use crate::error::Result;
 
@@ -206,7 +206,8 @@ impl AskTell for GoldenSection {
                 GoldenMode::Paper => (width <= COLLAPSE * self.first_width).then(|| self.spent()),
             };
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(&[self.next])));
         Ok(())
     }
 

@@ -33,7 +33,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::ask_tell::{AskTell, Record, Status};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::error::{LearnerError, Result, check_scalar, check_vector, invalid};
 use crate::power::per_parameter;
 
@@ -75,6 +75,12 @@ impl Default for Pi2Config {
         }
     }
 }
+
+/// The largest n_steps x n_basis accepted: PI² keeps two tables of that many floats (g_i and
+/// the time-averaging weights) and walks them on every update. 10^7 entries (160 MB) is far
+/// beyond any rollout a robot executes (10^5 steps of 1 ms with 100 kernels), and refusing
+/// larger sizes turns an allocation abort or minutes of work into a clear error.
+pub const MAX_TABLE_ENTRIES: usize = 10_000_000;
 
 /// The reference code's floor on the annealed noise.
 const MIN_NOISE_MULT: f64 = 0.1;
@@ -142,6 +148,17 @@ impl Pi2 {
             return Err(invalid("n_steps", cfg.n_steps, "must be at least 2"));
         }
         let n_basis = dim / cfg.n_dof;
+        if cfg.n_steps.saturating_mul(n_basis) > MAX_TABLE_ENTRIES {
+            return Err(invalid(
+                "n_steps",
+                cfg.n_steps,
+                &format!(
+                    "n_steps x n_basis = {} x {n_basis} exceeds {MAX_TABLE_ENTRIES}: PI² tabulates \
+                     the basis at every time step, and no rollout has that many steps",
+                    cfg.n_steps
+                ),
+            ));
+        }
         if let Some(t) = cfg.cost_tol {
             check_scalar("cost_tol", t, false)?;
         }
@@ -319,7 +336,8 @@ impl AskTell for Pi2 {
                 self.need_eval = true;
             }
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(&self.theta)));
         Ok(())
     }
 

@@ -18,7 +18,7 @@
 
 use nalgebra::DVector;
 
-use crate::ask_tell::{AskTell, Record, Status, max_abs};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite, max_abs};
 use crate::bounds::Bounds;
 use crate::error::{Result, check_query, check_scalar, invalid};
 
@@ -198,7 +198,9 @@ impl AskTell for PolicyGradient {
             self.costs.clear();
             self.plan = self.plan_update();
         }
-        self.rec.finish_tell(stop);
+        let next = self.plan[self.costs.len()].as_slice();
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(next)));
         Ok(())
     }
 

@@ -18,7 +18,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::ask_tell::{AskTell, Record, Status};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::error::{LearnerError, Result, check_query, check_scalar, invalid};
 
 #[derive(Debug, Clone)]
@@ -101,6 +101,13 @@ impl Power {
         check_query("theta0", theta0)?;
         let sigma = per_parameter(sigma, theta0.len())?;
         let var0: Vec<f64> = sigma.iter().map(|s| s * s).collect();
+        if let Some(i) = var0.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(
+                "sigma",
+                format!("{:e} (at index {i})", sigma[i]),
+                "its square, the exploration variance, overflows",
+            ));
+        }
         if cfg.n_best == 0 {
             return Err(invalid("n_best", 0, "must be at least 1"));
         }
@@ -199,7 +206,11 @@ impl AskTell for Power {
         self.rollouts.push((theta.to_vec(), r, self.var.clone()));
         self.update();
         let done = self.target.is_some_and(|t| r >= t);
-        self.rec.finish_tell(done.then_some(Status::Converged));
+        // A huge return (or rollout) can overflow the weighted means.
+        let diverged =
+            diverged_unless_finite(&self.mean).or_else(|| diverged_unless_finite(&self.var));
+        self.rec
+            .finish_tell(done.then_some(Status::Converged).or(diverged));
         Ok(())
     }
 

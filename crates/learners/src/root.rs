@@ -24,7 +24,7 @@
 //! `HitBound` when one end is an untried limit: the root lies outside [low, high] or the sign
 //! convention is wrong); the trial cap.
 
-use crate::ask_tell::{AskTell, Record, Status};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::bracket::check_bracket;
 use crate::error::Result;
 use crate::golden::GOLDEN_HIGH;
@@ -197,7 +197,8 @@ impl AskTell for IllinoisRootFinder {
         if stop.is_none() {
             self.next = self.safeguard(self.candidate());
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(&[self.next])));
         Ok(())
     }
 

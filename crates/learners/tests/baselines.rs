@@ -224,3 +224,39 @@ fn pi2_is_deterministic_for_a_seed_and_checks_its_cost_shape() {
     let e = Pi2::new(&[0.0; 15], &[0.2], pi2_cfg(1, true)).unwrap_err();
     assert!(e.is_input_error(), "{e}");
 }
+
+#[test]
+fn power_never_asks_a_non_finite_query() {
+    // sigma = 1e200: the variance sigma^2 overflows; refused up front.
+    let e = Power::new(&[0.0; 3], &[1e200], PowerConfig::default()).unwrap_err();
+    assert!(
+        e.is_input_error() && e.to_string().contains("overflows"),
+        "{e}"
+    );
+    // A return of 1e308 overflows the return-weighted mean: the learner stops as diverged.
+    let mut p = Power::new(&[0.0; 3], &[0.3], PowerConfig::default()).unwrap();
+    let th = p.ask().unwrap();
+    p.tell(&th, &[1e308]).unwrap();
+    assert_eq!(p.status(), Status::Diverged);
+    assert!(p.ask().unwrap_err().is_state_error());
+}
+
+#[test]
+fn pi2_refuses_sizes_no_rollout_has_and_says_why() {
+    for n_steps in [1usize << 40, 1_000_000_000] {
+        let cfg = Pi2Config {
+            n_steps,
+            ..Pi2Config::default()
+        };
+        let e = Pi2::new(&[0.0; 5], &[0.1], cfg).unwrap_err();
+        assert!(
+            e.is_input_error() && e.to_string().contains("n_steps x n_basis"),
+            "{e}"
+        );
+    }
+    let cfg = Pi2Config {
+        n_steps: 100_000,
+        ..Pi2Config::default()
+    };
+    assert!(Pi2::new(&[0.0; 5], &[0.1], cfg).is_ok());
+}

@@ -573,6 +573,46 @@ fn bad_input_is_a_clear_error() {
     assert!(e.to_string().contains("invertible"), "{e}");
 }
 
+// ---- never a non-finite query (issue 13 item 6) ---------------------------------------------
+
+#[test]
+fn a_step_that_overflows_stops_the_learner_as_diverged() {
+    // K = 1e308: the eq. 16 step 1e308 * 10 overflows.
+    let cfg = ErrorLearningConfig {
+        gain: 1e308.into(),
+        ..ErrorLearningConfig::default()
+    };
+    let mut l = ErrorLearning::new(&[1.0], cfg).unwrap();
+    let q = l.ask().unwrap();
+    l.tell(&q, &[10.0]).unwrap();
+    assert_eq!(l.status(), Status::Diverged);
+    assert!(l.ask().unwrap_err().is_state_error());
+
+    // delta = 1e300: the cost (eps/s)^2 of the perturbed trials overflows, the gradient is NaN.
+    let cfg = PolicyGradientConfig {
+        delta: Some(1e300),
+        ..PolicyGradientConfig::default()
+    };
+    let mut pg = PolicyGradient::new(&[0.0], cfg).unwrap();
+    run(&mut pg, eps1(0.5, |q| q));
+    assert_eq!(pg.status(), Status::Diverged);
+    assert!(pg.history().iter().all(|t| t.q[0].is_finite()));
+}
+
+#[test]
+fn a_bracket_whose_width_overflows_is_refused_for_what_it_is() {
+    for e in [
+        GoldenSection::new(0.5, -1e308, 1e308, GoldenConfig::default()).unwrap_err(),
+        IllinoisRootFinder::new(0.5, -1e308, 1e308, RootFinderConfig::default()).unwrap_err(),
+    ] {
+        assert!(
+            e.is_input_error() && e.to_string().contains("width overflows"),
+            "{e}"
+        );
+        assert!(!e.to_string().contains("q_tol"), "{e}");
+    }
+}
+
 #[test]
 fn the_default_q_tol_is_a_fraction_of_the_bracket() {
     // Robust golden section stops as Bracketed once [q_l, q_h] < 1e-4 (high - low) = 2e-4 when
