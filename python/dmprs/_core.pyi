@@ -1,8 +1,27 @@
 # Type stubs for the Rust extension dmprs._core (crates/py-bindings). The documented API is in
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
+from typing import final
 
 import numpy as np
 from numpy.typing import NDArray
+
+__all__ = [
+    "Dmp",
+    "rollout_batch",
+    "Generalizer",
+    "GaussianProcess",
+    "ErrorLearning",
+    "GoldenSection",
+    "IllinoisRootFinder",
+    "PI2",
+    "PolicyGradient",
+    "PoWER",
+    "MatchboxConfig",
+    "matchbox_check",
+    "matchbox_simulate",
+    "matchbox_simulate_batch",
+    "__version__",
+]
 
 __version__: str
 
@@ -10,6 +29,7 @@ _TrajectoryArrays = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
 ]
 
+@final
 class Dmp:
     def __new__(
         cls,
@@ -80,6 +100,7 @@ def rollout_batch(
 _Trial = tuple[NDArray[np.float64], NDArray[np.float64], float]
 _Vector = NDArray[np.float64]
 
+@final
 class ErrorLearning:
     def __new__(
         cls,
@@ -115,6 +136,7 @@ class ErrorLearning:
     @property
     def history(self) -> list[_Trial]: ...
 
+@final
 class GoldenSection:
     def __new__(
         cls,
@@ -147,6 +169,7 @@ class GoldenSection:
     @property
     def history(self) -> list[_Trial]: ...
 
+@final
 class IllinoisRootFinder:
     def __new__(
         cls,
@@ -177,6 +200,7 @@ class IllinoisRootFinder:
     @property
     def history(self) -> list[_Trial]: ...
 
+@final
 class PolicyGradient:
     def __new__(
         cls,
@@ -212,6 +236,7 @@ class PolicyGradient:
     @property
     def history(self) -> list[_Trial]: ...
 
+@final
 class PoWER:
     def __new__(
         cls,
@@ -246,6 +271,7 @@ class PoWER:
     @property
     def history(self) -> list[_Trial]: ...
 
+@final
 class PI2:
     def __new__(
         cls,
@@ -286,6 +312,7 @@ class PI2:
     @property
     def history(self) -> list[_Trial]: ...
 
+@final
 class MatchboxConfig:
     def __new__(
         cls,
@@ -316,6 +343,7 @@ def matchbox_simulate_batch(
     paths: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]],
     config: MatchboxConfig,
 ) -> list[dict[str, object]]: ...
+@final
 class GaussianProcess:
     @staticmethod
     def fit(
@@ -357,6 +385,7 @@ _DemoArrays = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None
 ]
 
+@final
 class Generalizer:
     def __new__(
         cls,
