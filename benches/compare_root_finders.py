@@ -5,7 +5,7 @@
 Prints a markdown table (pasted into benches/README.md, section "Query learners: trials to
 converge"). Every executed trial counts, the first (pure generalization, q = q0) included.
 The maps are synthetic stand-ins for the paper's tasks, not the simulations: q is in outcome
-units, eps = q0 - q_a(q) (method.md §5.3: eps > 0 means the query must increase).
+units, eps = q0 - q_a(q) (docs/method.md §5.3: eps > 0 means the query must increase).
 """
 
 from __future__ import annotations

@@ -52,7 +52,7 @@ def test_round_trip_is_bit_exact(db, tmp_path):
     back = dmprs.Database.load(tmp_path / "db")
     assert_same(db, back)
     manifest = json.loads((tmp_path / "db" / "manifest.json").read_text())
-    assert manifest["schema_version"] == dbmod.SCHEMA_VERSION
+    assert manifest["schema_version"] == 1  # joint-space databases stay readable by older dmprs
     assert manifest["query_units"] == ["l", "1"]
     assert all(len(e["sha256"]) == 64 for e in manifest["demos"])
 
@@ -188,7 +188,7 @@ def test_a_newer_schema_fails_clearly(db, tmp_path):
     manifest = json.loads(m.read_text())
     manifest["schema_version"] = dbmod.SCHEMA_VERSION + 1
     m.write_text(json.dumps(manifest))
-    with pytest.raises(DatabaseError, match=r"schema version 2 was written by a newer dmprs.*Upgrade"):
+    with pytest.raises(DatabaseError, match=r"schema version 3 was written by a newer dmprs.*Upgrade"):
         dmprs.Database.load(tmp_path / "db")
 
 

@@ -60,7 +60,7 @@ def test_one_dimensional_y_is_one_dof(demo):
 
 
 def test_weights_are_independent_of_the_demonstration_speed(demo):
-    # method.md §2.3: with tau = duration, a time-scaled copy of a demo has identical weights.
+    # docs/method.md §2.3: with tau = duration, a time-scaled copy of a demo has identical weights.
     t, y = demo
     a = dmprs.DMP.fit(t, y)
     b = dmprs.DMP.fit(2.5 * t, y)

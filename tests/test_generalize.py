@@ -1,4 +1,4 @@
-"""dmprs.Generalizer: the paper's G(q; Z) -> DMP (eq. 6, method.md §3)."""
+"""dmprs.Generalizer: the paper's G(q; Z) -> DMP (eq. 6, docs/method.md §3)."""
 
 import numpy as np
 import pytest
@@ -42,7 +42,7 @@ def flat(dmp):
     return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, dmp.y0])
 
 
-# --- linear (method.md §3.3) ------------------------------------------------------------------
+# --- linear (docs/method.md §3.3) -------------------------------------------------------------
 def test_linear_reproduces_each_demo_exactly():
     db = database([0.0, 1.0])
     gen = dmprs.Generalizer(db, "linear", n_basis=20)
@@ -117,7 +117,7 @@ def test_extrapolating_too_far_is_an_extrapolation_error():
         gen.predict(20.0)  # tau = 7 > 6.5
 
 
-# --- lwr-gp (Ude 2010, method.md §3.2) -------------------------------------------------------
+# --- lwr-gp (Ude 2010, docs/method.md §3.2) --------------------------------------------------
 @pytest.mark.parametrize("kernel", ["tricube", "gaussian"])
 def test_lwr_gp_reproduces_its_demos_to_ridge_precision(kernel):
     queries = [0.0, 0.3, 0.9, 1.4, 2.0]  # 5 demos: ML-II for the GPs
@@ -194,9 +194,10 @@ def test_too_few_demos(method):
         dmprs.Generalizer(database([0.0]), method)
 
 
-def test_too_many_demos_for_linear():
-    with pytest.raises(InvalidInputError, match=r"at most n \+ 1 = 2 demonstrations.*lwr-gp"):
-        dmprs.Generalizer(database([0.0, 1.0, 2.0]), "linear")
+def test_more_than_n_plus_1_demos_make_linear_piecewise():
+    # tests/test_triangulation.py checks the triangulated path; here only that it is taken
+    gen = dmprs.Generalizer(database([0.0, 1.0, 2.0]), "linear")
+    assert gen.n_demos == 3 and type(gen._core).__name__ == "PiecewiseLinear"
 
 
 def test_collinear_queries_for_linear():

@@ -9,7 +9,7 @@ import pytest
 import dmprs
 from dmprs import experiments
 from dmprs.adapters import Outcome, Status
-from dmprs.learning import learn
+from dmprs.loop import learn
 from dmprs.runlog import RunLog, RunLogError
 from dmprs.tasks.analytic import outcome_map
 
@@ -50,6 +50,8 @@ def test_each_trial_is_on_disk_before_the_learner_sees_it(tmp_path):
 
     class Watching:
         converged = False
+        done = property(lambda self: inner.done)
+        status_detail = property(lambda self: inner.status_detail)
 
         def ask(self):
             return inner.ask()
@@ -72,6 +74,8 @@ def test_a_crash_loses_no_finished_trial_and_resume_continues_identically(tmp_pa
 
     class Crashing:
         converged = False
+        done = property(lambda self: inner.done)
+        status_detail = property(lambda self: inner.status_detail)
         told = 0
 
         def ask(self):
@@ -167,6 +171,8 @@ def test_a_non_ok_outcome_never_reaches_the_learner():
 
     class Strict:
         converged = False
+        done = property(lambda self: inner.done)
+        status_detail = property(lambda self: inner.status_detail)
 
         def ask(self):
             return inner.ask()

@@ -19,6 +19,8 @@ from dmprs.sim import pouring_scene as scene
 from dmprs.tasks import Pouring, PouringAdapter
 from dmprs.tasks import pouring as pouring_mod
 from dmprs.tasks.pouring import calibrate_peak_tilt, demonstration_dmp, tilt_profile
+from dmprs.tasks.pouring import calibration as calibration_mod
+from dmprs.tasks.pouring import demonstrator as demonstrator_mod
 
 DEG = math.pi / 180
 
@@ -166,7 +168,7 @@ def test_poured_volume_is_monotone_in_peak_tilt_near_the_target():
     poured = [float(pour(0.3, cal.peak_tilt + d * DEG).signals["poured_volume"]) for d in (-4, 0, 4)]
     assert poured[0] < poured[1] < poured[2], poured
     assert poured[1] == pytest.approx(cal.poured_volume)
-    # tens of ml per degree near 0.2 l (method.md §9.3 prototype: ~30 ml/deg)
+    # tens of ml per degree near 0.2 l (docs/method.md §9.3 prototype: ~30 ml/deg)
     slope = (poured[2] - poured[0]) / 8 * 1000
     assert 5 < slope < 80, slope
 
@@ -178,7 +180,7 @@ def test_nothing_pours_while_upright_or_barely_tilted():
 
 def test_demonstration_dmp_reproduces_the_profile_and_is_accepted(monkeypatch):
     # the DMP part only: stub the (expensive) calibration with a fixed peak
-    monkeypatch.setattr(pouring_mod, "calibrate_peak_tilt",
+    monkeypatch.setattr(demonstrator_mod, "calibrate_peak_tilt",
                         lambda v, target, **kw: pouring_mod.Calibration(v, target, 0, 1.7, target, ()))
     dmp = demonstration_dmp(0.3)
     assert dmp.n_basis == 40 and dmp.n_dof == 1 and dmp.tau == pytest.approx(3.0)
@@ -193,12 +195,12 @@ def test_calibration_is_cached_on_disk(tmp_path, monkeypatch):
     cal = calibrate_peak_tilt(0.1, 0.04, cache_dir=tmp_path)
     assert abs(cal.poured_volume - 0.04) <= 0.004 or len(cal.evaluations) == 10
     assert len(list(tmp_path.glob("pouring-demo-*.json"))) == 1
-    pouring_mod._calibrate.cache_clear()
+    calibration_mod._calibrate.cache_clear()
 
     def no_sim(*a, **k):
         raise AssertionError("the disk cache was not used")
 
-    monkeypatch.setattr(pouring_mod, "_poured", no_sim)
+    monkeypatch.setattr(calibration_mod, "_poured", no_sim)
     assert calibrate_peak_tilt(0.1, 0.04, cache_dir=tmp_path) == cal
 
 

@@ -18,7 +18,7 @@ def test_golden_section_pours_two_decilitres(volume):
 
 
 def test_outside_the_demonstrations_the_paper_mode_fails_and_robust_mode_succeeds():
-    # method.md §6.2 #5: with q0 outside [q_l, q_h] the algorithm box inverts the bracket.
+    # docs/method.md §6.2 #5: with q0 outside [q_l, q_h] the algorithm box inverts the bracket.
     paper = experiments.pouring(bottle_volume=0.25, learner="golden", max_trials=6)
     robust = experiments.pouring(bottle_volume=0.25, learner="golden-robust", max_trials=6)
     assert not paper.converged

@@ -4,8 +4,9 @@ trials (Nemec, Vuga, Ude, "Efficient sensorimotor learning from multiple demonst
 The numerical core is Rust (``dmprs._core``); this package is the API users import.
 """
 
-from dmprs import learners
+from dmprs import adapters, learners, tasks
 from dmprs._core import __version__
+from dmprs.cartesian import CartesianDMP
 from dmprs.database import Database, Demo
 from dmprs.dmp import DMP, rollout_batch
 from dmprs.errors import (
@@ -18,12 +19,13 @@ from dmprs.errors import (
 )
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
-from dmprs.trajectory import Trajectory
-from dmprs.learning import LearningResult, learn
-from dmprs import adapters, tasks  # noqa: E402 - they build on the classes above
+from dmprs.loop import LearningResult, learn
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = [
     "DMP",
+    "CartesianDMP",
+    "CartesianTrajectory",
     "Database",
     "DatabaseError",
     "Demo",
@@ -32,14 +34,14 @@ __all__ = [
     "GaussianProcess",
     "Generalizer",
     "InvalidInputError",
-    "LearningResult",
     "LearnerStateError",
+    "LearningResult",
     "NumericalError",
     "Trajectory",
     "__version__",
     "adapters",
     "learn",
-    "tasks",
     "learners",
     "rollout_batch",
+    "tasks",
 ]

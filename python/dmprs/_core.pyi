@@ -1,31 +1,34 @@
 # Type stubs for the Rust extension dmprs._core (crates/py-bindings). The documented API is in
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
-from typing import final
+from typing import TypeAlias, final
 
 import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "PI2",
+    "CartesianDmp",
+    "CartesianGeneralizer",
     "Dmp",
-    "rollout_batch",
-    "Generalizer",
-    "GaussianProcess",
     "ErrorLearning",
+    "GaussianProcess",
+    "Generalizer",
     "GoldenSection",
     "IllinoisRootFinder",
-    "PI2",
-    "PolicyGradient",
-    "PoWER",
     "MatchboxConfig",
+    "PoWER",
+    "PolicyGradient",
+    "__version__",
     "matchbox_check",
     "matchbox_simulate",
     "matchbox_simulate_batch",
-    "__version__",
+    "rollout_batch",
+    "rollout_batch_cartesian",
 ]
 
 __version__: str
 
-_TrajectoryArrays = tuple[
+_TrajectoryArrays: TypeAlias = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
 ]
 
@@ -95,10 +98,91 @@ def rollout_batch(
     rest_tol: float = 1e-4,
 ) -> list[_TrajectoryArrays]: ...
 
+_CartesianArrays: TypeAlias = tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+]
+
+@final
+class CartesianDmp:
+    """Position + unit-quaternion DMP of crates/dmp-core/src/cartesian.rs; documented by
+    dmprs.cartesian. Rollouts give (t, position, quaternion, velocity, angular_velocity,
+    acceleration, angular_acceleration)."""
+
+    def __new__(
+        cls,
+        weights: NDArray[np.float64],
+        goal: NDArray[np.float64],
+        start: NDArray[np.float64],
+        tau: float,
+        *,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+    ) -> CartesianDmp: ...
+    @staticmethod
+    def fit(
+        t: NDArray[np.float64],
+        pose: NDArray[np.float64],
+        velocity: NDArray[np.float64] | None,
+        acceleration: NDArray[np.float64] | None,
+        angular_velocity: NDArray[np.float64] | None,
+        angular_acceleration: NDArray[np.float64] | None,
+        *,
+        normalize: bool,
+        n_basis: int,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+    ) -> CartesianDmp: ...
+    def rollout(
+        self, dt: float, duration: float | None = None, until_rest: bool = False, rest_tol: float = 1e-4
+    ) -> _CartesianArrays: ...
+    def with_goal(self, goal: NDArray[np.float64]) -> CartesianDmp: ...
+    def with_start(self, start: NDArray[np.float64]) -> CartesianDmp: ...
+    def with_tau(self, tau: float) -> CartesianDmp: ...
+    @property
+    def weights(self) -> NDArray[np.float64]: ...
+    @property
+    def goal(self) -> NDArray[np.float64]: ...
+    @property
+    def start(self) -> NDArray[np.float64]: ...
+    @property
+    def tau(self) -> float: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def alpha_z(self) -> float: ...
+    @property
+    def beta_z(self) -> float: ...
+    @property
+    def alpha_x(self) -> float: ...
+    @property
+    def width_factor(self) -> float: ...
+    @property
+    def centers(self) -> NDArray[np.float64]: ...
+    @property
+    def widths(self) -> NDArray[np.float64]: ...
+
+def rollout_batch_cartesian(
+    dmps: list[CartesianDmp],
+    dt: float,
+    duration: float | None = None,
+    until_rest: bool = False,
+    rest_tol: float = 1e-4,
+) -> list[_CartesianArrays]: ...
+
 # The ask/tell learners of crates/learners; built and documented by dmprs.learners. An option
 # left at None takes the default of the core's config struct.
-_Trial = tuple[NDArray[np.float64], NDArray[np.float64], float]
-_Vector = NDArray[np.float64]
+_Trial: TypeAlias = tuple[NDArray[np.float64], NDArray[np.float64], float]
+_Vector: TypeAlias = NDArray[np.float64]
 
 @final
 class ErrorLearning:
@@ -381,7 +465,7 @@ class GaussianProcess:
     @property
     def n_train(self) -> int: ...
 
-_DemoArrays = tuple[
+_DemoArrays: TypeAlias = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None
 ]
 
@@ -411,6 +495,59 @@ class Generalizer:
     def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]: ...
     @property
     def demo_dmps(self) -> list[Dmp]: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def n_query(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_demos(self) -> int: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def n_parameters(self) -> int: ...
+    @property
+    def tau_bounds(self) -> tuple[float, float]: ...
+
+_PoseDemoArrays: TypeAlias = tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+]
+
+@final
+class CartesianGeneralizer:
+    """crates/dmp-core/src/cartesian_generalize.rs; built and documented by dmprs.Generalizer.
+    Demos are (t, pose, velocity, acceleration, angular_velocity, angular_acceleration)."""
+
+    def __new__(
+        cls,
+        queries: NDArray[np.float64],
+        demos: list[_PoseDemoArrays],
+        method: str,
+        *,
+        n_basis: int,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+        kernel: str,
+        bandwidth: float,
+        ridge: float,
+        interpolate: bool,
+        gp_noise: float,
+        gp_optimize: bool | None,
+        gp_restarts: int,
+    ) -> CartesianGeneralizer: ...
+    def predict(self, q: NDArray[np.float64]) -> CartesianDmp: ...
+    def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]: ...
+    def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]: ...
+    @property
+    def demo_dmps(self) -> list[CartesianDmp]: ...
     @property
     def method(self) -> str: ...
     @property

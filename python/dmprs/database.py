@@ -5,9 +5,11 @@ On disk a database is a directory::
 
     manifest.json          format, schema version, query names and units, and per demo its
                            file, sha256, label and metadata
-    demo_<sha256[:16]>.npz one per demo: query, t, y and optionally yd, ydd (float64)
+    demo_<sha256[:16]>.npz one per demo: query, t, y and optionally yd, ydd (float64); for a pose
+                           demonstration query, t, position, quaternion and optionally
+                           velocity, angular_velocity, acceleration, angular_acceleration
 
-Saving never leaves a half-written database (design.md §5, "nothing is lost"): every file is
+Saving never leaves a half-written database: every file is
 written to a temporary file in the same directory, flushed, fsync'ed and renamed into place; the
 demo files are named by their content, so they never overwrite the files of the previous version;
 the manifest is replaced last, atomically, and only then are files no manifest refers to removed.
@@ -37,25 +39,33 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs._arrays import as_count, as_query
 from dmprs._io import write_atomic
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = ["Database", "Demo", "SCHEMA_VERSION"]
 
-#: The schema this version writes and the newest it reads.
-SCHEMA_VERSION = 1
+#: The newest schema this version reads and writes. Schema 2 adds pose demonstrations; a
+#: database of joint-space demonstrations is still written as schema 1, so older dmprs read it.
+SCHEMA_VERSION = 2
+_POSE_SCHEMA = 2
 _FORMAT = "dmprs.Database"
 _MANIFEST = "manifest.json"
 _DEMO_FILE = re.compile(r"^demo_[0-9a-f]{16}\.npz$")
 _ARRAY_KEYS = {"query", "t", "y", "yd", "ydd"}
+_POSE_KEYS = {
+    "query", "t", "position", "quaternion", "velocity", "angular_velocity", "acceleration",
+    "angular_acceleration",
+}
+#: what :meth:`Database.add` can do with a query already present
+DUPLICATE_POLICIES = ("refuse", "replace", "keep")
 
 
 @dataclass(frozen=True, eq=False)
 class Demo:
-    """One demonstration: its task ``query`` (n,), its ``trajectory``, an optional ``label`` and
-    JSON-safe ``metadata``."""
+    """One demonstration: its task ``query`` (n,), its ``trajectory`` (joint space, or a pose
+    trajectory), an optional ``label`` and JSON-safe ``metadata``."""
 
     query: NDArray[np.float64]
-    trajectory: Trajectory
+    trajectory: Trajectory | CartesianTrajectory
     label: str | None = None
     metadata: Mapping[str, Any] = field(default_factory=dict)
 
@@ -77,8 +87,10 @@ class Database:
     """Demonstrations ``(query, trajectory)`` with named, unit-labelled query dimensions.
 
     ``Database(query_names=("bottle_volume",), query_units=("l",))``: the query of every demo has
-    ``len(query_names)`` entries. All demos must have the same number of DOFs and distinct
-    queries (a generalizer could not tell two demos at the same query apart).
+    ``len(query_names)`` entries. All demos must have the same number of DOFs. A query that is
+    already present is handled by :meth:`add`'s ``on_duplicate`` policy. The demos are either all
+    joint-space :class:`~dmprs.Trajectory` s or all pose :class:`~dmprs.CartesianTrajectory` s
+    (then :attr:`is_cartesian`).
     """
 
     def __init__(self, query_names: Sequence[str], query_units: Sequence[str] | None = None) -> None:
@@ -114,34 +126,63 @@ class Database:
         """DOFs of the trajectories (None while empty)."""
         return self._demos[0].trajectory.n_dof if self._demos else None
 
+    @property
+    def is_cartesian(self) -> bool:
+        """True when the demonstrations are pose trajectories (False while empty)."""
+        return bool(self._demos) and isinstance(self._demos[0].trajectory, CartesianTrajectory)
+
     def _check_query(self, query: ArrayLike) -> NDArray[np.float64]:
         return as_query(query, "query", self._names)
 
     def add(
         self,
         query: ArrayLike,
-        trajectory: Trajectory,
+        trajectory: Trajectory | CartesianTrajectory,
         *,
         label: str | None = None,
         metadata: Mapping[str, Any] | None = None,
+        on_duplicate: str = "refuse",
     ) -> Demo:
-        """Appends a demonstration and returns its record. ``metadata`` must be JSON-serializable."""
-        q = self._check_query(query)
-        if not isinstance(trajectory, Trajectory):
+        """Appends a demonstration and returns its record. ``metadata`` must be JSON-serializable.
+
+        ``on_duplicate`` says what happens when a demo with exactly this query is present:
+
+        * ``"refuse"`` (default): raise :class:`~dmprs.errors.InvalidInputError` and change
+          nothing. The default because the other two silently change what the database means
+          (replace drops a demonstration, keep gives generalizers a repeat to deal with); a
+          caller that grows a database on purpose picks one (``dmprs.learn`` uses "replace").
+        * ``"replace"``: the new demo takes the place (and index) of every demo at that query.
+        * ``"keep"``: both are kept, in order. Generalizer ``"linear"`` averages the DMP
+          parameters of repeats (their mean is the least-squares estimate at that query);
+          ``"lwr-gp"`` refuses repeats with a message saying so.
+        """
+        if on_duplicate not in DUPLICATE_POLICIES:
             raise InvalidInputError(
-                f"trajectory is a {type(trajectory).__name__}; expected a dmprs.Trajectory"
+                f"on_duplicate = {on_duplicate!r} is invalid: use one of {DUPLICATE_POLICIES}"
+            )
+        q = self._check_query(query)
+        if not isinstance(trajectory, (Trajectory, CartesianTrajectory)):
+            raise InvalidInputError(
+                f"trajectory is a {type(trajectory).__name__}; expected a dmprs.Trajectory or "
+                "dmprs.CartesianTrajectory"
+            )
+        if self._demos and isinstance(trajectory, CartesianTrajectory) != self.is_cartesian:
+            kinds = ("joint-space trajectories", "pose trajectories")
+            raise InvalidInputError(
+                f"the trajectory is one of the {kinds[not self.is_cartesian]}, but the demonstrations "
+                f"in this database are {kinds[self.is_cartesian]}"
             )
         if self._demos and trajectory.n_dof != self.n_dof:
             raise InvalidInputError(
                 f"the trajectory has {trajectory.n_dof} DOFs, but the demonstrations in this "
                 f"database have {self.n_dof}"
             )
-        for k, d in enumerate(self._demos):
-            if np.array_equal(d.query, q):
-                raise InvalidInputError(
-                    f"demonstration {k} already has the query {q.tolist()}; two demonstrations at "
-                    "the same query cannot be generalized"
-                )
+        same = [k for k, d in enumerate(self._demos) if np.array_equal(d.query, q)]
+        if same and on_duplicate == "refuse":
+            raise InvalidInputError(
+                f"demonstration {same[0]} already has the query {q.tolist()}; pass "
+                "on_duplicate='replace' or 'keep' to add another demonstration at the same query"
+            )
         if label is not None and not isinstance(label, str):
             raise InvalidInputError(f"label must be a string or None; got {label!r}")
         meta = dict(metadata or {})
@@ -151,7 +192,12 @@ class Database:
             raise InvalidInputError(f"metadata must be JSON-serializable: {exc}") from None
         q.setflags(write=False)
         demo = Demo(q, trajectory, label, meta)
-        self._demos.append(demo)
+        if same and on_duplicate == "replace":
+            self._demos[same[0]] = demo
+            for k in reversed(same[1:]):
+                del self._demos[k]
+        else:
+            self._demos.append(demo)
         return demo
 
     def __len__(self) -> int:
@@ -212,7 +258,7 @@ class Database:
             entries.append({"file": name, "sha256": digest, "label": demo.label, "metadata": dict(demo.metadata)})
         manifest = {
             "format": _FORMAT,
-            "schema_version": SCHEMA_VERSION,
+            "schema_version": _POSE_SCHEMA if self.is_cartesian else 1,
             "query_names": list(self._names),
             "query_units": list(self._units),
             "demos": entries,
@@ -267,7 +313,8 @@ class Database:
         for k, entry in enumerate(entries):
             demo = _read_demo(root, mpath, k, entry, db.n_query)
             try:
-                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata)
+                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata,
+                       on_duplicate="keep")  # as saved
             except DmprsError as exc:
                 raise DatabaseError(f"{root / entry['file']}: {exc}") from None
         return db
@@ -275,11 +322,11 @@ class Database:
 
 def _npz_bytes(demo: Demo) -> bytes:
     tr = demo.trajectory
-    arrays = {"query": demo.query, "t": tr.t, "y": tr.y}
-    if tr.yd is not None:
-        arrays["yd"] = tr.yd
-    if tr.ydd is not None:
-        arrays["ydd"] = tr.ydd
+    arrays = {"query": demo.query}
+    names = sorted(_POSE_KEYS if isinstance(tr, CartesianTrajectory) else _ARRAY_KEYS)
+    for name in names:
+        if name != "query" and getattr(tr, name) is not None:
+            arrays[name] = getattr(tr, name)
     buf = io.BytesIO()
     np.savez(buf, **arrays)
     return buf.getvalue()
@@ -317,10 +364,14 @@ def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Dem
     try:
         with np.load(io.BytesIO(data), allow_pickle=False) as npz:
             keys = set(npz.files)
-            missing = {"query", "t", "y"} - keys
-            extra = keys - _ARRAY_KEYS
+            pose = "position" in keys
+            missing = ({"query", "t", "position", "quaternion"} if pose else {"query", "t", "y"}) - keys
+            extra = keys - (_POSE_KEYS if pose else _ARRAY_KEYS)
             if missing or extra:
-                raise ValueError(f"arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd")
+                raise ValueError(
+                    f"arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd, or query, "
+                    "t, position, quaternion and optionally their derivatives"
+                )
             arrays = {key: npz[key] for key in keys}
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         raise DatabaseError(f"{fpath}: not a readable demonstration file ({exc})") from None
@@ -331,7 +382,11 @@ def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Dem
     if q.shape != (n_query,):
         raise DatabaseError(f"{fpath}: query has shape {q.shape}, expected ({n_query},)")
     try:
-        traj = Trajectory(arrays["t"], arrays["y"], arrays.get("yd"), arrays.get("ydd"))
+        traj: Trajectory | CartesianTrajectory
+        if pose:
+            traj = CartesianTrajectory(**{k: v for k, v in arrays.items() if k != "query"})
+        else:
+            traj = Trajectory(arrays["t"], arrays["y"], arrays.get("yd"), arrays.get("ydd"))
     except DmprsError as exc:
         raise DatabaseError(f"{fpath}: invalid trajectory ({exc})") from None
     label = entry.get("label")

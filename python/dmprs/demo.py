@@ -1,5 +1,5 @@
-"""A DMP demonstration: fit a 7-DOF reaching movement, reproduce it, and adapt it to a new goal
-and speed. Runs until the paper's experiments (``dmprs reproduce``) replace it as the main job."""
+"""A quick look at the DMP core (``dmprs demo``): fit a 7-DOF reaching movement, reproduce it,
+and adapt it to a new goal and speed."""
 
 from __future__ import annotations
 
@@ -8,7 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-import dmprs
+from dmprs._core import __version__
+from dmprs.dmp import DMP, rollout_batch
+from dmprs.errors import DmprsError
+from dmprs.profiles import min_jerk
 
 
 def reaching_demo(n_samples: int = 1000, duration: float = 1.0, n_dof: int = 7):
@@ -16,7 +19,7 @@ def reaching_demo(n_samples: int = 1000, duration: float = 1.0, n_dof: int = 7):
     starting and ending at rest."""
     t = np.linspace(0.0, duration, n_samples)
     s = t / duration
-    mj = 10 * s**3 - 15 * s**4 + 6 * s**5
+    mj = min_jerk(s)[0]
     k = np.arange(n_dof)
     start = 0.2 * np.sin(k)
     goal = start + 0.8 * np.cos(1.3 * k)
@@ -27,7 +30,7 @@ def reaching_demo(n_samples: int = 1000, duration: float = 1.0, n_dof: int = 7):
 def run(out: Path | None) -> dict[str, float]:
     t, y = reaching_demo()
     t0 = time.perf_counter()
-    dmp = dmprs.DMP.fit(t, y, n_basis=50)
+    dmp = DMP.fit(t, y, n_basis=50)
     fit_ms = (time.perf_counter() - t0) * 1e3
     repro = dmp.rollout(dt=t[1] - t[0])
     rel = np.abs(repro.y - y).max(axis=0) / np.ptp(y, axis=0)
@@ -35,10 +38,10 @@ def run(out: Path | None) -> dict[str, float]:
     adapted = dmp.with_goal(new_goal).with_tau(1.5).rollout(dt=0.001, until_rest=True)
     many = [dmp.with_goal(dmp.goal + 0.001 * i) for i in range(1000)]
     t0 = time.perf_counter()
-    dmprs.rollout_batch(many, dt=0.001)
+    rollout_batch(many, dt=0.001)
     batch_ms = (time.perf_counter() - t0) * 1e3
 
-    print(f"dmprs {dmprs.__version__}: {dmp}")
+    print(f"dmprs {__version__}: {dmp}")
     print(f"fit of a 7-DOF, 1000-sample demo with 50 kernels: {fit_ms:.3f} ms")
     print("reproduction error per DOF, % of its range: "
           + " ".join(f"{100 * e:.2f}" for e in rel))
@@ -55,7 +58,7 @@ def _plot(out: Path, t, y, repro, adapted) -> None:
 
     try:
         plt = pyplot()
-    except dmprs.DmprsError as exc:
+    except DmprsError as exc:
         print(f"{exc}: no figure written")
         return
     out.mkdir(parents=True, exist_ok=True)

@@ -4,7 +4,7 @@ Rust core."""
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -12,7 +12,10 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs import _core
 from dmprs._arrays import as_count, as_float_array, as_scalar
 from dmprs.errors import InvalidInputError
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
+
+if TYPE_CHECKING:
+    from dmprs.cartesian import CartesianDMP
 
 __all__ = ["DMP", "rollout_batch"]
 
@@ -117,7 +120,7 @@ class DMP:
         alpha_x: float = 2.0,
         width_factor: float = 2.0,
     ) -> DMP:
-        """Fits a DMP to one demonstration by batch least squares (method.md §2.3).
+        """Fits a DMP to one demonstration by batch least squares (docs/method.md §2.3).
 
         ``tau = t[-1] - t[0]``, ``g = y[-1]``, ``y0 = y[0]``; with
         ``x_j = exp(-alpha_x (t_j - t_0) / tau)`` and
@@ -292,23 +295,51 @@ class DMP:
         )
 
 
+@overload
 def rollout_batch(
-    dmps: Iterable[DMP],
+    dmps: Iterable[DMP], dt: float = ..., duration: float | None = ..., *,
+    until_rest: bool = ..., rest_tol: float = ...,
+) -> list[Trajectory]: ...
+@overload
+def rollout_batch(
+    dmps: Iterable[CartesianDMP], dt: float = ..., duration: float | None = ..., *,
+    until_rest: bool = ..., rest_tol: float = ...,
+) -> list[CartesianTrajectory]: ...
+@overload
+def rollout_batch(
+    dmps: Iterable[DMP | CartesianDMP], dt: float = ..., duration: float | None = ..., *,
+    until_rest: bool = ..., rest_tol: float = ...,
+) -> list[Trajectory | CartesianTrajectory]: ...
+def rollout_batch(
+    dmps: Iterable[DMP | CartesianDMP],
     dt: float = 0.001,
     duration: float | None = None,
     *,
     until_rest: bool = False,
     rest_tol: float = 1e-4,
-) -> list[Trajectory]:
+) -> list[Trajectory] | list[CartesianTrajectory] | list[Trajectory | CartesianTrajectory]:
     """Rolls out many DMPs in one call, in parallel on all cores with the GIL released.
 
     The result equals ``[d.rollout(dt, duration, ...) for d in dmps]`` bit for bit. Each DMP
     keeps its own tau, so with ``duration=None`` the trajectories may differ in length.
+    :class:`dmprs.CartesianDMP` s (which give :class:`dmprs.CartesianTrajectory` s) may be mixed in.
     """
+    from dmprs.cartesian import CartesianDMP  # cartesian builds on this module
+
     items = list(dmps)
     for i, d in enumerate(items):
-        if not isinstance(d, DMP):
-            raise InvalidInputError(f"dmps[{i}] is a {type(d).__name__}, not a dmprs.DMP")
+        if not isinstance(d, (DMP, CartesianDMP)):
+            raise InvalidInputError(f"dmps[{i}] is a {type(d).__name__}, not a dmprs.DMP or dmprs.CartesianDMP")
     opts = _rollout_options(dt, duration, until_rest, rest_tol)
-    arrays = _core.rollout_batch([d._core for d in items], **opts)
-    return [Trajectory._trusted(*a) for a in arrays]
+    joint = [(i, d) for i, d in enumerate(items) if isinstance(d, DMP)]
+    pose = [(i, d) for i, d in enumerate(items) if isinstance(d, CartesianDMP)]
+    out: list[Any] = [None] * len(items)
+    if joint:
+        arrays = _core.rollout_batch([d._core for _, d in joint], **opts)
+        for (i, _), a in zip(joint, arrays, strict=True):
+            out[i] = Trajectory._trusted(*a)
+    if pose:
+        cartesian = _core.rollout_batch_cartesian([d._core for _, d in pose], **opts)
+        for (i, _), c in zip(pose, cartesian, strict=True):
+            out[i] = CartesianTrajectory._trusted(*c)
+    return out

@@ -1,8 +1,8 @@
 """Ready-made learning experiments: a task, its demonstration database, a generalizer and a
 learner, wired together the way the paper does it. The CLI (``dmprs learn``) runs these.
 
-Each experiment is an :class:`ExperimentSetup` factory registered in :data:`SETUPS`; the
-matchbox and pouring simulations add theirs.
+Each experiment is an :class:`ExperimentSetup` factory; :data:`SETUPS` lists them all by the name
+the CLI uses (``dmprs learn NAME``).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError
-from dmprs.learning import LearningResult, learn
+from dmprs.loop import LearningResult, learn
 from dmprs.tasks.base import Task
 
 
@@ -31,7 +31,7 @@ class ExperimentSetup:
     default_learner: str
     #: learner name -> factory(desired_query, **options)
     learners: dict[str, Callable[..., Any]] = field(default_factory=dict)
-    #: search limits for bracketing learners (the demos' queries, method.md §6.2 #9)
+    #: search limits for bracketing learners (the demos' queries, docs/method.md §6.2 #9)
     low: float | None = None
     high: float | None = None
 
@@ -62,19 +62,32 @@ def query_learners(low: float | None, high: float | None, scale: float = 1.0,
         "root": lambda q0, **kw: L.IllinoisRootFinder(q0, **bracket(), max_trials=max_trials, **kw),
         # constrained-domain policy gradient (eq. 12): finite differences in q, every trial counted
         "pg": lambda q0, **kw: L.PolicyGradient(q0, scale=scale, max_trials=max_trials, **kw),
+        # black-box baseline (dmprs.cmaes): from the same first trial q0, step a quarter of the
+        # search range (or ``scale``), within the search limits when there are any
+        "cma": lambda q0, **kw: _cma(q0, low, high, scale, max_trials, **kw),
     }
+
+
+def _cma(q0: NDArray[np.float64], low: float | None, high: float | None, scale: float, max_trials: int,
+         **kw: Any) -> Any:
+    from dmprs.cmaes import CMAES
+
+    sigma = kw.pop("sigma0", 0.25 * (high - low) if low is not None and high is not None else scale)
+    kw.setdefault("max_trials", max_trials)
+    return CMAES(q0, sigma, first_x0=True, **kw)
 
 
 # --- the analytic task ------------------------------------------------------------------------
 
 def analytic_setup(noise: float = 0.0, tol: float = 0.01, desired: float = 1.5,
-                   amplitudes: tuple[float, float] = (0.5, 2.5)) -> ExperimentSetup:
+                   amplitudes: tuple[float, float] = (0.5, 2.5), execution_noise: float = 0.0) -> ExperimentSetup:
     """Two demonstrations (bumps of the given amplitudes, labelled with their outcomes), linear
     generalization, desired outcome ``desired``."""
-    from dmprs import Database, Generalizer
+    from dmprs.database import Database
+    from dmprs.generalize import Generalizer
     from dmprs.tasks.analytic import AnalyticTask
 
-    task = AnalyticTask(noise=noise, tol=tol)
+    task = AnalyticTask(noise=noise, tol=tol, execution_noise=execution_noise)
     db = Database(query_names=task.query_names, query_units=task.query_units)
     labels = []
     for a in amplitudes:
@@ -90,7 +103,7 @@ def analytic_setup(noise: float = 0.0, tol: float = 0.01, desired: float = 1.5,
     )
 
 
-# --- pouring (paper section 5, method.md §9) -------------------------------------------------
+# --- pouring (paper section 5, docs/method.md §9) --------------------------------------------
 
 #: Gain of the "fixed" learner for pouring, in litres of assumed volume per litre of poured
 #: error: K = 1 l/l is eq. 16 with K = I, untuned and the same at every volume, which is what the
@@ -104,8 +117,8 @@ POURING_FIXED_GAIN = 1.0
 
 def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: float = 0.010,
                   liquid_seed: int = 0, demo_seed: int = 0, fixed_gain: float = POURING_FIXED_GAIN,
-                  reseed_liquid: bool = False, cache_dir: str | None = None) -> ExperimentSetup:
-    """Pour ``target_volume`` (0.2 l) from a bottle holding ``bottle_volume`` l (method.md §9).
+                  reseed_liquid: bool = False, cache_dir: str | None = None, noise: Any = None) -> ExperimentSetup:
+    """Pour ``target_volume`` (0.2 l) from a bottle holding ``bottle_volume`` l (docs/method.md §9).
 
     Two scripted demonstrations pour ``target_volume`` from bottles of 0.3 l and 1.0 l (their
     queries are those volumes; their peak tilts are calibrated in the simulation with the liquid
@@ -114,12 +127,14 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
     Learners: ``golden`` (default, the paper's choice, paper mode, bracket [0.3, 1.0] l),
     ``fixed`` (eq. 16 with the scalar gain ``fixed_gain`` in l/l) and the generic query learners
     (``error``, ``weighted`` with scale 0.05 l, ``secant``, ``golden-robust``, ``root``).
+    ``noise``: a :class:`dmprs.tasks.noise.Noise` for the trials (the demonstrations stay exact).
     """
-    from dmprs import Database, Generalizer
+    from dmprs.database import Database
+    from dmprs.generalize import Generalizer
     from dmprs.tasks.pouring import DEMO_VOLUMES, Pouring, demonstration
 
     task = Pouring(bottle_volume, target_volume=target_volume, tol=tol,
-                   liquid_seed=liquid_seed, reseed_liquid=reseed_liquid)
+                   liquid_seed=liquid_seed, reseed_liquid=reseed_liquid, noise=noise)
     gain = float(fixed_gain)
     if not (np.isfinite(gain) and gain > 0):
         raise InvalidInputError(f"fixed_gain = {fixed_gain!r} must be > 0 l/l")
@@ -129,8 +144,8 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
                                        cache_dir=cache_dir)
         db.add(query, traj)
     gen = Generalizer(db, method="linear", n_basis=40)
-    low, high = min(DEMO_VOLUMES), max(DEMO_VOLUMES)  # the demos' queries (method.md §6.2 #9)
-    learners = query_learners(low, high, scale=0.05)  # eq. 17's scale for litres (method.md §5.1)
+    low, high = min(DEMO_VOLUMES), max(DEMO_VOLUMES)  # the demos' queries (docs/method.md §6.2 #9)
+    learners = query_learners(low, high, scale=0.05)  # eq. 17's scale for litres (docs/method.md §5.1)
 
     def fixed(q0: NDArray[np.float64], **kw: Any) -> Any:
         from dmprs import learners as L
@@ -149,8 +164,8 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
 
 # --- matchbox flip-up --------------------------------------------------------------------------
 
-def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
-    """Stand the matchbox upright (method.md §8): two scripted strikes labelled with their
+def matchbox_setup(demos: str = "default", noise: Any = None, **config: float) -> ExperimentSetup:
+    """Stand the matchbox upright (docs/method.md §8): two scripted strikes labelled with their
     measured outcome angles, linear generalization with N = 25 kernels (the paper's matchbox
     setting), desired query pi/2.
 
@@ -158,14 +173,16 @@ def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
     ``"both_flipped_back"``: two that flip back, so pi/2 lies outside the demos and the
     generalizer extrapolates (Fig. 7). Learners: ``error`` (default; eq. 16, K = I, the paper's),
     ``weighted`` (eq. 17 with scale 1 rad, recommended for extrapolation), ``secant``, and the
-    bracketing ones between the demos' labels. ``config`` overrides simulation parameters.
+    bracketing ones between the demos' labels. ``config`` overrides simulation parameters;
+    ``noise`` is a :class:`dmprs.tasks.noise.Noise` for the trials (the demos are measured exactly).
     """
-    from dmprs import Database, Generalizer
+    from dmprs.database import Database
+    from dmprs.generalize import Generalizer
     from dmprs.tasks.matchbox import DEMO_SETS, MatchboxFlip
 
     if demos not in DEMO_SETS:
         raise InvalidInputError(f"unknown demonstration set {demos!r}; choose from {', '.join(DEMO_SETS)}")
-    task = MatchboxFlip(**config)
+    task = MatchboxFlip(noise, **config)
     db = Database(query_names=task.query_names, query_units=task.query_units)
     labels = []
     for duration in DEMO_SETS[demos]:
@@ -212,7 +229,7 @@ def analytic(desired: float = 1.5, learner: str = "error", max_trials: int = 20,
 
 
 def matchbox(demos: str = "default", learner: str = "error", max_trials: int = 20,
-             log_dir: str | Path | None = None, seed: int = 0, **config: float) -> LearningResult:
+             log_dir: str | Path | None = None, seed: int = 0, **config: Any) -> LearningResult:
     """The matchbox flip-up end to end (see :mod:`dmprs.tasks.matchbox`)."""
     return run("matchbox", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
                demos=demos, **config)

@@ -1,6 +1,6 @@
 """Gaussian process regression with a squared-exponential ARD kernel, fitted by the Rust core.
 
-Used by the "lwr-gp" generalizer for the goal and duration (method.md §3.2, after Ude et al.
+Used by the "lwr-gp" generalizer for the goal and duration (docs/method.md §3.2, after Ude et al.
 2010), and usable on its own.
 """
 

@@ -12,7 +12,7 @@ Every learner has the shape of cma, optuna and nevergrad::
 
 Query learners (:class:`ErrorLearning`, :class:`GoldenSection`, :class:`IllinoisRootFinder`,
 :class:`PolicyGradient`) are told the signed error ``eps = q0 - q_a`` (paper eq. 13), one
-entry per query dimension, with the sign convention of method.md §5.3:
+entry per query dimension, with the sign convention of docs/method.md §5.3:
 
     **eps > 0 means the query must increase.**
 
@@ -189,7 +189,7 @@ class _Learner:
     @property
     def best(self) -> Trial | None:
         """The executed trial with the lowest score (None before the first tell). When
-        converged it is the last executed trial (method.md §6.2 fix 2)."""
+        converged it is the last executed trial (docs/method.md §6.2 fix 2)."""
         b = self._core.best
         return None if b is None else Trial(*b)
 
@@ -213,7 +213,7 @@ class _Learner:
 
 
 class ErrorLearning(_Learner):
-    r"""Error learning in the query space, paper eqs. 16 and 17 (method.md §5).
+    r"""Error learning in the query space, paper eqs. 16 and 17 (docs/method.md §5).
 
     ::
 
@@ -227,7 +227,7 @@ class ErrorLearning(_Learner):
     * ``"identity"`` — J = I: the paper's matchbox setting (K = I).
     * ``"secant"`` — secant slope (n = 1) / Broyden update (n > 1), starting from I.
     * ``"finite-difference"`` — J from trials at q0 + delta e_j after the first trial at q0
-      (n extra trials, method.md §5.2 item 4).
+      (n extra trials, docs/method.md §5.2 item 4).
     * an ``(n, n)`` array (a scalar for n = 1) — a fixed J.
 
     Estimated J's must have a positive symmetric part and singular values in [0.1, 10], else I
@@ -279,7 +279,7 @@ class ErrorLearning(_Learner):
 
 class GoldenSection(_Learner):
     r"""Golden-section error learning for a scalar query (the paper's algorithm box,
-    method.md §6).
+    docs/method.md §6).
 
     Each trial moves 61.8 % of the way from q towards the limit sign(eps) points to::
 
@@ -373,7 +373,7 @@ class IllinoisRootFinder(_Learner):
 
 
 class PolicyGradient(_Learner):
-    r"""Constrained-domain policy gradient, paper eq. 12 (method.md §4), with central finite
+    r"""Constrained-domain policy gradient, paper eq. 12 (docs/method.md §4), with central finite
     differences::
 
         J(q)    = ||eps(q) / scale||^2                       (the cost of reward (1), eq. 14)
@@ -436,7 +436,7 @@ def _weights(theta0: Any) -> tuple[NDArray[np.float64], int | None]:
 
 
 class PoWER(_Learner):
-    r"""PoWER over a flat DMP weight vector (Kober & Peters; method.md §7.1), a baseline the
+    r"""PoWER over a flat DMP weight vector (Kober & Peters; docs/method.md §7.1), a baseline the
     paper cites but does not report numbers for.
 
     ``ask()`` returns ``theta_i = mean + N(0, diag(sigma**2))``; ``tell(theta, R)`` takes the
@@ -489,7 +489,7 @@ class PoWER(_Learner):
 
 
 class PI2(_Learner):
-    r"""PI² over a flat DMP weight vector (Theodorou, Buchli, Schaal 2010; method.md §7.2), a
+    r"""PI² over a flat DMP weight vector (Theodorou, Buchli, Schaal 2010; docs/method.md §7.2), a
     baseline the paper cites but does not report numbers for.
 
     Each update asks one noiseless evaluation rollout (theta itself) and then ``n_rollouts``

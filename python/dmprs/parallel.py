@@ -21,16 +21,12 @@ from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
 
-from dmprs.errors import DmprsError, InvalidInputError
+from dmprs.errors import DmprsError, InvalidInputError, ParallelError
 
 T = TypeVar("T")
 R = TypeVar("R")
 
 BACKENDS = ("local", "ray", "serial")
-
-
-class ParallelError(DmprsError, RuntimeError):
-    """A run inside ``pmap`` failed; the message names the item."""
 
 
 def pmap(

@@ -19,14 +19,10 @@ import numpy as np
 
 from dmprs._io import append_jsonl, read_jsonl, truncate_cut_line, write_atomic, write_npz_atomic
 from dmprs.adapters import Outcome
-from dmprs.errors import DmprsError
+from dmprs.errors import RunLogError
 from dmprs.trajectory import Trajectory
 
 LOG_SCHEMA_VERSION = 1
-
-
-class RunLogError(DmprsError, OSError):
-    """A run directory that cannot be read or written; the message names the file."""
 
 
 @dataclass(frozen=True)

@@ -99,3 +99,154 @@ class Trajectory:
             f"Trajectory(n_samples={self.n_samples}, n_dof={self.n_dof}, "
             f"duration={self.duration:.6g} s, fields={'+'.join(['t', *parts])})"
         )
+
+
+#: A quaternion whose norm is farther than this from 1 is refused unless normalization is asked
+#: for (the same tolerance as the Rust core's ``dmp_core::cartesian::UNIT_TOLERANCE``).
+UNIT_TOLERANCE = 1e-6
+
+_CARTESIAN_FIELDS = (
+    "t", "position", "quaternion", "velocity", "angular_velocity", "acceleration", "angular_acceleration",
+)
+
+
+def unit_quaternions(q: NDArray[np.float64], name: str, normalize: bool = False) -> NDArray[np.float64]:
+    """``q`` (T, 4), scalar first, checked to be unit quaternions: the zero quaternion is refused,
+    and so is a norm off by more than 1e-6 unless ``normalize`` (then every row is scaled to
+    unit norm). Raises naming the first offending sample."""
+    norms = np.linalg.norm(q, axis=1)
+    zero = norms == 0.0
+    off = zero if normalize else np.abs(norms - 1.0) > UNIT_TOLERANCE
+    if off.any():
+        j = int(np.argmax(off))
+        why = (
+            "the zero quaternion is not a rotation and cannot be normalized" if zero[j] else
+            "orientations must be unit quaternions (|norm - 1| <= 1e-6); pass normalize=True to scale them"
+        )
+        raise InvalidInputError(
+            f"{name}[{j}] has the quaternion (w, x, y, z) = {q[j].tolist()} of norm {norms[j]}: {why}"
+        )
+    return q / norms[:, None] if normalize else q
+
+
+@dataclass(frozen=True, eq=False)
+class CartesianTrajectory:
+    """A pose trajectory at times ``t`` (T,): ``position`` (T, 3) in m and ``quaternion`` (T, 4),
+    scalar first ``(w, x, y, z)`` and unit norm, with the linear ``velocity``, ``acceleration``
+    and the world-frame ``angular_velocity``, ``angular_acceleration`` (T, 3) when known. SI
+    units (m, rad, s); arrays are read-only float64.
+
+    :attr:`pose` is the (T, 7) array ``x, y, z, qw, qx, qy, qz`` of pytransform3d and
+    movement_primitives; :meth:`from_pose` builds one from it. Construction validates: finite
+    values, strictly increasing ``t``, matching shapes, and unit quaternions (to 1e-6).
+    Quaternions are kept as given, signs included (a fit makes them sign-continuous).
+    """
+
+    t: NDArray[np.float64]
+    position: NDArray[np.float64]
+    quaternion: NDArray[np.float64]
+    velocity: NDArray[np.float64] | None = None
+    angular_velocity: NDArray[np.float64] | None = None
+    acceleration: NDArray[np.float64] | None = None
+    angular_acceleration: NDArray[np.float64] | None = None
+
+    def __post_init__(self) -> None:
+        t = as_float_array(self.t, "t", 1)
+        check_increasing(t)
+        fields: dict[str, NDArray[np.float64] | None] = {"t": t}
+        for name in _CARTESIAN_FIELDS[1:]:
+            value = getattr(self, name)
+            if value is None and name not in ("position", "quaternion"):
+                fields[name] = None
+                continue
+            width = 4 if name == "quaternion" else 3
+            arr = as_float_array(value, name, 2)
+            if arr.shape != (t.shape[0], width):
+                raise InvalidInputError(
+                    f"{name} has shape {arr.shape}, expected ({t.shape[0]}, {width}): one row per entry of t"
+                )
+            check_finite(arr, name)
+            fields[name] = arr
+        quaternion = fields["quaternion"]
+        assert quaternion is not None
+        unit_quaternions(quaternion, "quaternion")
+        for name, value in fields.items():
+            owned = None if value is None else value.copy()  # never alias the caller's array
+            if owned is not None:
+                owned.setflags(write=False)
+            object.__setattr__(self, name, owned)
+
+    @classmethod
+    def from_pose(
+        cls,
+        t: Any,
+        pose: Any,
+        *,
+        normalize: bool = False,
+        velocity: Any = None,
+        angular_velocity: Any = None,
+        acceleration: Any = None,
+        angular_acceleration: Any = None,
+    ) -> CartesianTrajectory:
+        """From a (T, 7) ``pose`` array ``x, y, z, qw, qx, qy, qz``; ``normalize=True`` scales
+        each quaternion to unit norm instead of refusing one off by more than 1e-6."""
+        p = as_float_array(pose, "pose", 2)
+        if p.shape[1] != 7:
+            raise InvalidInputError(
+                f"pose has shape {p.shape}, expected (T, 7): x, y, z, qw, qx, qy, qz per sample"
+            )
+        check_finite(p, "pose")
+        q = unit_quaternions(p[:, 3:], "pose", normalize)
+        return cls(t, p[:, :3], q, velocity, angular_velocity, acceleration, angular_acceleration)
+
+    @classmethod
+    def _trusted(cls, *arrays: Any) -> CartesianTrajectory:
+        """Wraps arrays fresh from the core (already valid) without re-checking them."""
+        self = object.__new__(cls)
+        for name, arr in zip(_CARTESIAN_FIELDS, arrays, strict=True):
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        return self
+
+    @property
+    def pose(self) -> NDArray[np.float64]:
+        """(T, 7): ``x, y, z, qw, qx, qy, qz``."""
+        out = np.hstack([self.position, self.quaternion])
+        out.setflags(write=False)
+        return out
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def n_dof(self) -> int:
+        """6: three translations and three rotations."""
+        return 6
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def __len__(self) -> int:
+        return self.n_samples
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, CartesianTrajectory):
+            return NotImplemented
+        for name in _CARTESIAN_FIELDS:
+            a, b = getattr(self, name), getattr(other, name)
+            if (a is None) != (b is None):
+                return False
+            if a is not None and (a.shape != b.shape or not np.array_equal(a, b)):
+                return False
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        parts = [n for n in _CARTESIAN_FIELDS[1:] if getattr(self, n) is not None]
+        return (
+            f"CartesianTrajectory(n_samples={self.n_samples}, duration={self.duration:.6g} s, "
+            f"fields={'+'.join(['t', *parts])})"
+        )

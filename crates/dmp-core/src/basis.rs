@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 const ACTIVATION_CUTOFF: f64 = 37.0;
 
 /// Gaussian kernels `Psi_k(x) = exp(-h_k (x - c_k)^2)` on the phase `x` (paper eq. 4), with the
-/// centres and widths of the JSI lab code (method.md §2.2):
+/// centres and widths of the JSI lab code (docs/method.md §2.2):
 /// `c_k = exp(-alpha_x (k-1)/(N-1))`, `h_k = width_factor / (c_{k+1} - c_k)^2`, `h_N = h_{N-1}`.
 /// `width_factor = 2` is the lab code's value (`sigma_k = (c_{k+1}-c_k)/2`).
 #[derive(Debug, Clone, PartialEq)]

@@ -1,7 +1,7 @@
-//! The generalizer `G(q; Z) -> [w, tau, g, y0]` of the paper (eq. 6; method.md §3): from M
+//! The generalizer `G(q; Z) -> [w, tau, g, y0]` of the paper (eq. 6; docs/method.md §3): from M
 //! demonstrations, each with a task query `q_k` in R^n, to a DMP for any query.
 //!
-//! * [`Method::Linear`] (method.md §3.3, the paper's matchbox setting): affine interpolation and
+//! * [`Method::Linear`] (docs/method.md §3.3, the paper's matchbox setting): affine interpolation and
 //!   extrapolation of every parameter. For two demos and a scalar query this is the paper's
 //!   `theta(q) = (1 - a) theta_1 + a theta_2`, `a = (q - q_1)/(q_2 - q_1)`. For n-D queries it
 //!   uses the barycentric coordinates of `q` with respect to the demo queries, which must be
@@ -9,24 +9,24 @@
 //!   M < n + 1, constant along directions orthogonal to the demos' affine hull (the least-squares
 //!   projection onto it). More than n + 1 demos would make "linear" a regression that no longer
 //!   reproduces its demos, so it is refused: use `LwrGp`.
-//! * [`Method::LwrGp`] (Ude et al. 2010, method.md §3.2): shape weights by locally weighted
+//! * [`Method::LwrGp`] (Ude et al. 2010, docs/method.md §3.2): shape weights by locally weighted
 //!   regression over all demo data ([`crate::lwr`]), and tau, goal and start by one Gaussian
 //!   process per scalar ([`crate::gp`]). The start y0 is not in the paper's theta = [w, tau, g];
 //!   we generalize it like g so that the result is a complete DMP that reproduces each demo.
 //!
 //! Either way tau must stay positive: a query whose tau falls outside
-//! `(0.2 min tau_k, 5 max tau_k)` (method.md §3.3) is refused with [`Error::Extrapolation`].
+//! `(0.2 min tau_k, 5 max tau_k)` (docs/method.md §3.3) is refused with [`Error::Extrapolation`].
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::basis::Basis;
-use crate::design::{PreparedDemo, normal_equations, solve_ridge};
+use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
 use crate::error::{Error, Result, check_scalar};
-use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
+use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales};
 use crate::lwr::{Lwr, LwrOptions};
 
-/// tau(q) must lie strictly inside `(TAU_LOW x min tau_k, TAU_HIGH x max tau_k)` (method.md §3.3).
+/// tau(q) must lie strictly inside `(TAU_LOW x min tau_k, TAU_HIGH x max tau_k)` (docs/method.md §3.3).
 pub const TAU_LOW: f64 = 0.2;
 pub const TAU_HIGH: f64 = 5.0;
 
@@ -35,12 +35,12 @@ pub const TAU_HIGH: f64 = 5.0;
 pub struct LwrGpOptions {
     pub lwr: LwrOptions,
     /// Noise standard deviation of each GP relative to the standard deviation of its outputs.
-    /// Held fixed: a small value makes the GP reproduce the demos (method.md §10). Default 1e-4
-    /// (method.md §3.2 suggests 1e-3; 1e-4 reproduces demos about 100 x more closely and still
+    /// Held fixed: a small value makes the GP reproduce the demos (docs/method.md §10). Default 1e-4
+    /// (docs/method.md §3.2 suggests 1e-3; 1e-4 reproduces demos about 100 x more closely and still
     /// keeps the kernel matrix well conditioned for distinct queries).
     pub gp_noise: f64,
     /// Fit length scales and signal variances by ML-II. `None`: only with at least 4 demos
-    /// (method.md §3.2: with M <= 3, ML-II is ill-posed; then l = query range, signal = var).
+    /// (docs/method.md §3.2: with M <= 3, ML-II is ill-posed; then l = query range, signal = var).
     pub gp_optimize: Option<bool>,
     pub gp_restarts: usize,
 }
@@ -129,7 +129,7 @@ fn flatten(dmp: &Dmp) -> DVector<f64> {
 }
 
 impl Generalizer {
-    /// Fits one DMP per demonstration (method.md §2.3, each on its own tau and goal) and
+    /// Fits one DMP per demonstration (docs/method.md §2.3, each on its own tau and goal) and
     /// precomputes what `method` needs for fast queries.
     pub fn new(
         queries: &[Vec<f64>],
@@ -281,7 +281,7 @@ impl Generalizer {
 
     fn lwr_gp_model(
         queries: &[Vec<f64>],
-        normal: Vec<crate::design::NormalEquations>,
+        normal: Vec<crate::design_matrix::NormalEquations>,
         dmps: &[Dmp],
         opts: &LwrGpOptions,
     ) -> Result<LwrGp> {
@@ -290,17 +290,8 @@ impl Generalizer {
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
         let optimize = opts.gp_optimize.unwrap_or(m >= 4);
-        let ranges: Vec<f64> = x
-            .row_iter()
-            .map(|r| {
-                let s = r.max() - r.min();
-                if s > 0.0 { s } else { 1.0 }
-            })
-            .collect();
         let fit = |y: Vec<f64>| -> Result<GaussianProcess> {
-            let mean = y.iter().sum::<f64>() / m as f64;
-            let var = y.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / m as f64;
-            let var = if var > 0.0 { var } else { 1.0 };
+            let (ranges, var) = data_scales(&x.as_view(), &y);
             let noise = opts.gp_noise * opts.gp_noise * var;
             let initial = Hyperparameters {
                 length_scales: ranges.clone(),
@@ -453,7 +444,7 @@ impl Generalizer {
     }
 
     /// Central-difference Jacobian of [`Self::parameters`] with respect to `q`
-    /// (`n_parameters x n`), for learners that need a gain (method.md §5.2). The step in
+    /// (`n_parameters x n`), for learners that need a gain (docs/method.md §5.2). The step in
     /// dimension d is `rel_step x` the range of the demo queries in d (or `max(|q_d|, 1)` where
     /// they do not vary). Exact up to rounding for the linear generalizer, which is affine.
     pub fn jacobian(&self, q: &[f64], rel_step: f64) -> Result<DMatrix<f64>> {

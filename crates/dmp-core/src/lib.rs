@@ -4,21 +4,29 @@
 //! "Efficient sensorimotor learning from multiple demonstrations" (2013), eqs. 1-4, their fit
 //! from demonstrations and their rollout, and their generalization over a database of
 //! demonstrations (paper eq. 6: Gaussian processes, locally weighted regression, linear
-//! interpolation). Pure Rust on nalgebra; no Python, no learners.
+//! interpolation), and the Cartesian (position + unit quaternion) DMP of Ude, Nemec, Petrič and
+//! Morimoto (2014) on the same phase and basis. Pure Rust on nalgebra; no Python, no learners.
 
 pub mod basis;
-pub mod design;
-pub mod diff;
+pub mod cartesian;
+pub mod cartesian_generalize;
+pub mod design_matrix;
 pub mod dmp;
 pub mod error;
+pub mod finite_difference;
 pub mod generalize;
 pub mod gp;
 pub mod linalg;
 pub mod lwr;
 pub mod optimize;
+pub mod quaternion;
 pub mod rollout;
 
 pub use basis::Basis;
+pub use cartesian::{
+    CartesianDemonstration, CartesianDmp, CartesianTrajectory, rollout_batch_cartesian,
+};
+pub use cartesian_generalize::CartesianGeneralizer;
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
 pub use generalize::{Generalizer, LwrGpOptions, Method};

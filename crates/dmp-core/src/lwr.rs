@@ -1,4 +1,4 @@
-//! Locally weighted regression of the DMP shape weights across demonstrations (method.md §3.2,
+//! Locally weighted regression of the DMP shape weights across demonstrations (docs/method.md §3.2,
 //! after Ude et al. 2010): at a query `q`, one weighted least-squares problem over the stacked
 //! data of all demonstrations, with one kernel weight per demonstration,
 //!
@@ -6,9 +6,9 @@
 //! w(q) = ( sum_k kappa_k A_k^T A_k + lambda I )^{-1} ( sum_k kappa_k A_k^T F_k )
 //! ```
 //!
-//! `A_k`, `F_k` are the design matrix and targets of demo k (method.md §2.3), each on its own
+//! `A_k`, `F_k` are the design matrix and targets of demo k (docs/method.md §2.3), each on its own
 //! `tau_k` and `g_k` through the common phase, so `A_k^T A_k` and `A_k^T F_k` are computed once
-//! (see [`crate::design::normal_equations`]) and a query costs one `N x N` solve.
+//! (see [`crate::design_matrix::normal_equations`]) and a query costs one `N x N` solve.
 //!
 //! Kernel weights: `kappa_k = K(d_k)` with `d_k = |D (q - q_k)| / b`, `D = diag(1 / range)` of
 //! the demo queries, the tricube `K(d) = (1 - |d|^3)^3` (`|d| < 1`, else 0) or the Gaussian
@@ -17,14 +17,14 @@
 //!
 //! Interpolation (our addition, on by default): a plain kernel gives a locally constant blend, so
 //! `w(q_k)` would mix demo k with its neighbours and the generalizer would not reproduce its own
-//! demonstrations (required by method.md §10). Multiplying each weight by `(d_min / d_k)^2`, a
+//! demonstrations (required by docs/method.md §10). Multiplying each weight by `(d_min / d_k)^2`, a
 //! Shepard-type factor that grows without bound as `q -> q_k` (Atkeson, Moore & Schaal 1997,
 //! "Locally weighted learning", on kernels that make LWR interpolate), makes `w(q_k)` the fit of
 //! demo k alone (up to the ridge) while leaving `w` continuous and a convex blend elsewhere.
 
 use nalgebra::DMatrix;
 
-use crate::design::{NormalEquations, solve_ridge};
+use crate::design_matrix::{NormalEquations, solve_ridge};
 use crate::error::{Error, Result, check_scalar};
 
 /// The kernel on the scaled query distance.
@@ -61,7 +61,7 @@ pub struct LwrOptions {
     pub bandwidth: f64,
     /// `lambda = ridge x trace(sum kappa A^T A) / N`. Default 1e-10, the relative ridge of
     /// [`crate::Dmp::fit`], so that at a demo's query the regression is that demo's own fit bit for
-    /// bit. (method.md §3.2 suggests about 1e-6 for fear of a singular normal matrix; that cannot
+    /// bit. (docs/method.md §3.2 suggests about 1e-6 for fear of a singular normal matrix; that cannot
     /// happen here, because every demo covers the whole phase interval and so activates every
     /// kernel.)
     pub ridge: f64,

@@ -10,7 +10,7 @@
 //!
 //! What `feedback` is depends on the learner family; each constructor documents it:
 //! * query learners (error learning, golden section, the root finder, policy gradient): the
-//!   signed error `eps = q0 - q_a` (n entries), with the convention of method.md §5.3:
+//!   signed error `eps = q0 - q_a` (n entries), with the convention of docs/method.md §5.3:
 //!   **eps > 0 means the query must increase**;
 //! * PoWER: one return R > 0 (maximized);
 //! * PI²: the costs of one rollout, either one terminal cost or one cost per time step.
@@ -32,7 +32,7 @@ pub enum Status {
     /// `max_trials` trials were told without converging.
     TrialCap,
     /// The iterates ran into a search limit and stayed there: the root lies outside the limits,
-    /// or the sign convention of eps is wrong (method.md §5.3, §6.2 item 4).
+    /// or the sign convention of eps is wrong (docs/method.md §5.3, §6.2 item 4).
     HitBound {
         high: bool,
         value: f64,

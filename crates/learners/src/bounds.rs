@@ -1,7 +1,7 @@
 //! Optional box limits on the query for the unbracketed learners (error learning, policy
 //! gradient), and the detection of a run that is stuck at one of them.
 //!
-//! A wrong sign convention of eps (method.md §5.3) or a target outside the reachable range makes
+//! A wrong sign convention of eps (docs/method.md §5.3) or a target outside the reachable range makes
 //! these learners walk away from the root; with limits they clip at a limit and stay there. After
 //! `pin_limit` consecutive trials at a limit whose eps still points outwards, the learner stops
 //! with `Status::HitBound` instead of looping until the trial cap.

@@ -1,18 +1,18 @@
-//! Error learning in the query space (paper eqs. 16, 17; method.md §5).
+//! Error learning in the query space (paper eqs. 16, 17; docs/method.md §5).
 //!
 //! ```text
 //! eps_m   = q0 - q_a(q_m)                                   (13)  told by the caller
 //! q_{m+1} = q_m + w_m K J_m^{-1} eps_m                      (16), (17)
 //! w_m     = 1                         fixed gain            (16)
-//! w_m     = exp(-||eps_m / s||^2)     weighted, task scale s (17), method.md §5.1 [D]
+//! w_m     = exp(-||eps_m / s||^2)     weighted, task scale s (17), docs/method.md §5.1 [D]
 //! ```
 //! `K` is the user's gain (eq. 16's K; identity by default). `J_m` estimates dq_a/dq and turns
-//! the step into a Newton step (method.md §5.2, the Newton reading of "K ≈ d(G⁻¹∘G)/dq"):
+//! the step into a Newton step (docs/method.md §5.2, the Newton reading of "K ≈ d(G⁻¹∘G)/dq"):
 //! identity (the paper's matchbox setting), a fixed matrix, a secant/Broyden estimate, or a
 //! finite-difference estimate at q0 bought with n extra trials. Every estimate passes the §5.2
 //! safeguard (slope in [0.1, 10] and positive) or is replaced by I.
 //!
-//! Sign convention (method.md §5.3): eps > 0 means the query must increase. With q_a increasing
+//! Sign convention (docs/method.md §5.3): eps > 0 means the query must increase. With q_a increasing
 //! in q and eps = q0 - q_a this holds; a task whose outcome decreases with q must flip the sign
 //! of its error. A wrong sign makes the iterates walk away from the root: with `low`/`high` the
 //! learner then stops with `HitBound`, without them with `Diverged`.
@@ -82,7 +82,7 @@ pub enum Jacobian {
     /// Secant (n = 1) / Broyden (n > 1) update from consecutive trials, starting at J = I.
     Secant,
     /// Forward differences at q0 with step `delta`: trials q0 + delta e_j, j = 1..n, after the
-    /// first trial at q0 (method.md §5.2 item 4). The probes count as trials.
+    /// first trial at q0 (docs/method.md §5.2 item 4). The probes count as trials.
     FiniteDifference { delta: f64 },
 }
 

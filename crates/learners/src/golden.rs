@@ -1,4 +1,4 @@
-//! Golden-section error learning (the paper's algorithm box; method.md §6).
+//! Golden-section error learning (the paper's algorithm box; docs/method.md §6).
 //!
 //! A sign-driven bracketing root finder for one-dimensional queries: each trial moves 61.8 % of
 //! the way from the current q towards the limit that sign(eps) points to, so the bracket shrinks
@@ -15,13 +15,13 @@
 //!   (at most `max_expansions` times per side, then `HitBound`), (c) stops when the bracket is
 //!   narrower than `q_tol` (`Bracketed`).
 //!
-//!   Expansion step [D]: method.md §6.3 writes q_h <- q_h + 1.618 (q_h - q_l), but by the time a
+//!   Expansion step [D]: docs/method.md §6.3 writes q_h <- q_h + 1.618 (q_h - q_l), but by the time a
 //!   trial is within 5 % of q_h the bracket [q_l, q_h] has shrunk to about 7 % of W0, so that
 //!   step barely moves the limit (three expansions reach only 0.25 W0 past it). The k-th
 //!   expansion on a side instead adds 1.618^k W0, the geometric growth of classical bracket
 //!   search (Numerical Recipes' `mnbrak`): k expansions reach up to 1.618 + ... + 1.618^k W0.
 //!
-//! eps > 0 means the query must increase (method.md §5.3).
+//! eps > 0 means the query must increase (docs/method.md §5.3).
 
 use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::bracket::check_bracket;

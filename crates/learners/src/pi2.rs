@@ -1,5 +1,5 @@
 //! PI², policy improvement with path integrals, over the flat DMP weight vector (Theodorou,
-//! Buchli, Schaal 2010 and Schaal's `runPI2Learning.m`; method.md §7.2).
+//! Buchli, Schaal 2010 and Schaal's `runPI2Learning.m`; docs/method.md §7.2).
 //!
 //! One update = 1 noiseless evaluation rollout + K rollouts (after the first update, K - n_reuse
 //! new ones and the n_reuse best of the previous batch):
@@ -22,7 +22,7 @@
 //! projection the time average of identical dtheta_i is dtheta itself: the update is
 //! theta += sum_k P_k eps_k, PI^BB (Stulp & Sigaud 2012) — tested. With the projection on it is
 //! not: M_i is not the identity, so each weight receives a kernel-weighted blend of the
-//! neighbouring components of sum_k P_k eps_k (method.md §7.2 states the reduction without this
+//! neighbouring components of sum_k P_k eps_k (docs/method.md §7.2 states the reduction without this
 //! caveat).
 //!
 //! `tell(theta, costs)`: one terminal cost, or T costs r_0..r_{T-1} (the last includes any

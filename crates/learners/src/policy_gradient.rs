@@ -1,4 +1,4 @@
-//! Constrained-domain policy gradient (paper eq. 12; method.md §4) with central finite
+//! Constrained-domain policy gradient (paper eq. 12; docs/method.md §4) with central finite
 //! differences in the query space.
 //!
 //! ```text
@@ -6,14 +6,14 @@
 //! g_i       = (J(q + d e_i) - J(q - d e_i)) / (2 d)    2n perturbed trials per update
 //! q_{m+1}   = q_m - alpha_m g,   alpha_m = alpha0 / (m + 1)^0.602
 //! ```
-//! The step sizes satisfy Robbins-Monro (sum alpha = inf, sum alpha^2 < inf; method.md §4, the
+//! The step sizes satisfy Robbins-Monro (sum alpha = inf, sum alpha^2 < inf; docs/method.md §4, the
 //! garbled condition of the paper read as intended); 0.602 is Spall's SPSA exponent. Every
 //! perturbed trial is a trial (it is asked, executed and told), and so is the evaluation of the
 //! centre q_m that starts each update when `evaluate_center` (the first one is the pure
 //! generalization q0, as for the other learners).
 //!
 //! Its `tell` takes eps like the other query learners (eps > 0: the query must increase,
-//! method.md §5.3) and forms the scalar cost itself, so it is a drop-in replacement; any told
+//! docs/method.md §5.3) and forms the scalar cost itself, so it is a drop-in replacement; any told
 //! query with every |eps_i| < tol ends the run (`Converged`; it is the best trial).
 
 use nalgebra::DVector;

@@ -1,5 +1,5 @@
 //! PoWER, episodic reward-weighted policy search over the flat DMP weight vector (Kober & Peters
-//! 2008/2011; method.md §7.1, the simplifications of Kober's sample code): constant exploration
+//! 2008/2011; docs/method.md §7.1, the simplifications of Kober's sample code): constant exploration
 //! during a rollout, the return instead of the state-action value, importance sampling over the
 //! `n_best` best rollouts so far.
 //!
@@ -11,8 +11,8 @@
 //!             clipped to [0.1, 10] x var0
 //! ```
 //! `tell(theta, [R])` takes the rollout's return R, which must be > 0 (reward-weighted EM; for
-//! an error eps use e.g. R = exp(-(eps/s)^2), method.md §7.1). Deterministic for a seed
-//! (ChaCha8). A baseline: the paper reports no PoWER numbers (method.md §7).
+//! an error eps use e.g. R = exp(-(eps/s)^2), docs/method.md §7.1). Deterministic for a seed
+//! (ChaCha8). A baseline: the paper reports no PoWER numbers (docs/method.md §7).
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

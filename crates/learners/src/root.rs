@@ -3,7 +3,7 @@
 //!
 //! It is a drop-in replacement for golden-section error learning (`golden.rs`): it starts with
 //! the pure generalization q0, needs limits [low, high] assumed to contain the root, and reads
-//! the same eps (eps > 0: the query must increase, method.md §5.3). Unlike golden section it
+//! the same eps (eps > 0: the query must increase, docs/method.md §5.3). Unlike golden section it
 //! also uses |eps|:
 //!
 //! * with both ends of the bracket tried, the next query is the regula-falsi point, with the

@@ -96,7 +96,7 @@ fn weighted_error_learning_is_eq17_with_a_task_scale() {
 
 #[test]
 fn identity_gain_cycles_at_slope_two_but_secant_and_finite_difference_converge() {
-    // q_a = 2q: the gradient form with unit gain maps q to q0 - q (method.md §5.2).
+    // q_a = 2q: the gradient form with unit gain maps q to q0 - q (docs/method.md §5.2).
     let f = |q: &[f64]| vec![1.0 - 2.0 * q[0]];
     let mut fixed = el(&[1.0], |c| c.max_trials = 20);
     run(&mut fixed, f);
@@ -277,7 +277,7 @@ fn golden_section_shrinks_its_bracket_by_0_382_or_0_618_per_trial() {
 
 #[test]
 fn paper_mode_keeps_the_quirk_of_q0_outside_the_bracket_robust_mode_fixes_it() {
-    // method.md §6.2 item 5: ql = 0.3, qh = 1.0, q0 = 1.2, eps > 0 -> next q = 1.076 (inverted bracket).
+    // docs/method.md §6.2 #5: ql = 0.3, qh = 1.0, q0 = 1.2, eps > 0 -> next q = 1.076 (inverted bracket).
     let qa = |q: f64| q - 0.1; // root at 1.3
     let mut p = golden(1.2, 0.3, 1.0, GoldenMode::Paper);
     let q = p.ask().unwrap();

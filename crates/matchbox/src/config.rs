@@ -1,4 +1,4 @@
-//! Constants of the matchbox flip-up scene (method.md §8.3) and the module's error type.
+//! Constants of the matchbox flip-up scene (docs/method.md §8.3) and the module's error type.
 //!
 //! Geometry, in SI units, z up, the table top at z = 0 and its edge at x = 0 (the table is x < 0):
 //! the box (36 mm along x, 53 mm along y, 16 mm tall) lies flat with its 53 mm edge parallel to
@@ -23,11 +23,11 @@ pub type Result<T> = std::result::Result<T, Error>;
 /// Physical and numerical parameters. The defaults are assumptions, not measurements (the paper
 /// gives none): a 15 g cardboard box on a smooth table (friction 0.3, restitution 0.3).
 ///
-/// Calibration note: with friction 0.45 and restitution 0.05 (closer to method.md's guess) this
+/// Calibration note: with friction 0.45 and restitution 0.05 (the plan in docs/method.md §8.3) this
 /// Rapier scene stands the box up only for strike durations within about +-1.5 % of 0.099 s, and
 /// not contiguously; with 0.3 / 0.3 the upright window is contiguous and spans strike durations
 /// 0.097-0.113 s (peak fingertip speed 0.70-0.81 m/s, +-7 %), like the +-6 % the pymunk
-/// prototype of method.md §8.3 found. `cargo run --release -p matchbox --example matchbox_sweep`
+/// prototype of docs/method.md §8.3 found. `cargo run --release -p matchbox --example matchbox_sweep`
 /// prints the sweep.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MatchboxConfig {
@@ -143,7 +143,7 @@ impl MatchboxConfig {
     }
 
     /// Where a strike starts and ends by default: 40 mm below the table top to 2 mm above it, at
-    /// `finger_radius` inside the box's outer edge (method.md §8.3).
+    /// `finger_radius` inside the box's outer edge (docs/method.md §8.3).
     pub fn default_strike(&self) -> ([f64; 2], [f64; 2]) {
         let x = self.overhang - self.finger_radius;
         ([x, -0.040], [x, 0.002])

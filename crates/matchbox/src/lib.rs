@@ -5,7 +5,7 @@
 //! A kinematic fingertip follows a DMP's trajectory up under the overhanging edge of a matchbox
 //! lying on a table; the box tips about its bottom edge and flips back, stands upright on its
 //! 53 x 16 mm face, or flips over, depending on the strike speed. The measures are those of the
-//! paper's eq. 18 with the sign resolved as in method.md §8.2. It knows no DMPs and no learners:
+//! paper's eq. 18 with the sign resolved as in docs/method.md §8.2. It knows no DMPs and no learners:
 //! a fingertip path in, the box's measures out.
 
 mod config;

@@ -1,4 +1,4 @@
-//! From the box's tilt history to the paper's measures (eq. 18, method.md §8.2-8.3).
+//! From the box's tilt history to the paper's measures (eq. 18, docs/method.md §8.2-8.3).
 //!
 //! phi(t) is the rotation about the pivot axis from the initial pose, positive toward upright,
 //! unwrapped and clipped to [0, pi] (fast strikes make the box somersault).
@@ -39,10 +39,10 @@ pub struct Measures {
     pub t0: Option<f64>,
     /// phi(t0 + Delta t), if t0 exists.
     pub phi_after: Option<f64>,
-    /// The outcome in query units (method.md §8.2): phi_max if flipped back, else phi(t0 + Dt).
+    /// The outcome in query units (docs/method.md §8.2): phi_max if flipped back, else phi(t0 + Dt).
     pub outcome_angle: f64,
     /// Eq. 18 as printed: outcome_angle - pi/2. Learners use the query convention
-    /// eps = pi/2 - outcome_angle (its negative; method.md §8.2).
+    /// eps = pi/2 - outcome_angle (its negative; docs/method.md §8.2).
     pub eps18: f64,
     pub regime: Regime,
 }

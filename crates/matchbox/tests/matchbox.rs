@@ -24,7 +24,7 @@ fn measures(duration: f64) -> Measures {
 }
 
 /// Sweeping the strike speed goes flipped back, then upright, then flipped over (paper §5), with
-/// an upright window of at least +-6 % of strike speed (method.md §8.3).
+/// an upright window of at least +-6 % of strike speed (docs/method.md §8.3).
 #[test]
 fn faster_strikes_go_back_then_upright_then_over() {
     let durations: Vec<f64> = (0..=40).map(|k| 0.14 - 0.002 * k as f64).collect(); // slow -> fast
@@ -76,7 +76,7 @@ fn faster_strikes_go_back_then_upright_then_over() {
 #[test]
 fn flip_back_errors_are_bounded_by_the_tipping_angle() {
     // phi_max cannot exceed the tipping angle pi/2 - atan(16/36) = 66 deg without going on to
-    // upright or over (method.md §8.3): flip-back errors jump across zero (paper Fig. 2c).
+    // upright or over (docs/method.md §8.3): flip-back errors jump across zero (paper Fig. 2c).
     let tipping = std::f64::consts::FRAC_PI_2 - (16.0f64 / 36.0).atan();
     for d in [0.16, 0.14, 0.12] {
         let m = measures(d);

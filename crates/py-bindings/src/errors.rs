@@ -60,7 +60,9 @@ fn dmp_core_class(err: &dmp_core::Error) -> PyErrorClass {
     use dmp_core::Error as E;
     match err {
         E::Extrapolation { .. } => PyErrorClass::Extrapolation,
-        E::Numerical { .. } => PyErrorClass::Numerical,
+        // A cancelled computation is normally replaced by the KeyboardInterrupt that cancelled it
+        // (gp.rs, `interruptible`); reaching Python on its own it is a failed computation.
+        E::Numerical { .. } | E::Cancelled { .. } => PyErrorClass::Numerical,
         E::InDemo { source, .. } => match dmp_core_class(source) {
             // A demonstration's data cannot be "too far from the demonstrations".
             PyErrorClass::Extrapolation => PyErrorClass::InvalidInput,
@@ -74,7 +76,8 @@ fn dmp_core_class(err: &dmp_core::Error) -> PyErrorClass {
         | E::DemoCount { .. }
         | E::DuplicateQuery { .. }
         | E::DofMismatch { .. }
-        | E::DegenerateQueries { .. } => PyErrorClass::InvalidInput,
+        | E::DegenerateQueries { .. }
+        | E::Quaternion { .. } => PyErrorClass::InvalidInput,
     }
 }
 

@@ -1,6 +1,7 @@
 //! PyO3 bindings: the module `dmprs._core`. Thin wrappers only; the algorithms live in
 //! `dmp-core`, `learners` and `matchbox`, the user-facing classes and docs in `python/dmprs`.
 
+mod cartesian;
 mod dmp;
 mod errors;
 mod generalize;
@@ -12,6 +13,8 @@ use pyo3::prelude::*;
 
 #[pymodule]
 mod _core {
+    #[pymodule_export]
+    use super::cartesian::{PyCartesianDmp, PyCartesianGeneralizer, py_rollout_batch_cartesian};
     #[pymodule_export]
     use super::dmp::PyDmp;
     #[pymodule_export]

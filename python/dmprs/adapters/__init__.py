@@ -5,11 +5,12 @@ An adapter is episodic: ``execute`` runs one whole trajectory and returns the me
 ``docs/adapters.md`` for writing one for a real arm.
 """
 
-from dmprs.adapters.base import Adapter, AdapterError, BaseAdapter
-from dmprs.adapters.conformance import AdapterConformanceError, check_adapter
+from dmprs.adapters.base import Adapter, BaseAdapter
+from dmprs.adapters.conformance import check_adapter
 from dmprs.adapters.recording import RecordingAdapter, ReplayAdapter
 from dmprs.adapters.registry import ENTRY_POINT_GROUP, available_adapters, load_adapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, SignalSpec, Status
+from dmprs.errors import AdapterConformanceError, AdapterError
 
 __all__ = [
     "ENTRY_POINT_GROUP",

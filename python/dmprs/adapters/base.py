@@ -14,12 +14,8 @@ import traceback
 from types import TracebackType
 
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import DmprsError
+from dmprs.errors import AdapterError
 from dmprs.trajectory import Trajectory
-
-
-class AdapterError(DmprsError, RuntimeError):
-    """An adapter was used out of order (e.g. execute before connect)."""
 
 
 class Adapter(abc.ABC):

@@ -9,12 +9,8 @@ import numpy as np
 
 from dmprs.adapters.base import Adapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import DmprsError
+from dmprs.errors import AdapterConformanceError
 from dmprs.trajectory import Trajectory
-
-
-class AdapterConformanceError(DmprsError, AssertionError):
-    """``check_adapter`` found violations of the adapter protocol; the message lists them all."""
 
 
 def check_adapter(

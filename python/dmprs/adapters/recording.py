@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 
 from dmprs._io import append_jsonl, read_jsonl, write_npz_atomic
-from dmprs.adapters.base import Adapter, AdapterError
+from dmprs.adapters.base import Adapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import InvalidInputError
+from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.trajectory import Trajectory
 
 _INDEX = "recording.jsonl"
@@ -30,8 +30,8 @@ def _trajectory_arrays(prefix: str, tr: Trajectory | None) -> dict[str, np.ndarr
 def _trajectory_from(arrays: Any, prefix: str) -> Trajectory | None:
     if f"{prefix}t" not in arrays:
         return None
-    get = lambda k: arrays[f"{prefix}{k}"] if f"{prefix}{k}" in arrays else None  # noqa: E731
-    return Trajectory(get("t"), get("y"), get("yd"), get("ydd"))
+    return Trajectory(arrays[f"{prefix}t"], arrays[f"{prefix}y"], arrays.get(f"{prefix}yd"),
+                      arrays.get(f"{prefix}ydd"))
 
 
 class RecordingAdapter(Adapter):

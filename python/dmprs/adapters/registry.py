@@ -18,24 +18,26 @@ from dmprs.errors import InvalidInputError
 
 ENTRY_POINT_GROUP = "dmprs.adapters"
 
-# Built-in adapters, imported lazily (the simulations pull in their physics engines).
-_BUILTIN: dict[str, str] = {}
-
-
-def register_builtin(name: str, target: str) -> None:
-    """Registers ``"module:Class"`` under ``name`` (used by dmprs's own task modules)."""
-    _BUILTIN[name] = target
+#: The adapters shipped with dmprs, as ``"module:Class"``: imported only when loaded (the
+#: simulations pull in their physics engines), listed here so that nothing depends on which
+#: task modules happen to have been imported.
+BUILTIN: dict[str, str] = {
+    "analytic": "dmprs.tasks.analytic:AnalyticAdapter",
+    "arm-pouring": "dmprs.tasks.arm_pouring:ArmPouringAdapter",
+    "matchbox": "dmprs.tasks.matchbox:MatchboxAdapter",
+    "pouring": "dmprs.tasks.pouring:PouringAdapter",
+}
 
 
 def available_adapters() -> list[str]:
-    names = set(_BUILTIN) | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)}
+    names = set(BUILTIN) | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)}
     return sorted(names)
 
 
 def load_adapter(name: str, **kwargs: Any) -> Adapter:
     """Instantiates the adapter registered under ``name`` with ``kwargs``."""
-    if name in _BUILTIN:
-        module, _, attr = _BUILTIN[name].partition(":")
+    if name in BUILTIN:
+        module, _, attr = BUILTIN[name].partition(":")
         cls = getattr(importlib.import_module(module), attr)
     else:
         matches = [ep for ep in entry_points(group=ENTRY_POINT_GROUP) if ep.name == name]

@@ -4,7 +4,7 @@ small polydisperse discs, a glass under the mouth and a tray floor that catches 
 This module is only the physics: it knows nothing of DMPs, tasks or learners. The adapter in
 :mod:`dmprs.tasks.pouring` turns its results into SI outcome signals.
 
-Design (method.md §9.3, checked there with a throw-away prototype):
+Design (docs/method.md §9.3, checked there with a throw-away prototype):
 
 * Internal units are mm, g, s (gravity 9810 mm/s^2): the particle radius is 2 mm, and pymunk's
   tolerances (``collision_slop``) are absolute lengths, so millimetres keep them meaningful.
@@ -27,6 +27,7 @@ Design (method.md §9.3, checked there with a throw-away prototype):
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -38,7 +39,7 @@ from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError, NumericalError
 
-# --- simulation constants (method.md §9.3) ------------------------------------------------------
+# --- simulation constants (docs/method.md §9.3) -------------------------------------------------
 DT = 1.0 / 600.0  #: physics step (s)
 ITERATIONS = 12  #: solver iterations per step
 COLLISION_SLOP = 0.05  #: allowed penetration (mm)
@@ -63,7 +64,7 @@ PIVOT = (0.0, 400.0)  #: the mouth centre in the world (mm)
 BOTTLE_DEPTH = NECK_LENGTH + SHOULDER_HEIGHT + BODY_HEIGHT  #: mouth to bottom, 235 mm
 #: The most liquid the bottle accepts (discs). The spawn grid holds ~590 discs; 550 (1.1 l)
 #: settles to about 70 % of the straight body's height, so even a full bottle starts with its
-#: free surface well below the shoulder (method.md §9.3: keep 1.0 l below ~90 % of the body).
+#: free surface well below the shoulder (docs/method.md §9.3: keep 1.0 l below ~90 % of the body).
 MAX_PARTICLES = 550
 
 # --- glass and tray, world frame --------------------------------------------------------------
@@ -212,7 +213,7 @@ class _Scene:
         bottle.position = PIVOT
         space.add(bottle)
         outline = bottle_outline()
-        for a, b in zip(outline[:-1], outline[1:], strict=True):
+        for a, b in itertools.pairwise(outline):
             seg = pymunk.Segment(bottle, a, b, WALL_RADIUS)
             seg.friction = 0.0
             seg.elasticity = 0.0
@@ -351,7 +352,7 @@ def simulate_pour(
     interrupted = False
     k = 0
     for k in range(1, n_steps + 1):
-        # Drive through velocity (method.md §9.3): reach the commanded angle at the end of the step.
+        # Drive through velocity (docs/method.md §9.3): reach the commanded angle at the end of the step.
         bottle.angular_velocity = (-command[k] - bottle.angle) / DT
         space.step(DT)
         executed[k] = -bottle.angle

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 class Task(abc.ABC):
     """Scoring for one kind of trial, on top of an adapter.
 
-    The signed error follows one convention for every learner (method.md §5.3): **eps > 0
+    The signed error follows one convention for every learner (docs/method.md §5.3): **eps > 0
     means the query must increase**. With a measured outcome ``y`` (from :meth:`measure`), its
     target ``y*`` for the desired query (from :meth:`target`) and the task's ``sign``
     ``s = sign(dy/dq)``::

@@ -9,7 +9,7 @@ strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
   ``settle_time`` (2 s) more. Signals: the tilt history ``phi`` (rad, clipped to [0, pi]) with
   its times ``phi_t``, ``phi_max``, ``t0`` (first time phi >= pi/2, NaN if never),
   ``phi_after`` (phi(t0 + 0.05 s), NaN if no t0), ``outcome_angle``, ``eps18`` and ``regime``.
-* :class:`MatchboxFlip`: the query is the **outcome angle** (method.md §8.2): a demonstration is
+* :class:`MatchboxFlip`: the query is the **outcome angle** (docs/method.md §8.2): a demonstration is
   labelled phi_max if it flipped back and phi(t0 + 0.05 s) if it flipped over, and the desired
   query is pi/2. Then ``q_a = outcome_angle`` and the error is ``eps = pi/2 - q_a``
   (eq. 13). That is the **negative of eq. 18 as printed** (``eps18 = q_a - pi/2``): applied
@@ -25,22 +25,27 @@ strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
-from dmprs.adapters.registry import register_builtin
 from dmprs.errors import InvalidInputError
+from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
+from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
+if TYPE_CHECKING:
+    from dmprs.dmp import DMP
+
 CONTROL_PERIOD = 0.001
-#: strike durations (s) of the scripted demonstrations: method.md §8.1 (one flips back, one
+#: strike durations (s) of the scripted demonstrations: docs/method.md §8.1 (one flips back, one
 #: over) and Fig. 7 (both flip back). The upright window of the default scene is 0.097-0.113 s.
 #: "both_flipped_back" reuses the default's slow strike and adds the one 6 % slower than the
-#: window. How many trials learning needs depends on the demos, as method.md §8.3 found for its
+#: window. How many trials learning needs depends on the demos, as docs/method.md §8.3 found for its
 #: prototype: with 0.13 / 0.12 s instead, eq. 16 needed 18 trials and eq. 17 11 (the jump of
 #: the outcome across the window, paper Fig. 2c, makes error learning bounce); with 0.125 / 0.118
 #: s, 3 and 2. ``dmprs reproduce`` reports the sets it runs.
@@ -50,7 +55,7 @@ DEMO_SETS = {
 }
 
 
-def config(**overrides: float) -> _core.MatchboxConfig:
+def config(**overrides: Any) -> _core.MatchboxConfig:
     """The simulation's parameters (see ``MatchboxConfig`` in crates/matchbox): defaults are a
     15 g, 53 x 36 x 16 mm box overhanging the table edge by 14 mm, friction 0.3, restitution
     0.3, 1 ms steps with 8 solver iterations, 2 s of settling after the strike."""
@@ -66,17 +71,22 @@ def strike(duration: float, cfg: _core.MatchboxConfig | None = None, dt: float =
     n = max(2, round(duration / dt))
     t = np.linspace(0.0, duration, n + 1)
     s = t / duration
-    m = 10 * s**3 - 15 * s**4 + 6 * s**5
+    m = min_jerk(s)[0]
     return Trajectory(t, np.stack([x0 + m * (x1 - x0), z0 + m * (z1 - z0)], axis=1))
 
 
 class MatchboxAdapter(BaseAdapter):
-    """The Rapier matchbox scene behind the adapter interface (deterministic: ``reset``'s seed
-    has nothing to vary)."""
+    """The Rapier matchbox scene behind the adapter interface. Deterministic unless ``noise``
+    (:class:`dmprs.tasks.noise.Noise`: fingertip tracking error in m, friction and restitution
+    perturbed by ``contact``, ``outcome_angle`` and ``eps18`` measured with ``measurement`` rad),
+    drawn from ``reset``'s seed."""
 
-    def __init__(self, **config_overrides: float) -> None:
+    def __init__(self, noise: Noise | None = None, **config_overrides: float) -> None:
+        self.noise = noise or Noise()
+        self._overrides = config_overrides
+        self._rng = Noise.rng(0)
         self.config = config(**config_overrides)
-        c = self.config.to_dict()
+        c: dict[str, Any] = self.config.to_dict()
         (x0, z0), _ = self.config.default_strike()
         super().__init__(AdapterSpec(
             name="matchbox",
@@ -110,10 +120,24 @@ class MatchboxAdapter(BaseAdapter):
         return list(_core.matchbox_check(trajectory.t, np.ascontiguousarray(trajectory.y[:, 0]),
                                          np.ascontiguousarray(trajectory.y[:, 1]), self.config))
 
+    def _reset(self, seed: int | None) -> None:
+        self._rng = Noise.rng(seed)
+
     def _execute(self, trajectory: Trajectory) -> Outcome:
+        cfg, noise = self.config, self.noise
+        if not noise.off:
+            trajectory = noise.track(trajectory, self._rng)
+            if noise.contact:
+                base: dict[str, Any] = cfg.to_dict()
+                cfg = config(**{**self._overrides, "friction": base["friction"] * noise.factor(self._rng),
+                                "restitution": base["restitution"] * noise.factor(self._rng)})
         ep = _core.matchbox_simulate(trajectory.t, np.ascontiguousarray(trajectory.y[:, 0]),
-                                     np.ascontiguousarray(trajectory.y[:, 1]), self.config)
-        return Outcome(Status.OK, signals=_signals(ep), executed=trajectory)
+                                     np.ascontiguousarray(trajectory.y[:, 1]), cfg)
+        signals = _signals(ep)
+        if noise.measurement:
+            signals["outcome_angle"] = noise.measure(signals["outcome_angle"], self._rng)
+            signals["eps18"] = signals["outcome_angle"] - math.pi / 2
+        return Outcome(Status.OK, signals=signals, executed=trajectory)
 
 
 def _signals(ep: dict) -> dict:
@@ -126,7 +150,6 @@ def _signals(ep: dict) -> dict:
     }
 
 
-register_builtin("matchbox", "dmprs.tasks.matchbox:MatchboxAdapter")
 
 
 class MatchboxFlip(Task):
@@ -137,25 +160,31 @@ class MatchboxFlip(Task):
     query_units = ("rad",)
     sign = 1.0
 
-    def __init__(self, **config_overrides: float) -> None:
-        super().__init__(MatchboxAdapter(**config_overrides))
+    def __init__(self, noise: Noise | None = None, **config_overrides: float) -> None:
+        super().__init__(MatchboxAdapter(noise, **config_overrides))
 
-    def trajectory(self, dmp):  # type: ignore[override]
+    adapter: MatchboxAdapter
+
+    def trajectory(self, dmp: DMP) -> Trajectory:
         """The DMP's rollout at 1 ms up to tau; the fingertip then holds still."""
         return dmp.rollout(dt=CONTROL_PERIOD)
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
         return np.array([outcome.signals["outcome_angle"]])
 
-    def success(self, desired_query, outcome: Outcome) -> bool:
+    def success(self, desired_query: ArrayLike, outcome: Outcome) -> bool:
         return outcome.ok and outcome.signals["regime"] == "upright"
 
     def demonstration(self, duration: float) -> tuple[NDArray[np.float64], Trajectory]:
         """A scripted strike and its label, the outcome angle it measurably produced."""
         traj = strike(duration, self.adapter.config)
-        with self.adapter:
-            self.adapter.reset(seed=0)
-            outcome = self.adapter.execute(traj)
+        noise, self.adapter.noise = self.adapter.noise, Noise()  # a demonstration is measured exactly
+        try:
+            with self.adapter:
+                self.adapter.reset(seed=0)
+                outcome = self.adapter.execute(traj)
+        finally:
+            self.adapter.noise = noise
         if not outcome.ok:
             raise InvalidInputError(f"the demonstration strike of {duration} s was {outcome.status.value}: {outcome.message}")
         return self.measure(outcome), traj

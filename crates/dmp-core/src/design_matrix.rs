@@ -1,6 +1,6 @@
-//! The design matrix of the batch least-squares fit (method.md §2.3) and its normal equations,
+//! The design matrix of the batch least-squares fit (docs/method.md §2.3) and its normal equations,
 //! shared by the one-demonstration fit ([`crate::Dmp::fit`]) and the locally weighted regression
-//! over many demonstrations ([`crate::lwr`], method.md §3.2).
+//! over many demonstrations ([`crate::lwr`], docs/method.md §3.2).
 //!
 //! For a demonstration with duration `tau`, goal `g = y_T` and samples `(t_j, y_j, yd_j, ydd_j)`:
 //!
@@ -16,9 +16,9 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use crate::basis::{Basis, phase};
-use crate::diff;
 use crate::dmp::{Demonstration, DmpConfig};
 use crate::error::{Error, Result, check_finite_matrix, check_increasing};
+use crate::finite_difference;
 
 /// Design-matrix entries below this are set to zero, as in the lab's fitting code.
 const DESIGN_CUTOFF: f64 = 1e-8;
@@ -28,7 +28,7 @@ const DESIGN_CUTOFF: f64 = 1e-8;
 pub struct PreparedDemo<'a> {
     pub t: &'a [f64],
     pub y: DMatrixView<'a, f64>,
-    /// `D x T`, measured or computed with [`diff::gradient`].
+    /// `D x T`, measured or computed with [`finite_difference::gradient`].
     pub yd: DMatrix<f64>,
     pub ydd: DMatrix<f64>,
     /// `t_T - t_1`.
@@ -59,11 +59,11 @@ impl<'a> PreparedDemo<'a> {
                 got: format!("({}, {n_dof})", y.ncols()),
             });
         }
-        if t.len() < diff::MIN_SAMPLES {
+        if t.len() < finite_difference::MIN_SAMPLES {
             return Err(Error::TooFewSamples {
                 name: "t",
                 got: t.len(),
-                needed: diff::MIN_SAMPLES,
+                needed: finite_difference::MIN_SAMPLES,
                 why: "second-order finite differences need 3",
             });
         }
@@ -83,11 +83,11 @@ impl<'a> PreparedDemo<'a> {
         }
         let yd = match demo.yd {
             Some(v) => v.into_owned(),
-            None => diff::gradient(t, &y),
+            None => finite_difference::gradient(t, &y),
         };
         let ydd = match demo.ydd {
             Some(v) => v.into_owned(),
-            None => diff::gradient(t, &yd.as_view()),
+            None => finite_difference::gradient(t, &yd.as_view()),
         };
         Ok(Self {
             t,
@@ -142,6 +142,11 @@ pub fn normal_equations(
                 nz.start = nz.start.min(k);
                 nz.end = k + 1;
             }
+        }
+        // A row whose every entry fell below the cut-off (a large alpha_x leaves the late
+        // samples' phase far past the last centre) adds nothing; `nz` is still inverted there.
+        if nz.is_empty() {
+            continue;
         }
         let yj = y.column(j);
         for d in 0..n_dof {

@@ -15,45 +15,59 @@ pub fn gradient(t: &[f64], y: &DMatrixView<'_, f64>) -> DMatrix<f64> {
     let n = t.len();
     debug_assert!(n >= MIN_SAMPLES && y.ncols() == n);
     let mut out = DMatrix::zeros(y.nrows(), n);
-    // out[:, j] = a y[:, i] + b y[:, i+1] + c y[:, i+2]; written without temporaries, this runs in
-    // the fit's hot path.
-    let mut combine = |j: usize, i: usize, a: f64, b: f64, c: f64| {
+    for j in 0..n {
+        // out[:, j] = a y[:, i] + b y[:, i+1] + c y[:, i+2]; written without temporaries, this
+        // runs in the fit's hot path.
+        let (i, [a, b, c]) = stencil(t, j);
         let (y0, y1, y2) = (y.column(i), y.column(i + 1), y.column(i + 2));
         for (d, o) in out.column_mut(j).iter_mut().enumerate() {
             *o = a * y0[d] + b * y1[d] + c * y2[d];
         }
-    };
-    // Interior: the three-point formula exact for quadratics.
-    for j in 1..n - 1 {
+    }
+    out
+}
+
+/// The weights of the scheme at sample `j`: `dy/dt(t_j) = a y_i + b y_{i+1} + c y_{i+2}` with
+/// `(i, [a, b, c])` returned; `a + b + c = 0`. Also used to differentiate quaternion samples in
+/// the tangent space at sample `j` ([`crate::cartesian`]).
+#[inline]
+pub fn stencil(t: &[f64], j: usize) -> (usize, [f64; 3]) {
+    let n = t.len();
+    if j == 0 {
+        // Start: one-sided, exact for quadratics.
+        let (d1, d2) = (t[1] - t[0], t[2] - t[1]);
+        (
+            0,
+            [
+                -(2.0 * d1 + d2) / (d1 * (d1 + d2)),
+                (d1 + d2) / (d1 * d2),
+                -d1 / (d2 * (d1 + d2)),
+            ],
+        )
+    } else if j == n - 1 {
+        // End.
+        let (d1, d2) = (t[n - 2] - t[n - 3], t[n - 1] - t[n - 2]);
+        (
+            n - 3,
+            [
+                d2 / (d1 * (d1 + d2)),
+                -(d2 + d1) / (d1 * d2),
+                (2.0 * d2 + d1) / (d2 * (d1 + d2)),
+            ],
+        )
+    } else {
+        // Interior: the three-point formula exact for quadratics.
         let hs = t[j] - t[j - 1];
         let hd = t[j + 1] - t[j];
-        combine(
-            j,
+        (
             j - 1,
-            -hd / (hs * (hs + hd)),
-            (hd - hs) / (hs * hd),
-            hs / (hd * (hs + hd)),
-        );
+            [
+                -hd / (hs * (hs + hd)),
+                (hd - hs) / (hs * hd),
+                hs / (hd * (hs + hd)),
+            ],
+        )
     }
-    // Start: one-sided, also exact for quadratics.
-    let (d1, d2) = (t[1] - t[0], t[2] - t[1]);
-    combine(
-        0,
-        0,
-        -(2.0 * d1 + d2) / (d1 * (d1 + d2)),
-        (d1 + d2) / (d1 * d2),
-        -d1 / (d2 * (d1 + d2)),
-    );
-    // End.
-    let (d1, d2) = (t[n - 2] - t[n - 3], t[n - 1] - t[n - 2]);
-    combine(
-        n - 1,
-        n - 3,
-        d2 / (d1 * (d1 + d2)),
-        -(d2 + d1) / (d1 * d2),
-        (2.0 * d2 + d1) / (d2 * (d1 + d2)),
-    );
-    out
 }
 
 #[cfg(test)]

@@ -1,0 +1,396 @@
+//! `dmprs._core.CartesianDmp`, `rollout_batch_cartesian` and `CartesianGeneralizer`: numpy in,
+//! numpy out. `dmprs.CartesianDMP` and `dmprs.Generalizer` (Python) wrap these and document them.
+
+use dmp_core::cartesian::POSE_WIDTH;
+use dmp_core::{
+    CartesianDemonstration, CartesianDmp, CartesianGeneralizer, CartesianTrajectory, DmpConfig,
+    RolloutOptions, rollout_batch_cartesian,
+};
+use nalgebra::{DMatrix, DMatrixView};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+
+use crate::dmp::{contiguous, time_major};
+use crate::errors::{IntoPyResult, invalid_input};
+use crate::generalize::{parse_method, parse_queries, query, row_major};
+
+/// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
+type CartesianArrays<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+);
+
+fn trajectory_arrays(py: Python<'_>, tr: CartesianTrajectory) -> PyResult<CartesianArrays<'_>> {
+    let n = tr.t.len();
+    Ok((
+        tr.t.into_pyarray(py),
+        tr.position.into_pyarray(py).reshape([n, 3])?,
+        tr.quaternion.into_pyarray(py).reshape([n, 4])?,
+        tr.velocity.into_pyarray(py).reshape([n, 3])?,
+        tr.angular_velocity.into_pyarray(py).reshape([n, 3])?,
+        tr.acceleration.into_pyarray(py).reshape([n, 3])?,
+        tr.angular_acceleration.into_pyarray(py).reshape([n, 3])?,
+    ))
+}
+
+fn pose(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<[f64; POSE_WIDTH]> {
+    let slice = contiguous(name, a)?;
+    slice.try_into().map_err(|_| {
+        invalid_input(format!(
+            "{name} has shape ({},), expected (7,): x, y, z, qw, qx, qy, qz",
+            slice.len()
+        ))
+    })
+}
+
+fn optional<'a>(
+    name: &str,
+    a: &'a Option<PyReadonlyArray2<'_, f64>>,
+) -> PyResult<Option<DMatrixView<'a, f64>>> {
+    a.as_ref().map(|a| time_major(name, a)).transpose()
+}
+
+#[pyclass(name = "CartesianDmp", module = "dmprs._core", frozen)]
+pub struct PyCartesianDmp {
+    pub inner: CartesianDmp,
+}
+
+#[pymethods]
+impl PyCartesianDmp {
+    #[new]
+    #[pyo3(signature = (weights, goal, start, tau, *, alpha_z, beta_z, alpha_x, width_factor))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        weights: PyReadonlyArray2<'_, f64>,
+        goal: PyReadonlyArray1<'_, f64>,
+        start: PyReadonlyArray1<'_, f64>,
+        tau: f64,
+        alpha_z: f64,
+        beta_z: f64,
+        alpha_x: f64,
+        width_factor: f64,
+    ) -> PyResult<Self> {
+        // (6, N) C-ordered is the N x 6 column-major matrix of the core.
+        let config = DmpConfig {
+            n_basis: weights.shape()[1],
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        let w = DMatrix::from(time_major("weights", &weights)?);
+        let inner = CartesianDmp::new(
+            config,
+            w,
+            &pose("goal", &goal)?,
+            &pose("start", &start)?,
+            tau,
+        );
+        Ok(Self {
+            inner: inner.py_err()?,
+        })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (t, pose, velocity, acceleration, angular_velocity, angular_acceleration,
+                        *, normalize, n_basis, alpha_z, beta_z, alpha_x, width_factor))]
+    #[allow(clippy::too_many_arguments)]
+    fn fit(
+        py: Python<'_>,
+        t: PyReadonlyArray1<'_, f64>,
+        pose: PyReadonlyArray2<'_, f64>,
+        velocity: Option<PyReadonlyArray2<'_, f64>>,
+        acceleration: Option<PyReadonlyArray2<'_, f64>>,
+        angular_velocity: Option<PyReadonlyArray2<'_, f64>>,
+        angular_acceleration: Option<PyReadonlyArray2<'_, f64>>,
+        normalize: bool,
+        n_basis: usize,
+        alpha_z: f64,
+        beta_z: f64,
+        alpha_x: f64,
+        width_factor: f64,
+    ) -> PyResult<Self> {
+        let t = contiguous("t", &t)?;
+        let demo = CartesianDemonstration {
+            t,
+            pose: time_major("pose", &pose)?,
+            velocity: optional("velocity", &velocity)?,
+            acceleration: optional("acceleration", &acceleration)?,
+            angular_velocity: optional("angular_velocity", &angular_velocity)?,
+            angular_acceleration: optional("angular_acceleration", &angular_acceleration)?,
+            normalize,
+        };
+        let config = DmpConfig {
+            n_basis,
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        let inner = py.detach(|| CartesianDmp::fit(&demo, config)).py_err()?;
+        Ok(Self { inner })
+    }
+
+    #[pyo3(signature = (dt, duration=None, until_rest=false, rest_tol=1e-4))]
+    fn rollout<'py>(
+        &self,
+        py: Python<'py>,
+        dt: f64,
+        duration: Option<f64>,
+        until_rest: bool,
+        rest_tol: f64,
+    ) -> PyResult<CartesianArrays<'py>> {
+        let opts = RolloutOptions {
+            dt,
+            duration,
+            until_rest,
+            rest_tol,
+        };
+        let tr = py.detach(|| self.inner.rollout(&opts)).py_err()?;
+        trajectory_arrays(py, tr)
+    }
+
+    fn with_goal(&self, goal: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_goal(&pose("goal", &goal)?).py_err()?,
+        })
+    }
+
+    fn with_start(&self, start: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_start(&pose("start", &start)?).py_err()?,
+        })
+    }
+
+    fn with_tau(&self, tau: f64) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_tau(tau).py_err()?,
+        })
+    }
+
+    /// (6, N)
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let w = self.inner.weights();
+        w.as_slice()
+            .to_vec()
+            .into_pyarray(py)
+            .reshape([w.ncols(), w.nrows()])
+    }
+    #[getter]
+    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.goal().to_vec().into_pyarray(py)
+    }
+    #[getter]
+    fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.start().to_vec().into_pyarray(py)
+    }
+    #[getter]
+    fn tau(&self) -> f64 {
+        self.inner.tau()
+    }
+    #[getter]
+    fn n_basis(&self) -> usize {
+        self.inner.n_basis()
+    }
+    #[getter]
+    fn alpha_z(&self) -> f64 {
+        self.inner.config().alpha_z
+    }
+    #[getter]
+    fn beta_z(&self) -> f64 {
+        self.inner.config().beta_z
+    }
+    #[getter]
+    fn alpha_x(&self) -> f64 {
+        self.inner.config().alpha_x
+    }
+    #[getter]
+    fn width_factor(&self) -> f64 {
+        self.inner.config().width_factor
+    }
+    #[getter]
+    fn centers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.basis().centers().to_vec().into_pyarray(py)
+    }
+    #[getter]
+    fn widths<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.basis().widths().to_vec().into_pyarray(py)
+    }
+}
+
+/// Rolls out many Cartesian DMPs on all cores with the GIL released.
+#[pyfunction(name = "rollout_batch_cartesian")]
+#[pyo3(signature = (dmps, dt, duration=None, until_rest=false, rest_tol=1e-4))]
+pub fn py_rollout_batch_cartesian<'py>(
+    py: Python<'py>,
+    dmps: Vec<PyRef<'py, PyCartesianDmp>>,
+    dt: f64,
+    duration: Option<f64>,
+    until_rest: bool,
+    rest_tol: f64,
+) -> PyResult<Vec<CartesianArrays<'py>>> {
+    let owned: Vec<CartesianDmp> = dmps.iter().map(|d| d.inner.clone()).collect();
+    let opts = RolloutOptions {
+        dt,
+        duration,
+        until_rest,
+        rest_tol,
+    };
+    let trajectories = py
+        .detach(|| rollout_batch_cartesian(&owned, &opts))
+        .py_err()?;
+    trajectories
+        .into_iter()
+        .map(|tr| trajectory_arrays(py, tr))
+        .collect()
+}
+
+/// `(t, pose, velocity, acceleration, angular_velocity, angular_acceleration)` of one demo.
+type PoseDemoArrays<'py> = (
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray2<'py, f64>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+);
+
+#[pyclass(name = "CartesianGeneralizer", module = "dmprs._core", frozen)]
+pub struct PyCartesianGeneralizer {
+    inner: CartesianGeneralizer,
+}
+
+#[pymethods]
+impl PyCartesianGeneralizer {
+    /// `queries` `(M, n)`; `demos` a list of [`PoseDemoArrays`] with `pose` `(T, 7)`.
+    #[new]
+    #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
+                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        queries: PyReadonlyArray2<'_, f64>,
+        demos: Vec<PoseDemoArrays<'_>>,
+        method: &str,
+        n_basis: usize,
+        alpha_z: f64,
+        beta_z: f64,
+        alpha_x: f64,
+        width_factor: f64,
+        kernel: &str,
+        bandwidth: f64,
+        ridge: f64,
+        interpolate: bool,
+        gp_noise: f64,
+        gp_optimize: Option<bool>,
+        gp_restarts: usize,
+    ) -> PyResult<Self> {
+        let method = parse_method(
+            method,
+            kernel,
+            bandwidth,
+            ridge,
+            interpolate,
+            gp_noise,
+            gp_optimize,
+            gp_restarts,
+        )?;
+        let qs = parse_queries(&queries)?;
+        let mut views = Vec::with_capacity(demos.len());
+        for (t, pose, v, a, w, wd) in &demos {
+            let t = contiguous("t", t)?;
+            views.push(CartesianDemonstration {
+                t,
+                pose: time_major("pose", pose)?,
+                velocity: optional("velocity", v)?,
+                acceleration: optional("acceleration", a)?,
+                angular_velocity: optional("angular_velocity", w)?,
+                angular_acceleration: optional("angular_acceleration", wd)?,
+                normalize: false,
+            });
+        }
+        let config = DmpConfig {
+            n_basis,
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        let inner = py
+            .detach(|| CartesianGeneralizer::new(&qs, &views, config, method))
+            .py_err()?;
+        Ok(Self { inner })
+    }
+
+    fn predict(&self, q: PyReadonlyArray1<'_, f64>) -> PyResult<PyCartesianDmp> {
+        Ok(PyCartesianDmp {
+            inner: self.inner.predict(query(&q)?).py_err()?,
+        })
+    }
+
+    fn parameters<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let p = self.inner.parameters(query(&q)?).py_err()?;
+        Ok(p.as_slice().to_vec().into_pyarray(py))
+    }
+
+    /// `(n_parameters, n)`.
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+        rel_step: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
+        row_major(py, &jac)
+    }
+
+    #[getter]
+    fn demo_dmps(&self) -> Vec<PyCartesianDmp> {
+        self.inner
+            .demo_dmps()
+            .iter()
+            .map(|d| PyCartesianDmp { inner: d.clone() })
+            .collect()
+    }
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.method()
+    }
+    #[getter]
+    fn n_query(&self) -> usize {
+        self.inner.n_query()
+    }
+    #[getter]
+    fn n_dof(&self) -> usize {
+        6
+    }
+    #[getter]
+    fn n_demos(&self) -> usize {
+        self.inner.n_demos()
+    }
+    #[getter]
+    fn n_basis(&self) -> usize {
+        self.inner.config().n_basis
+    }
+    #[getter]
+    fn n_parameters(&self) -> usize {
+        self.inner.n_parameters()
+    }
+    #[getter]
+    fn tau_bounds(&self) -> (f64, f64) {
+        self.inner.tau_bounds()
+    }
+}

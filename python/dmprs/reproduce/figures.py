@@ -1,0 +1,84 @@
+"""The reproduction's figures: the paper's Figs. 4, 7 and 9 and the baseline comparison."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
+    """Figs. 4, 7, 9 in the paper's style and a baseline comparison (needs matplotlib)."""
+    try:
+        from dmprs.plots import pyplot
+
+        plt = pyplot()
+    except Exception:  # noqa: BLE001 - the report is written without figures
+        return []
+    paths = []
+    for part, title, fname in (("matchbox", "Matchbox (Fig. 4)", "fig4_matchbox.png"),
+                               ("matchbox_both_flipped_back", "Matchbox, both demos flipped back (Fig. 7)",
+                                "fig7_matchbox_extrapolation.png")):
+        runs = [r for r in results if r["kind"] == "learn" and r["part"] == part]
+        if not runs:
+            continue
+        fig, ax = plt.subplots(2, 1, figsize=(6.5, 5.5), sharex=True)
+        for r in runs:
+            n = np.arange(1, len(r["trials"]) + 1)
+            q = [np.degrees(t["query"][0]) for t in r["trials"]]
+            qa = [np.degrees(t["signals"].get("outcome_angle", np.nan)) for t in r["trials"]]
+            line, = ax[0].plot(n, qa, "o-", label=f"{r['learner']}: achieved angle")
+            ax[0].plot(n, q, "x:", color=line.get_color(), alpha=0.6)
+            ax[1].plot(n, [np.degrees(t["eps"][0]) if t["eps"] else np.nan for t in r["trials"]], "o-",
+                       color=line.get_color(), label=r["learner"])
+        ax[0].axhline(90, color="grey", ls="--", lw=0.8)
+        ax[0].set(ylabel="angle (deg)", title=f"{title}: o achieved, x query")
+        ax[1].axhline(0, color="grey", lw=0.8)
+        ax[1].set(ylabel="error eps (deg)", xlabel="trial")
+        ax[1].xaxis.get_major_locator().set_params(integer=True)
+        ax[0].legend(fontsize=7)
+        fig.tight_layout()
+        paths.append(out / fname)
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    runs = [r for r in results if r["kind"] == "learn" and r["part"] == "pouring" and r["learner"] == "golden"]
+    if runs:
+        fig, ax = plt.subplots(2, 1, figsize=(6.5, 5.5), sharex=True)
+        for r in runs:
+            n = np.arange(1, len(r["trials"]) + 1)
+            err = [1000 * t["signals"].get("poured_volume", np.nan) - 200 for t in r["trials"]]
+            line, = ax[0].plot(n, err, "o-", label=f"bottle {r['setup']['bottle_volume']} l")
+            ax[1].plot(n, [t["query"][0] for t in r["trials"]], "o-", color=line.get_color())
+        ax[0].axhspan(-10, 10, color="green", alpha=0.1)
+        ax[0].set(ylabel="poured - 200 ml (ml)", title="Pouring, golden section (Fig. 9)")
+        ax[1].set(ylabel="learned query (l)", xlabel="trial")
+        ax[1].xaxis.get_major_locator().set_params(integer=True)
+        ax[0].legend(fontsize=7)
+        fig.tight_layout()
+        paths.append(out / "fig9_pouring.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    base = [r for r in results if r["kind"] == "baseline"]
+    if base:
+        fig, ax = plt.subplots(figsize=(7, 3.8))
+        labels, data = [], []
+        for (demos, method) in sorted({(r["setup"].get("demos"), r["method"]) for r in base}):
+            rs = [r for r in base if r["setup"].get("demos") == demos and r["method"] == method]
+            labels.append(f"{method}\n{demos}")
+            data.append([r["trials_to_success"] or r["budget"] for r in rs])
+        for demos in sorted({r["setup"].get("demos") for r in base}):
+            ql = [r for r in results if r["kind"] == "learn" and r["experiment"] == "matchbox"
+                  and r["setup"].get("demos") == demos and r["trials_to_success"]]
+            if ql:
+                labels.append(f"query learners\n{demos}")
+                data.append([r["trials_to_success"] for r in ql])
+        ax.boxplot(data, tick_labels=labels)
+        ax.set_yscale("log")
+        ax.set(ylabel="trials to upright (budget if never)", title="Matchbox: weight space vs query space")
+        ax.tick_params(axis="x", labelsize=7)
+        fig.tight_layout()
+        paths.append(out / "baselines.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    return paths

@@ -1,0 +1,206 @@
+"""One pour of the arm scene in MuJoCo: the joint servo at 1 kHz follows a joint trajectory while
+the granular liquid flows; then the bottle is held still and the spheres are counted.
+
+Physics only: it knows nothing of DMPs, IK or tasks (the adapter in
+:mod:`dmprs.tasks.arm_pouring` validates the trajectory and turns the result into signals).
+
+* The servo: MuJoCo position actuators ``tau = kp (q_c - q) - kv qd`` with gravity compensation;
+  commanding ``q_c = q* + (kv / kp) qd*`` makes it the PD ``kp (q* - q) + kv (qd* - qd)`` on the
+  reference (q*, qd*), so the arm does not lag behind a moving reference. The reference is the
+  commanded trajectory interpolated linearly at every 1 ms step.
+* The liquid is spawned on a lattice in the bottle at the home configuration and settled for
+  :data:`SETTLE_TIME` with the arm holding still; the settled state (every qpos and qvel) is
+  cached per process, and each trial starts from a fresh ``MjData`` set to it, so a trial is
+  bit-identical whether the state was just computed or cached.
+* Divergence (a non-finite state, or any of MuJoCo's instability warnings: bad qacc, too many
+  contacts or constraints) raises :class:`~dmprs.errors.NumericalError`.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dmprs.errors import NumericalError
+from dmprs.sim import arm_model as am
+from dmprs.sim import granular
+
+#: the mouth's start pose (x, y, z, qw, qx, qy, qz): upright, beside the glass and above its rim
+HOME_POSE = (0.75, 0.0, 0.32, 1.0, 0.0, 0.0, 0.0)
+#: the IK's seed for the home configuration: elbow up, wrist bent down (deg 0, 34, 0, -69, 0, -57, 0)
+HOME_SEED = (0.0, 0.6, 0.0, -1.2, 0.0, -1.0, 0.0)
+#: s of settling before a pour (the spheres come to rest within ~0.2 s)
+SETTLE_TIME = 0.4
+#: s between stop/timeout checks
+STOP_CHECK_EVERY = 100
+
+#: MuJoCo's warnings that mean the state is no longer physical (on a bad qpos, qvel or qacc
+#: MuJoCo resets the state and carries on, so the warning is the only trace)
+_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL", "mjWARN_CONTACTFULL",
+             "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
+
+
+@functools.lru_cache(maxsize=1)
+def home_configuration() -> NDArray[np.float64]:
+    """The joint positions of :data:`HOME_POSE` (the IK from :data:`HOME_SEED`), read-only."""
+    from dmprs.sim.arm_ik import ArmKinematics
+
+    q, pe, re = ArmKinematics().solve(np.array(HOME_POSE), np.array(HOME_SEED))
+    if pe > 1e-4 or re > 1e-3:
+        raise NumericalError(f"the home pose is unreachable (errors {pe:.3g} m, {re:.3g} rad)")
+    q.setflags(write=False)
+    return q
+
+
+@dataclass(frozen=True)
+class SettledLiquid:
+    """A compiled model with ``n`` spheres and its settled state (read-only arrays)."""
+
+    n: int
+    seed: int
+    model: Any
+    qpos: NDArray[np.float64]
+    qvel: NDArray[np.float64]
+    solver: tuple[str, int, int]
+
+
+@dataclass(frozen=True)
+class ArmPourResult:
+    """What one pour did. ``times``/``q``/``q_ref``: executed and reference joint positions at
+    every physics step (from 0). ``sample_times``/``glass_counts``: spheres in the glass over
+    time. ``region``: the final region of every sphere (:data:`granular.IN_BOTTLE`, ...);
+    ``positions``: the final sphere centres (n, 3; m).
+    ``n_bottle + n_glass + n_spilled = n_particles`` (spilled is counted from ``region``, not by
+    subtraction, so this is a real check). ``cpu_servo``: seconds spent in the servo loop
+    outside ``mj_step``."""
+
+    times: NDArray[np.float64]
+    q: NDArray[np.float64]
+    q_ref: NDArray[np.float64]
+    sample_times: NDArray[np.float64]
+    glass_counts: NDArray[np.int64]
+    region: NDArray[np.int8]
+    positions: NDArray[np.float64]
+    n_particles: int
+    n_bottle: int
+    n_glass: int
+    n_spilled: int
+    interrupted: bool = False
+
+
+def _bottle_frame(model: Any, data: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    b = model.body("bottle").id
+    return data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy()
+
+
+def _particle_positions(data: Any, n: int) -> NDArray[np.float64]:
+    # free joints after the 7 arm joints: 7 qpos each (position then quaternion)
+    return data.qpos[7:].reshape(n, 7)[:, :3].copy() if n else np.zeros((0, 3))
+
+
+def _check_health(mujoco: Any, data: Any, when: float) -> None:
+    for name in _WARNINGS:
+        w = data.warning[getattr(mujoco.mjtWarning, name)]
+        if w.number > 0:
+            raise NumericalError(f"MuJoCo warned {name} at t = {when:.3f} s: the simulation diverged")
+    if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
+        raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")
+
+
+@functools.lru_cache(maxsize=8)
+def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER, am.ITERATIONS, am.CONDIM),
+                   ) -> SettledLiquid:
+    """``n`` spheres spawned in the bottle at the home configuration and settled for
+    :data:`SETTLE_TIME` s; raises NumericalError if one is not in the bottle afterwards."""
+    import mujoco
+
+    q_home = home_configuration()
+    kinematic = am.load()
+    kd = mujoco.MjData(kinematic)
+    kd.qpos[:7] = q_home
+    mujoco.mj_kinematics(kinematic, kd)
+    pos, mat = _bottle_frame(kinematic, kd)
+    local = granular.spawn_sites(n, seed)
+    world = pos + local @ mat.T
+    name, iterations, condim = solver
+    model = am.load(world, solver=name, iterations=iterations, condim=condim)
+    data = mujoco.MjData(model)
+    data.qpos[:7] = q_home
+    data.ctrl[:] = q_home
+    for _ in range(round(SETTLE_TIME / am.TIMESTEP)):
+        mujoco.mj_step(model, data)
+    _check_health(mujoco, data, SETTLE_TIME)
+    mujoco.mj_kinematics(model, data)
+    region = granular.classify(_particle_positions(data, n), *_bottle_frame(model, data))
+    if not (region == granular.IN_BOTTLE).all():
+        bad = int(np.flatnonzero(region != granular.IN_BOTTLE)[0])
+        raise NumericalError(f"settling {n} spheres (seed {seed}) left sphere {bad} outside the bottle")
+    qpos, qvel = data.qpos.copy(), data.qvel.copy()
+    qpos.setflags(write=False)
+    qvel.setflags(write=False)
+    return SettledLiquid(n, seed, model, qpos, qvel, solver)
+
+
+def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np.float64],
+                  liquid: SettledLiquid, *, hold: float = 1.0, sample_period: float = 0.02,
+                  should_stop: Callable[[], bool] | None = None,
+                  on_sample: Callable[[Any, Any, float], None] | None = None) -> ArmPourResult:
+    """Follows the joint trajectory ``q`` (T, 7) with velocities ``qd`` at times ``t`` (from its
+    first sample, which must be the home configuration), then holds the last sample for
+    ``hold`` s, and counts. The caller validates the trajectory; this function trusts it.
+    ``on_sample(model, data, t)`` is called at every count (every ``sample_period`` s), e.g. to
+    render frames; it must not change ``data``."""
+    import mujoco
+
+    model, n = liquid.model, liquid.n
+    data = mujoco.MjData(model)
+    data.qpos[:] = liquid.qpos
+    data.qvel[:] = liquid.qvel
+    mujoco.mj_forward(model, data)
+    _check_health(mujoco, data, 0.0)
+    dt = am.TIMESTEP
+    n_move = max(1, math.ceil((t[-1] - t[0]) / dt - 1e-9))
+    n_steps = n_move + round(hold / dt)
+    times = np.arange(n_steps + 1) * dt
+    q_ref = np.stack([np.interp(t[0] + times, t, q[:, j]) for j in range(7)], axis=1)
+    qd_ref = np.stack([np.interp(t[0] + times, t, qd[:, j]) for j in range(7)], axis=1)
+    qd_ref[n_move + 1:] = 0.0  # holding still after the end
+    command = q_ref + qd_ref * (np.asarray(am.KV) / np.asarray(am.KP))
+    executed = np.empty((n_steps + 1, 7))
+    executed[0] = data.qpos[:7]
+    sample_every = max(1, round(sample_period / dt))
+    sample_t = [0.0]
+    counts = [int(granular.in_glass(_particle_positions(data, n)).sum())]
+    if on_sample is not None:
+        on_sample(model, data, 0.0)
+    interrupted = False
+    k = 0
+    for k in range(1, n_steps + 1):
+        data.ctrl[:] = command[k]
+        mujoco.mj_step(model, data)
+        executed[k] = data.qpos[:7]
+        if k % sample_every == 0 or k == n_steps:
+            sample_t.append(k * dt)
+            counts.append(int(granular.in_glass(_particle_positions(data, n)).sum()))
+            if on_sample is not None:
+                on_sample(model, data, k * dt)
+            _check_health(mujoco, data, k * dt)
+        if should_stop is not None and k % STOP_CHECK_EVERY == 0 and should_stop():
+            interrupted = True
+            break
+    _check_health(mujoco, data, k * dt)
+    mujoco.mj_kinematics(model, data)
+    positions = _particle_positions(data, n)
+    region = granular.classify(positions, *_bottle_frame(model, data))
+    return ArmPourResult(
+        times=times[: k + 1], q=executed[: k + 1], q_ref=q_ref[: k + 1],
+        sample_times=np.array(sample_t), glass_counts=np.array(counts, dtype=np.int64),
+        region=region, positions=positions, n_particles=n,
+        n_bottle=int((region == granular.IN_BOTTLE).sum()), n_glass=int((region == granular.IN_GLASS).sum()),
+        n_spilled=int((region == granular.SPILLED).sum()), interrupted=interrupted)

@@ -1,0 +1,268 @@
+"""The MuJoCo arm-pouring scene behind the adapter interface: joint or pose trajectories, the dry
+IK pass, limits, collisions, and the outcome signals."""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
+from dmprs.errors import InvalidInputError
+from dmprs.tasks.arm_pouring.poses import is_pose_trajectory
+from dmprs.tasks.pouring.adapter import _check_volume as _check_litres
+from dmprs.trajectory import Trajectory
+
+#: litres per sphere (the same 2 ml as the 2-D scene)
+PARTICLE_VOLUME = 0.002
+#: the most the simulated bottle holds (l): 500 spheres
+CAPACITY = 1.0
+TARGET_VOLUME = 0.2  #: l, the paper's task
+DEMO_VOLUMES = (0.3, 1.0)  #: l, the demonstrations' bottles (method.md §9.1)
+#: s: command sample period of a trajectory (the servo interpolates it to 1 kHz)
+CONTROL_PERIOD = 0.002
+MAX_DURATION = 8.0  #: s
+#: a pose trajectory must start at the home pose within these (m, rad)
+START_POSITION_TOL = 1e-3
+START_ORIENTATION_TOL = 1e-3
+#: an IK residual above these at any sample makes the pose unreachable (m, rad)
+REACH_POSITION_TOL = 1e-3
+REACH_ORIENTATION_TOL = 5e-3
+#: quaternions must be unit to this (a CartesianDMP rollout is to 1e-12)
+UNIT_TOL = 1e-6
+#: s between the samples the collision check looks at
+COLLISION_CHECK_PERIOD = 0.01
+
+
+def _check_volume(value: Any, name: str, capacity: float = CAPACITY) -> float:
+    """A volume in litres: finite, > 0, within ``capacity``, at least one 2 ml sphere (the 2-D
+    scene's rule, whose particles are the same 2 ml)."""
+    return _check_litres(value, name, capacity=capacity)
+
+
+def _tilt(quat: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The angle (rad) between the bottle's axis (the mouth frame's z) and the vertical."""
+    _w, x, y = quat[:, 0], quat[:, 1], quat[:, 2]
+    zz = 1 - 2 * (x * x + y * y)  # the z component of the rotated z axis
+    return np.arccos(np.clip(zz / np.sum(quat * quat, axis=1), -1.0, 1.0))
+
+
+@functools.lru_cache(maxsize=1)
+def _kinematics() -> Any:
+    from dmprs.sim.arm_ik import ArmKinematics
+
+    return ArmKinematics()
+
+
+class ArmPouringAdapter(BaseAdapter):
+    """The MuJoCo arm-pouring scene behind the adapter interface.
+
+    Seven DOFs ``a1..a7`` (rad) with the iiwa 14's position and velocity limits; a joint
+    trajectory must start at :func:`home_configuration` (within 1 mrad), a pose trajectory at
+    :data:`~dmprs.sim.arm_scene.HOME_POSE` (1 mm, 1 mrad). After the trajectory the arm holds its
+    last sample for ``hold`` s and the spheres are counted.
+
+    Signals: ``poured_volume`` (l, in the glass: the measurement), ``remaining_volume``,
+    ``spilled_volume``, ``initial_volume`` (l) and the same as sphere counts
+    (``poured_particles``, ``remaining_particles``, ``spilled_particles``, ``particles``; the three
+    add up to ``particles``); ``tracking_error`` (rad, the largest |q - q*| of any joint while
+    moving); ``ik_position_error`` (m) and ``ik_orientation_error`` (rad), the largest IK
+    residuals (0 for a joint trajectory); ``max_tilt`` (rad, of the bottle's axis from the
+    vertical); ``poured_volume_curve`` (l) at ``poured_volume_time`` (s) every 20 ms.
+    """
+
+    def __init__(self, bottle_volume: float = 0.5, *, liquid_seed: int = 0, reseed_liquid: bool = False,
+                 hold: float = 0.5) -> None:
+        from dmprs.sim import arm_model as am
+        from dmprs.sim.arm_scene import home_configuration
+
+        v = _check_volume(bottle_volume, "bottle_volume")
+        self.n_particles = round(v / PARTICLE_VOLUME)
+        self.bottle_volume = self.n_particles * PARTICLE_VOLUME
+        if not (isinstance(liquid_seed, (int, np.integer)) and not isinstance(liquid_seed, bool)
+                and liquid_seed >= 0):
+            raise InvalidInputError(f"liquid_seed = {liquid_seed!r} must be a non-negative integer")
+        hold_s = float(hold)
+        if not (math.isfinite(hold_s) and 0 <= hold_s <= 10):
+            raise InvalidInputError(f"hold = {hold!r} s must be between 0 and 10")
+        self.home = home_configuration()
+        super().__init__(AdapterSpec(
+            name="arm-pouring",
+            dof_names=am.JOINT_NAMES,
+            dof_units=("rad",) * 7,
+            control_period=CONTROL_PERIOD,
+            signals=(
+                SignalSpec("poured_volume", "l", "liquid in the glass, counted `hold` s after the trajectory ends"),
+                SignalSpec("remaining_volume", "l", "liquid still in the bottle at the end"),
+                SignalSpec("spilled_volume", "l", "liquid neither in the bottle nor in the glass"),
+                SignalSpec("initial_volume", "l", "liquid in the bottle before the trial"),
+                SignalSpec("poured_particles", "1", "spheres in the glass (2 ml each)"),
+                SignalSpec("remaining_particles", "1", "spheres in the bottle"),
+                SignalSpec("spilled_particles", "1", "spheres elsewhere"),
+                SignalSpec("particles", "1", "spheres in the scene (constant)"),
+                SignalSpec("tracking_error", "rad", "largest joint tracking error while moving"),
+                SignalSpec("ik_position_error", "m", "largest IK position residual (0 for joint trajectories)"),
+                SignalSpec("ik_orientation_error", "rad", "largest IK orientation residual"),
+                SignalSpec("max_tilt", "rad", "largest executed tilt of the bottle from upright"),
+                SignalSpec("poured_volume_curve", "l", "liquid in the glass over time"),
+                SignalSpec("poured_volume_time", "s", "sample times of poured_volume_curve"),
+            ),
+            position_min=tuple(-x for x in am.JOINT_LIMITS),
+            position_max=am.JOINT_LIMITS,
+            velocity_max=am.VELOCITY_LIMITS,
+            start_pose=tuple(float(x) for x in self.home),
+            start_tolerance=1e-3,
+            max_duration=MAX_DURATION,
+            min_samples=3,
+        ))
+        self.liquid_seed = int(liquid_seed)
+        self.reseed_liquid = bool(reseed_liquid)
+        self.hold = hold_s
+        self._seed = self.liquid_seed
+        self._planned: tuple[Any, Trajectory, float, float] | None = None
+
+    def _reset(self, seed: int | None) -> None:
+        if self.reseed_liquid:
+            self._seed = self.liquid_seed if seed is None else int(seed)
+
+    # --- the dry pass: IK, limits, collisions ----------------------------------------------------
+
+    def plan(self, trajectory: Any) -> tuple[Trajectory | None, float, float, list[str]]:
+        """The joint trajectory that executes ``trajectory`` (itself if it is a joint trajectory;
+        the IK's solution for a pose trajectory), its largest IK residuals (m, rad), and every
+        problem found before the limit and collision checks."""
+        if not is_pose_trajectory(trajectory):
+            return (trajectory if isinstance(trajectory, Trajectory) else None), 0.0, 0.0, []
+        from dmprs.sim.arm_scene import HOME_POSE
+
+        t = np.asarray(trajectory.t, dtype=float)
+        pose = np.asarray(trajectory.pose, dtype=float)
+        if t.ndim != 1 or pose.shape != (len(t), 7):
+            return None, 0.0, 0.0, [f"a pose trajectory needs t (T,) and pose (T, 7); got {t.shape} and {pose.shape}"]
+        if len(t) < 3:
+            return None, 0.0, 0.0, [f"trajectory has {len(t)} samples; at least 3 are needed"]
+        for name, arr in (("t", t), ("pose", pose)):
+            if not np.isfinite(arr).all():
+                idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
+                return None, 0.0, 0.0, [f"{name}{list(idx)} is not finite"]
+        if (np.diff(t) <= 0).any():
+            j = int(np.argmax(np.diff(t) <= 0)) + 1
+            return None, 0.0, 0.0, [f"t must be strictly increasing; t[{j}] = {t[j]:.6g} s is not"]
+        norm = np.linalg.norm(pose[:, 3:], axis=1)
+        off = np.abs(norm - 1)
+        if (off > UNIT_TOL).any():
+            j = int(np.argmax(off))
+            return None, 0.0, 0.0, [(f"the quaternion at t = {t[j]:.4g} s has norm {norm[j]:.9g}, not 1 "
+                                    f"(tolerance {UNIT_TOL:g})")]
+        home = np.asarray(HOME_POSE)
+        problems = []
+        dp = float(np.linalg.norm(pose[0, :3] - home[:3]))
+        dr = 2 * math.acos(min(1.0, abs(float(np.dot(pose[0, 3:] / norm[0], home[3:])))))
+        if dp > START_POSITION_TOL or dr > START_ORIENTATION_TOL:
+            problems.append(f"the pose trajectory starts {dp * 1000:.3g} mm and {dr:.3g} rad from the home pose "
+                            f"{HOME_POSE} (tolerances {START_POSITION_TOL * 1000:g} mm, {START_ORIENTATION_TOL:g} rad)")
+            return None, 0.0, 0.0, problems
+        if trajectory is not None and self._planned is not None and self._planned[0] is trajectory:
+            _, joints, pe, re = self._planned
+            return joints, pe, re, []
+        ik = _kinematics().track(t, pose / norm[:, None] if norm.size else pose, self.home)
+        bad_p = np.flatnonzero(ik.position_error > REACH_POSITION_TOL)
+        bad_r = np.flatnonzero(ik.orientation_error > REACH_ORIENTATION_TOL)
+        if len(bad_p) or len(bad_r):
+            j = int(min(bad_p[:1].tolist() + bad_r[:1].tolist()))
+            problems.append(
+                f"the pose at t = {t[j]:.4g} s is unreachable: the IK is left {ik.position_error[j] * 1000:.3g} mm "
+                f"and {ik.orientation_error[j]:.3g} rad away (tolerances {REACH_POSITION_TOL * 1000:g} mm, "
+                f"{REACH_ORIENTATION_TOL:g} rad); position {np.round(pose[j, :3], 4).tolist()} m")
+            return None, 0.0, 0.0, problems
+        qd = np.gradient(ik.q, t, axis=0, edge_order=2)
+        joints = Trajectory(t, ik.q, qd)
+        pe, re = float(ik.position_error.max()), float(ik.orientation_error.max())
+        self._planned = (trajectory, joints, pe, re)
+        return joints, pe, re, []
+
+    def check(self, trajectory: Any) -> list[str]:
+        joints, _, _, problems = self.plan(trajectory)
+        if problems:
+            return problems
+        if joints is None:
+            return [(f"expected a dmprs.Trajectory (7 joints) or a pose trajectory (.t, .pose), got "
+                    f"{type(trajectory).__name__}")]
+        problems = self.spec.check(joints)
+        if is_pose_trajectory(trajectory):
+            problems = [f"the IK solution: {p}" for p in problems]
+        return problems or self._collisions(joints)
+
+    def _collisions(self, joints: Trajectory) -> list[str]:
+        """The first contact of the arm or the bottle with the table or the glass, if any."""
+        import mujoco
+
+        kin = _kinematics()
+        m, d = kin.model, kin.data
+        table = m.geom("table").id
+        glassware = {g for g in range(m.ngeom) if m.geom(g).name.startswith("glass")}
+        step = max(1, round(COLLISION_CHECK_PERIOD / max(float(np.median(np.diff(joints.t))), 1e-9)))
+        rows = list(range(0, joints.n_samples, step)) + [joints.n_samples - 1]
+        for k in rows:
+            d.qpos[:7] = joints.y[k]
+            mujoco.mj_fwdPosition(m, d)
+            for c in d.contact[: d.ncon]:
+                if c.dist >= 0:
+                    continue
+                names = sorted((m.geom(c.geom1).name, m.geom(c.geom2).name))
+                hit = {c.geom1, c.geom2}
+                if table in hit or hit & glassware:
+                    return [(f"at t = {joints.t[k] - joints.t[0]:.4g} s {names[0]} and {names[1]} collide "
+                            f"({-c.dist * 1000:.3g} mm of penetration)")]
+        return []
+
+    # --- execution -------------------------------------------------------------------------------
+
+    def _execute(self, trajectory: Any) -> Outcome:
+        from dmprs.sim import arm_scene as scene
+
+        joints, pe, re, problems = self.plan(trajectory)
+        if problems or joints is None:  # execute() checked already; a changed trajectory is refused
+            return Outcome(Status.REJECTED, message="; ".join(problems) or "not a trajectory")
+        liquid = scene.settled_liquid(self.n_particles, self._seed)
+        qd = joints.yd if joints.yd is not None else np.gradient(joints.y, joints.t, axis=0)
+        result = scene.simulate_pour(joints.t, joints.y, qd, liquid, hold=self.hold,
+                                     should_stop=self._interrupted)
+        t_rel = joints.t - joints.t[0]
+        reached = t_rel <= result.times[-1] + 1e-12
+        executed = None
+        if reached.sum() >= 2:
+            executed = Trajectory(joints.t[reached], np.stack(
+                [np.interp(t_rel[reached], result.times, result.q[:, j]) for j in range(7)], axis=1))
+        if result.interrupted:
+            return self._interrupted_outcome(executed)
+        moving = result.times <= t_rel[-1] + 1e-12
+        tracking = float(np.abs(result.q[moving] - result.q_ref[moving]).max())
+        tilt = float(_tilt(self._mouth_quaternions(result.q[::10])).max())
+        n = result.n_particles
+        signals = {
+            "poured_volume": result.n_glass * PARTICLE_VOLUME,
+            "remaining_volume": result.n_bottle * PARTICLE_VOLUME,
+            "spilled_volume": result.n_spilled * PARTICLE_VOLUME,
+            "initial_volume": n * PARTICLE_VOLUME,
+            "poured_particles": result.n_glass,
+            "remaining_particles": result.n_bottle,
+            "spilled_particles": result.n_spilled,
+            "particles": n,
+            "tracking_error": tracking,
+            "ik_position_error": pe,
+            "ik_orientation_error": re,
+            "max_tilt": tilt,
+            "poured_volume_curve": result.glass_counts * PARTICLE_VOLUME,
+            "poured_volume_time": result.sample_times,
+        }
+        return Outcome(Status.OK, signals=signals, executed=executed)
+
+    @staticmethod
+    def _mouth_quaternions(q: NDArray[np.float64]) -> NDArray[np.float64]:
+        kin = _kinematics()
+        return np.array([kin.pose(row)[3:] for row in q])
+

@@ -1,0 +1,96 @@
+"""The arm experiment's encoding and generalization, without simulating: the demonstrations as
+CartesianDMPs, their linear generalization against a second method (the library's Generalizer on
+the rotation vector, which for a rotation about one fixed axis is the discrete DMP of the angle),
+and the pose <-> tangent maps. The pours themselves are tested in test_arm_pouring.py."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dmprs.arm_experiments import CartesianLinearGeneralizer
+from dmprs.cartesian import CartesianDMP
+from dmprs.database import Database
+from dmprs.generalize import Generalizer
+from dmprs.sim.arm_scene import HOME_POSE
+from dmprs.tasks.arm_pouring import (
+    ArmPouring,
+    PoseTrajectory,
+    demonstration_tangent,
+    pose_to_tangent,
+    pour_poses,
+    tangent_to_pose,
+)
+
+PEAKS = {0.3: 2.3, 1.0: 1.8}  # rad: about the calibrated peak tilts
+
+
+@pytest.fixture(scope="module")
+def generalizers():
+    demos = [(v, CartesianDMP.fit(pour_poses(p).t, pour_poses(p).pose, n_basis=40)) for v, p in PEAKS.items()]
+    db = Database(query_names=("bottle_volume",))
+    for v, p in PEAKS.items():
+        db.add([v], demonstration_tangent(p))
+    return CartesianLinearGeneralizer(demos), Generalizer(db, method="linear", n_basis=40), demos
+
+
+@pytest.mark.parametrize("q", [0.3, 0.45, 0.6, 0.9, 1.0, 1.1])
+def test_cartesian_generalization_equals_the_angle_dmp(generalizers, q):
+    cart, angle, _ = generalizers
+    task = ArmPouring(0.5)
+    a = task.trajectory(cart.predict([q]))
+    b = task.trajectory(angle.predict([q]))
+    assert not isinstance(b, type(a))  # two different code paths: CartesianDMP and the 6-D DMP
+    np.testing.assert_allclose(a.pose, b.pose, atol=1e-12)
+
+
+def test_generalization_reproduces_the_demonstrations(generalizers):
+    cart, _, demos = generalizers
+    for v, dmp in demos:
+        got = cart.predict([v])
+        for name in ("weights", "goal", "start", "tau"):
+            np.testing.assert_allclose(getattr(got, name), getattr(dmp, name), atol=1e-12)
+        rollout = cart.predict([v]).rollout(dt=0.002)
+        demo = pour_poses(PEAKS[v])
+        # the DMP reproduces the scripted pour: within 3 mm and 3 mrad (N = 40 kernels, 4.2 s)
+        assert np.abs(rollout.pose[:, :3] - demo.pose[:, :3]).max() < 3e-3
+        assert np.abs(rollout.pose[:, 3:] - demo.pose[:, 3:]).max() < 3e-3
+
+
+def test_generalized_tilt_lies_between_the_demos(generalizers):
+    cart, _, _ = generalizers
+    peak = {q: 2 * np.arccos(np.clip(cart.predict([q]).rollout(dt=0.01).pose[:, 3], -1, 1)).max()
+            for q in (0.3, 0.65, 1.0)}
+    assert peak[1.0] < peak[0.65] < peak[0.3]
+    assert peak[0.65] == pytest.approx(0.5 * (PEAKS[0.3] + PEAKS[1.0]), abs=0.01)
+
+
+def test_generalizer_needs_two_distinct_demos(generalizers):
+    _, _, demos = generalizers
+    with pytest.raises(ValueError, match="two demonstrations"):
+        CartesianLinearGeneralizer(demos[:1])
+    with pytest.raises(ValueError, match="two demonstrations"):
+        CartesianLinearGeneralizer([demos[0], demos[0]])
+
+
+unit = st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda v: 0.1 < np.linalg.norm(v))
+
+
+@settings(max_examples=50, deadline=None)
+@given(unit, unit, st.lists(st.floats(-2, 2), min_size=3, max_size=3))
+def test_tangent_map_round_trips(q, ref, position):
+    q = np.array(q) / np.linalg.norm(q)
+    ref = np.array(ref) / np.linalg.norm(ref)
+    pose = np.concatenate([position, q])[None]
+    back = tangent_to_pose(pose_to_tangent(pose, ref), ref)
+    np.testing.assert_allclose(back[0, :3], position, atol=1e-12)
+    assert abs(abs(float(np.dot(back[0, 3:], q))) - 1) < 1e-9  # the same rotation
+    assert np.linalg.norm(pose_to_tangent(pose, ref)[0, 3:]) <= np.pi + 1e-9  # the short way round
+
+
+def test_pose_trajectory_validates():
+    t = np.linspace(0, 1, 5)
+    with pytest.raises(ValueError, match="shape"):
+        PoseTrajectory(t, np.zeros((5, 6)))
+    with pytest.raises(ValueError, match="increasing"):
+        PoseTrajectory(t[::-1], np.tile(HOME_POSE, (5, 1)))
