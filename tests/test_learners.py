@@ -349,6 +349,8 @@ def test_out_of_range_counts_are_clear_errors():
         L.GoldenSection(0.5, low=0.0, high=1.0, max_trials=2.5)
     with pytest.raises(InvalidInputError, match="tol must be a real number"):
         L.IllinoisRootFinder(0.5, low=0.0, high=1.0, tol="abc")
+    with pytest.raises(InvalidInputError, match="mode must be a string"):
+        L.GoldenSection(0.5, low=0.0, high=1.0, mode=5)
 
 
 def test_a_bracket_whose_width_overflows_is_named():

@@ -120,6 +120,12 @@ def _count(value: Any, name: str) -> int | None:
     return n
 
 
+def _text(value: Any, name: str) -> str | None:
+    if value is None or isinstance(value, str):
+        return value
+    raise InvalidInputError(f"{name} must be a string; got {value!r}")
+
+
 def _flag(value: Any, name: str) -> bool | None:
     if value is None:
         return None
@@ -316,7 +322,7 @@ class GoldenSection(_Learner):
             _vector(q0, "q0"),
             low=_optional_vector(low, "low", 1),
             high=_optional_vector(high, "high", 1),
-            mode=mode,
+            mode=_text(mode, "mode"),
             tol=_real(tol, "tol"),
             q_tol=_real(q_tol, "q_tol"),
             max_trials=_count(max_trials, "max_trials"),
