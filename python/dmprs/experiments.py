@@ -48,18 +48,18 @@ def query_learners(low: float | None, high: float | None, scale: float = 1.0,
     """The paper's query-space learners by name, for a one-dimensional query."""
     from dmprs import learners as L
 
-    def bracket() -> tuple[float, float]:
+    def bracket() -> dict[str, Any]:
         if low is None or high is None:
             raise InvalidInputError("this learner needs search limits (low, high)")
-        return low, high
+        return {"low": low, "high": high}
 
     return {
         "error": lambda q0, **kw: L.ErrorLearning(q0, max_trials=max_trials, **kw),
         "weighted": lambda q0, **kw: L.ErrorLearning(q0, weighted=True, scale=scale, max_trials=max_trials, **kw),
         "secant": lambda q0, **kw: L.ErrorLearning(q0, jacobian="secant", max_trials=max_trials, **kw),
-        "golden": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="paper", max_trials=max_trials, **kw),
-        "golden-robust": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="robust", max_trials=max_trials, **kw),
-        "root": lambda q0, **kw: L.IllinoisRootFinder(float(q0[0]), *bracket(), max_trials=max_trials, **kw),
+        "golden": lambda q0, **kw: L.GoldenSection(q0, **bracket(), mode="paper", max_trials=max_trials, **kw),
+        "golden-robust": lambda q0, **kw: L.GoldenSection(q0, **bracket(), mode="robust", max_trials=max_trials, **kw),
+        "root": lambda q0, **kw: L.IllinoisRootFinder(q0, **bracket(), max_trials=max_trials, **kw),
         # constrained-domain policy gradient (eq. 12): finite differences in q, every trial counted
         "pg": lambda q0, **kw: L.PolicyGradient(q0, scale=scale, max_trials=max_trials, **kw),
         # black-box baseline (dmprs.cmaes): from the same first trial q0, step a quarter of the

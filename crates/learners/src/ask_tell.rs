@@ -143,19 +143,27 @@ impl Record {
         &self.history
     }
 
-    /// The start of every `ask`: refuses after a stop, repeats a pending query.
-    pub(crate) fn pending_or_running(&self) -> Result<Option<Vec<f64>>> {
+    /// Every learner's `ask`: refuses after a stop, repeats a pending query, else makes `next()`
+    /// the pending query. A non-finite query is never asked: the learner stops as `Diverged`
+    /// (its `tell` normally notices first, see [`diverged_unless_finite`]).
+    pub(crate) fn ask_with(&mut self, next: impl FnOnce() -> Vec<f64>) -> Result<Vec<f64>> {
         if !self.status.is_running() {
             return Err(LearnerError::Finished {
                 status: self.status.to_string(),
             });
         }
-        Ok(self.pending.clone())
-    }
-
-    pub(crate) fn set_pending(&mut self, q: Vec<f64>) -> Vec<f64> {
+        if let Some(q) = &self.pending {
+            return Ok(q.clone());
+        }
+        let q = next();
+        if diverged_unless_finite(&q).is_some() {
+            self.status = Status::Diverged;
+            return Err(LearnerError::Finished {
+                status: self.status.to_string(),
+            });
+        }
         self.pending = Some(q.clone());
-        q
+        Ok(q)
     }
 
     /// The start of every `tell`: the order of calls, the query, and the feedback's size and
@@ -232,4 +240,10 @@ impl Record {
 /// criterion of a vector query reads like the paper's |eps| < precision for n = 1.
 pub(crate) fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
+}
+
+/// `Some(Diverged)` when a learner's next query (or the state it samples it from) is not finite:
+/// a huge gain, step, exploration or return overflowed. A learner never asks such a query.
+pub(crate) fn diverged_unless_finite(next: &[f64]) -> Option<Status> {
+    (!next.iter().all(|v| v.is_finite())).then_some(Status::Diverged)
 }

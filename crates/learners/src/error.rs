@@ -49,25 +49,39 @@ pub enum LearnerError {
     },
 }
 
+/// What kind of mistake an error is: the bindings map each kind to one Python class.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The caller's input was wrong (Python: `InvalidInputError`).
+    Input,
+    /// The calls came in the wrong order (Python: `LearnerStateError`).
+    State,
+    /// Valid input, failed computation (Python: `NumericalError`).
+    Numerical,
+}
+
 impl LearnerError {
-    /// True when the caller's input was wrong (Python maps these to `InvalidInputError`).
-    pub fn is_input_error(&self) -> bool {
-        matches!(
-            self,
+    /// The kind of this error (an exhaustive match: a new variant must choose its kind).
+    pub fn kind(&self) -> ErrorKind {
+        match self {
             LearnerError::NonFinite { .. }
-                | LearnerError::Dimension { .. }
-                | LearnerError::InvalidParameter { .. }
-        )
+            | LearnerError::Dimension { .. }
+            | LearnerError::InvalidParameter { .. } => ErrorKind::Input,
+            LearnerError::NotAsked
+            | LearnerError::UnexpectedQuery { .. }
+            | LearnerError::Finished { .. } => ErrorKind::State,
+            LearnerError::Numerical { .. } => ErrorKind::Numerical,
+        }
     }
 
-    /// True when the call came in the wrong order (Python maps these to `LearnerStateError`).
+    /// True when the caller's input was wrong.
+    pub fn is_input_error(&self) -> bool {
+        self.kind() == ErrorKind::Input
+    }
+
+    /// True when the call came in the wrong order.
     pub fn is_state_error(&self) -> bool {
-        matches!(
-            self,
-            LearnerError::NotAsked
-                | LearnerError::UnexpectedQuery { .. }
-                | LearnerError::Finished { .. }
-        )
+        self.kind() == ErrorKind::State
     }
 }
 
@@ -129,4 +143,29 @@ pub(crate) fn check_max_trials(max_trials: usize) -> Result<()> {
         return Err(invalid("max_trials", 0, "must be at least 1"));
     }
     Ok(())
+}
+
+/// A query vector of at least one entry, all finite.
+pub(crate) fn check_query(name: &'static str, q: &[f64]) -> Result<()> {
+    if q.is_empty() {
+        return Err(LearnerError::Dimension {
+            name,
+            expected: "at least 1 entry".into(),
+            got: "0 entries".into(),
+        });
+    }
+    check_finite(name, q)
+}
+
+/// The one entry of a one-dimensional query (or limit) given as a slice: the bindings pass
+/// every query as a 1-D array, the bracketing learners take a scalar.
+pub fn scalar_entry(name: &'static str, values: &[f64]) -> Result<f64> {
+    match values {
+        [v] => Ok(*v),
+        _ => Err(LearnerError::Dimension {
+            name,
+            expected: "1 entry (this learner searches a one-dimensional query)".into(),
+            got: format!("{} entries", values.len()),
+        }),
+    }
 }

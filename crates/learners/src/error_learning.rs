@@ -19,9 +19,58 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::ask_tell::{AskTell, Record, Status, max_abs};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite, max_abs};
 use crate::bounds::Bounds;
-use crate::error::{LearnerError, Result, check_scalar, check_vector, invalid};
+use crate::error::{LearnerError, Result, check_finite, check_query, check_scalar, invalid};
+
+/// An n x n matrix given as a scalar (times I), a diagonal, or in full.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SquareMatrix {
+    Scalar(f64),
+    Diagonal(Vec<f64>),
+    Full(DMatrix<f64>),
+}
+
+impl SquareMatrix {
+    /// The n x n matrix; every entry finite.
+    fn to_matrix(&self, name: &'static str, n: usize) -> Result<DMatrix<f64>> {
+        let m = match self {
+            SquareMatrix::Scalar(g) => DMatrix::from_diagonal_element(n, n, *g),
+            SquareMatrix::Diagonal(d) if d.len() == n => {
+                DMatrix::from_diagonal(&DVector::from_column_slice(d))
+            }
+            SquareMatrix::Diagonal(d) => {
+                return Err(LearnerError::Dimension {
+                    name,
+                    expected: format!("a scalar, {n} diagonal entries or shape ({n}, {n})"),
+                    got: format!("{} diagonal entries", d.len()),
+                });
+            }
+            SquareMatrix::Full(m) if m.shape() == (n, n) => m.clone(),
+            SquareMatrix::Full(m) => {
+                return Err(LearnerError::Dimension {
+                    name,
+                    expected: format!("shape ({n}, {n})"),
+                    got: format!("shape {:?}", m.shape()),
+                });
+            }
+        };
+        check_finite(name, m.as_slice())?;
+        Ok(m)
+    }
+}
+
+impl From<f64> for SquareMatrix {
+    fn from(g: f64) -> Self {
+        SquareMatrix::Scalar(g)
+    }
+}
+
+impl From<DMatrix<f64>> for SquareMatrix {
+    fn from(m: DMatrix<f64>) -> Self {
+        SquareMatrix::Full(m)
+    }
+}
 
 /// How J_m (the estimate of dq_a/dq) is obtained.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,7 +78,7 @@ pub enum Jacobian {
     /// J = I: the step is K eps (eq. 16 as in the paper's matchbox experiment).
     Identity,
     /// A fixed, user-supplied n x n estimate of dq_a/dq (must be invertible).
-    Fixed(DMatrix<f64>),
+    Fixed(SquareMatrix),
     /// Secant (n = 1) / Broyden (n > 1) update from consecutive trials, starting at J = I.
     Secant,
     /// Forward differences at q0 with step `delta`: trials q0 + delta e_j, j = 1..n, after the
@@ -37,10 +86,13 @@ pub enum Jacobian {
     FiniteDifference { delta: f64 },
 }
 
+/// The finite-difference step of `Jacobian::FiniteDifference` unless the caller chooses one.
+pub const DEFAULT_FD_DELTA: f64 = 0.01;
+
 #[derive(Debug, Clone)]
 pub struct ErrorLearningConfig {
-    /// K of eq. 16 (n x n). A scalar gain g is `g * I`.
-    pub gain: DMatrix<f64>,
+    /// K of eq. 16 (n x n).
+    pub gain: SquareMatrix,
     /// Eq. 17 instead of eq. 16.
     pub weighted: bool,
     /// The task scale s in exp(-||eps/s||^2) (units of eps).
@@ -55,18 +107,18 @@ pub struct ErrorLearningConfig {
     pub pin_limit: usize,
 }
 
-impl ErrorLearningConfig {
-    /// Eq. 16 with K = I, no limits.
-    pub fn new(n: usize, tol: f64, max_trials: usize) -> Self {
+/// Eq. 16 with K = I, no limits.
+impl Default for ErrorLearningConfig {
+    fn default() -> Self {
         Self {
-            gain: DMatrix::identity(n, n),
+            gain: SquareMatrix::Scalar(1.0),
             weighted: false,
             scale: 1.0,
             jacobian: Jacobian::Identity,
             low: None,
             high: None,
-            tol,
-            max_trials,
+            tol: 1e-3,
+            max_trials: 50,
             pin_limit: 3,
         }
     }
@@ -104,38 +156,25 @@ pub struct ErrorLearning {
 impl ErrorLearning {
     pub fn new(q0: &[f64], cfg: ErrorLearningConfig) -> Result<Self> {
         let n = q0.len();
-        if n == 0 {
-            return Err(LearnerError::Dimension {
-                name: "q0",
-                expected: "at least 1 entry".into(),
-                got: "0 entries".into(),
-            });
-        }
-        check_vector("q0", q0, n)?;
-        if cfg.gain.shape() != (n, n) {
-            return Err(LearnerError::Dimension {
-                name: "gain",
-                expected: format!("shape ({n}, {n})"),
-                got: format!("shape {:?}", cfg.gain.shape()),
-            });
-        }
-        crate::error::check_finite("gain", cfg.gain.as_slice())?;
+        check_query("q0", q0)?;
+        let gain = cfg.gain.to_matrix("gain", n)?;
         check_scalar("scale", cfg.scale, true)?;
         check_scalar("tol", cfg.tol, true)?;
         let jac = match &cfg.jacobian {
             Jacobian::Fixed(j) => {
-                if j.shape() != (n, n) {
-                    return Err(LearnerError::Dimension {
-                        name: "jacobian",
-                        expected: format!("shape ({n}, {n})"),
-                        got: format!("shape {:?}", j.shape()),
-                    });
-                }
-                crate::error::check_finite("jacobian", j.as_slice())?;
+                let j = j.to_matrix("jacobian", n)?;
                 if j.clone().lu().try_inverse().is_none() {
-                    return Err(invalid("jacobian", format!("{j:?}"), "must be invertible"));
+                    let rows: Vec<String> = j
+                        .row_iter()
+                        .map(|r| format!("{:?}", r.iter().collect::<Vec<_>>()))
+                        .collect();
+                    return Err(invalid(
+                        "jacobian",
+                        format!("[{}]", rows.join(", ")),
+                        "must be invertible",
+                    ));
                 }
-                j.clone()
+                j
             }
             Jacobian::FiniteDifference { delta } => {
                 check_scalar("delta", *delta, true)?;
@@ -152,7 +191,7 @@ impl ErrorLearning {
             n,
             next: q0.clone(),
             q0,
-            gain: cfg.gain,
+            gain,
             weighted: cfg.weighted,
             scale: cfg.scale,
             mode: cfg.jacobian,
@@ -240,10 +279,7 @@ impl AskTell for ErrorLearning {
     }
 
     fn ask(&mut self) -> Result<Vec<f64>> {
-        if let Some(q) = self.rec.pending_or_running()? {
-            return Ok(q);
-        }
-        Ok(self.rec.set_pending(self.next.as_slice().to_vec()))
+        self.rec.ask_with(|| self.next.as_slice().to_vec())
     }
 
     fn tell(&mut self, q: &[f64], eps: &[f64]) -> Result<()> {
@@ -316,7 +352,8 @@ impl AskTell for ErrorLearning {
         if stop.is_none() && self.growth >= GROWTH_TRIALS && score > GROWTH_FACTOR * h[0].score {
             stop = Some(Status::Diverged);
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(self.next.as_slice())));
         Ok(())
     }
 

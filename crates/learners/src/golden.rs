@@ -23,8 +23,9 @@
 //!
 //! eps > 0 means the query must increase (docs/method.md §5.3).
 
-use crate::ask_tell::{AskTell, Record, Status};
-use crate::error::{Result, check_scalar, invalid};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
+use crate::bracket::check_bracket;
+use crate::error::Result;
 
 /// The paper's constants: the next point sits at 0.618 (eps > 0) or 0.382 (eps <= 0) of the
 /// new bracket.
@@ -48,11 +49,24 @@ pub struct GoldenConfig {
     pub mode: GoldenMode,
     /// Converged when |eps| < tol.
     pub tol: f64,
-    /// Robust mode: stop when the bracket is narrower than this (query units).
-    pub q_tol: f64,
+    /// Robust mode: stop when the bracket is narrower than this (query units). None: 1e-4 times
+    /// the width of [low, high].
+    pub q_tol: Option<f64>,
     pub max_trials: usize,
     /// Robust mode: expansions allowed per side before `HitBound`.
     pub max_expansions: usize,
+}
+
+impl Default for GoldenConfig {
+    fn default() -> Self {
+        Self {
+            mode: GoldenMode::Paper,
+            tol: 1e-3,
+            q_tol: None,
+            max_trials: 50,
+            max_expansions: 4,
+        }
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -75,14 +89,7 @@ pub struct GoldenSection {
 
 impl GoldenSection {
     pub fn new(q0: f64, low: f64, high: f64, cfg: GoldenConfig) -> Result<Self> {
-        check_scalar("q0", q0, false)?;
-        check_scalar("low", low, false)?;
-        check_scalar("high", high, false)?;
-        if low >= high {
-            return Err(invalid("low", low, &format!("must be < high = {high}")));
-        }
-        check_scalar("tol", cfg.tol, true)?;
-        check_scalar("q_tol", cfg.q_tol, true)?;
+        let q_tol = check_bracket(q0, low, high, cfg.tol, cfg.q_tol)?;
         let (ql, qh) = match cfg.mode {
             GoldenMode::Paper => (low, high),
             GoldenMode::Robust => (low.min(q0), high.max(q0)), // §6.3 (a)
@@ -90,7 +97,7 @@ impl GoldenSection {
         Ok(Self {
             mode: cfg.mode,
             tol: cfg.tol,
-            q_tol: cfg.q_tol,
+            q_tol,
             ql,
             qh,
             next: q0, // §6.2 item 8: the first trial is the pure generalization
@@ -166,10 +173,7 @@ impl AskTell for GoldenSection {
     }
 
     fn ask(&mut self) -> Result<Vec<f64>> {
-        if let Some(q) = self.rec.pending_or_running()? {
-            return Ok(q);
-        }
-        Ok(self.rec.set_pending(vec![self.next]))
+        self.rec.ask_with(|| vec![self.next])
     }
 
     fn tell(&mut self, q: &[f64], eps: &[f64]) -> Result<()> {
@@ -202,7 +206,8 @@ impl AskTell for GoldenSection {
                 GoldenMode::Paper => (width <= COLLAPSE * self.first_width).then(|| self.spent()),
             };
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(&[self.next])));
         Ok(())
     }
 

@@ -8,6 +8,7 @@
 
 pub mod ask_tell;
 pub mod bounds;
+pub mod bracket;
 pub mod error;
 pub mod error_learning;
 pub mod golden;
@@ -18,8 +19,10 @@ pub mod root;
 
 pub use ask_tell::{AskTell, Record, Status, Trial};
 pub use dmp_core::{Dmp, DmpConfig, Trajectory};
-pub use error::{LearnerError, Result};
-pub use error_learning::{ErrorLearning, ErrorLearningConfig, Jacobian};
+pub use error::{ErrorKind, LearnerError, Result, scalar_entry};
+pub use error_learning::{
+    DEFAULT_FD_DELTA, ErrorLearning, ErrorLearningConfig, Jacobian, SquareMatrix,
+};
 pub use golden::{GoldenConfig, GoldenMode, GoldenSection};
 pub use pi2::{Pi2, Pi2Config};
 pub use policy_gradient::{PolicyGradient, PolicyGradientConfig};

@@ -33,13 +33,12 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::ask_tell::{AskTell, Record, Status};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::error::{LearnerError, Result, check_scalar, check_vector, invalid};
 use crate::power::per_parameter;
 
 #[derive(Debug, Clone)]
 pub struct Pi2Config {
-    pub sigma: Vec<f64>,
     /// K, rollouts per update.
     pub n_rollouts: usize,
     pub n_reuse: usize,
@@ -57,6 +56,31 @@ pub struct Pi2Config {
     pub max_trials: usize,
     pub seed: u64,
 }
+
+impl Default for Pi2Config {
+    fn default() -> Self {
+        Self {
+            n_rollouts: 10,
+            n_reuse: 5,
+            h: 10.0,
+            n_updates: 20,
+            n_dof: 1,
+            n_steps: 100,
+            alpha_x: 2.0,
+            width_factor: 2.0,
+            projection: true,
+            cost_tol: None,
+            max_trials: 200,
+            seed: 0,
+        }
+    }
+}
+
+/// The largest n_steps x n_basis accepted: PI² keeps two tables of that many floats (g_i and
+/// the time-averaging weights) and walks them on every update. 10^7 entries (160 MB) is far
+/// beyond any rollout a robot executes (10^5 steps of 1 ms with 100 kernels), and refusing
+/// larger sizes turns an allocation abort or minutes of work into a clear error.
+pub const MAX_TABLE_ENTRIES: usize = 10_000_000;
 
 /// The reference code's floor on the annealed noise.
 const MIN_NOISE_MULT: f64 = 0.1;
@@ -88,7 +112,8 @@ pub struct Pi2 {
 }
 
 impl Pi2 {
-    pub fn new(theta0: &[f64], cfg: Pi2Config) -> Result<Self> {
+    /// `sigma`: the exploration standard deviation, one entry or one per weight.
+    pub fn new(theta0: &[f64], sigma: &[f64], cfg: Pi2Config) -> Result<Self> {
         let dim = theta0.len();
         if cfg.n_dof == 0 {
             return Err(invalid("n_dof", 0, "must be at least 1"));
@@ -104,7 +129,7 @@ impl Pi2 {
             });
         }
         check_vector("theta0", theta0, dim)?;
-        let sigma = per_parameter(&cfg.sigma, dim)?;
+        let sigma = per_parameter(sigma, dim)?;
         if cfg.n_rollouts < 2 {
             return Err(invalid("n_rollouts", cfg.n_rollouts, "must be at least 2"));
         }
@@ -122,10 +147,21 @@ impl Pi2 {
         if cfg.n_steps < 2 {
             return Err(invalid("n_steps", cfg.n_steps, "must be at least 2"));
         }
+        let n_basis = dim / cfg.n_dof;
+        if cfg.n_steps.saturating_mul(n_basis) > MAX_TABLE_ENTRIES {
+            return Err(invalid(
+                "n_steps",
+                cfg.n_steps,
+                &format!(
+                    "n_steps x n_basis = {} x {n_basis} exceeds {MAX_TABLE_ENTRIES}: PI² tabulates \
+                     the basis at every time step, and no rollout has that many steps",
+                    cfg.n_steps
+                ),
+            ));
+        }
         if let Some(t) = cfg.cost_tol {
             check_scalar("cost_tol", t, false)?;
         }
-        let n_basis = dim / cfg.n_dof;
         let basis = Basis::new(n_basis, cfg.alpha_x, cfg.width_factor)
             .map_err(|e| invalid("basis", e, "alpha_x and width_factor must be > 0"))?;
         let t = cfg.n_steps;
@@ -262,21 +298,21 @@ impl AskTell for Pi2 {
     }
 
     fn ask(&mut self) -> Result<Vec<f64>> {
-        if let Some(q) = self.rec.pending_or_running()? {
-            return Ok(q);
-        }
-        self.pending_is_eval = self.need_eval;
-        if self.need_eval {
-            return Ok(self.rec.set_pending(self.theta.clone()));
-        }
         let mult = self.noise_mult();
-        let theta: Vec<f64> = (0..self.theta.len())
-            .map(|p| {
-                let z: f64 = StandardNormal.sample(&mut self.rng);
-                self.theta[p] + self.sigma[p] * mult * z
-            })
-            .collect();
-        Ok(self.rec.set_pending(theta))
+        let (theta, sigma, rng) = (&self.theta, &self.sigma, &mut self.rng);
+        let (need_eval, pending_is_eval) = (self.need_eval, &mut self.pending_is_eval);
+        self.rec.ask_with(|| {
+            *pending_is_eval = need_eval;
+            if need_eval {
+                return theta.clone();
+            }
+            (0..theta.len())
+                .map(|p| {
+                    let z: f64 = StandardNormal.sample(rng);
+                    theta[p] + sigma[p] * mult * z
+                })
+                .collect()
+        })
     }
 
     fn tell(&mut self, theta: &[f64], costs: &[f64]) -> Result<()> {
@@ -300,7 +336,8 @@ impl AskTell for Pi2 {
                 self.need_eval = true;
             }
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(&self.theta)));
         Ok(())
     }
 

@@ -18,21 +18,21 @@
 
 use nalgebra::DVector;
 
-use crate::ask_tell::{AskTell, Record, Status, max_abs};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite, max_abs};
 use crate::bounds::Bounds;
-use crate::error::{LearnerError, Result, check_scalar, check_vector};
+use crate::error::{Result, check_query, check_scalar, invalid};
 
 /// Spall's decay exponent for the SPSA/Kiefer-Wolfowitz gain sequence.
 pub const DECAY: f64 = 0.602;
 
 #[derive(Debug, Clone)]
 pub struct PolicyGradientConfig {
-    /// alpha0 in alpha_m = alpha0 / (m+1)^decay. alpha0 = s^2 / 2 makes the first step a Newton
-    /// step on the ideal map q_a = q.
-    pub alpha0: f64,
+    /// alpha0 in alpha_m = alpha0 / (m+1)^decay. None: s^2 / 2, which makes the first step a
+    /// Newton step on the ideal map q_a = q.
+    pub alpha0: Option<f64>,
     pub decay: f64,
-    /// The finite-difference step d (query units).
-    pub delta: f64,
+    /// The finite-difference step d (query units). None: 0.05 s.
+    pub delta: Option<f64>,
     /// The task scale s of the cost.
     pub scale: f64,
     pub evaluate_center: bool,
@@ -44,10 +44,33 @@ pub struct PolicyGradientConfig {
     pub pin_limit: usize,
 }
 
+impl Default for PolicyGradientConfig {
+    fn default() -> Self {
+        Self {
+            alpha0: None,
+            decay: DECAY,
+            delta: None,
+            scale: 1.0,
+            evaluate_center: true,
+            low: None,
+            high: None,
+            tol: 1e-3,
+            max_trials: 100,
+            pin_limit: 3,
+        }
+    }
+}
+
+/// The default finite-difference step as a fraction of the task scale s.
+const DELTA_PER_SCALE: f64 = 0.05;
+
 #[derive(Debug, Clone)]
 pub struct PolicyGradient {
     n: usize,
     cfg: PolicyGradientConfig,
+    /// alpha0 and delta with their defaults resolved.
+    alpha0: f64,
+    delta: f64,
     bounds: Option<Bounds>,
     center: DVector<f64>,
     /// The queries of the current update, in order: [centre,] +e_0, -e_0, +e_1, ...
@@ -61,26 +84,21 @@ pub struct PolicyGradient {
 impl PolicyGradient {
     pub fn new(q0: &[f64], cfg: PolicyGradientConfig) -> Result<Self> {
         let n = q0.len();
-        if n == 0 {
-            return Err(LearnerError::Dimension {
-                name: "q0",
-                expected: "at least 1 entry".into(),
-                got: "0 entries".into(),
-            });
-        }
-        check_vector("q0", q0, n)?;
-        check_scalar("alpha0", cfg.alpha0, true)?;
+        check_query("q0", q0)?;
+        check_scalar("scale", cfg.scale, true)?;
+        let alpha0 = cfg.alpha0.unwrap_or(0.5 * cfg.scale * cfg.scale);
+        check_scalar("alpha0", alpha0, true)?;
         check_scalar("decay", cfg.decay, true)?;
         if cfg.decay > 1.0 || cfg.decay <= 0.5 {
             // Robbins-Monro: sum alpha diverges only for decay <= 1, sum alpha^2 converges only for decay > 1/2.
-            return Err(crate::error::invalid(
+            return Err(invalid(
                 "decay",
                 cfg.decay,
                 "must lie in (0.5, 1] (Robbins-Monro)",
             ));
         }
-        check_scalar("delta", cfg.delta, true)?;
-        check_scalar("scale", cfg.scale, true)?;
+        let delta = cfg.delta.unwrap_or(DELTA_PER_SCALE * cfg.scale);
+        check_scalar("delta", delta, true)?;
         check_scalar("tol", cfg.tol, true)?;
         let bounds = Bounds::new(cfg.low.as_deref(), cfg.high.as_deref(), n, cfg.pin_limit)?;
         if let Some(b) = &bounds {
@@ -90,6 +108,8 @@ impl PolicyGradient {
         let mut pg = Self {
             n,
             cfg,
+            alpha0,
+            delta,
             bounds,
             center: DVector::from_column_slice(q0),
             plan: Vec::new(),
@@ -103,7 +123,7 @@ impl PolicyGradient {
 
     /// The step size of update m.
     pub fn alpha(&self, m: usize) -> f64 {
-        self.cfg.alpha0 / ((m + 1) as f64).powf(self.cfg.decay)
+        self.alpha0 / ((m + 1) as f64).powf(self.cfg.decay)
     }
 
     /// The current iterate q_m.
@@ -126,7 +146,7 @@ impl PolicyGradient {
         for i in 0..self.n {
             for sign in [1.0, -1.0] {
                 let mut q = self.center.clone();
-                q[i] += sign * self.cfg.delta;
+                q[i] += sign * self.delta;
                 plan.push(self.clipped(q));
             }
         }
@@ -144,11 +164,8 @@ impl AskTell for PolicyGradient {
     }
 
     fn ask(&mut self) -> Result<Vec<f64>> {
-        if let Some(q) = self.rec.pending_or_running()? {
-            return Ok(q);
-        }
-        let q = self.plan[self.costs.len()].as_slice().to_vec();
-        Ok(self.rec.set_pending(q))
+        self.rec
+            .ask_with(|| self.plan[self.costs.len()].as_slice().to_vec())
     }
 
     fn tell(&mut self, q: &[f64], eps: &[f64]) -> Result<()> {
@@ -181,7 +198,9 @@ impl AskTell for PolicyGradient {
             self.costs.clear();
             self.plan = self.plan_update();
         }
-        self.rec.finish_tell(stop);
+        let next = self.plan[self.costs.len()].as_slice();
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(next)));
         Ok(())
     }
 

@@ -18,13 +18,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::ask_tell::{AskTell, Record, Status};
-use crate::error::{LearnerError, Result, check_scalar, check_vector, invalid};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
+use crate::error::{LearnerError, Result, check_query, check_scalar, invalid};
 
 #[derive(Debug, Clone)]
 pub struct PowerConfig {
-    /// Exploration standard deviation per parameter (one entry, or one per weight).
-    pub sigma: Vec<f64>,
     pub n_best: usize,
     pub adapt_variance: bool,
     pub variance_window: usize,
@@ -32,6 +30,19 @@ pub struct PowerConfig {
     pub target_return: Option<f64>,
     pub max_trials: usize,
     pub seed: u64,
+}
+
+impl Default for PowerConfig {
+    fn default() -> Self {
+        Self {
+            n_best: 10,
+            adapt_variance: false,
+            variance_window: 100,
+            target_return: None,
+            max_trials: 200,
+            seed: 0,
+        }
+    }
 }
 
 /// Kober's code: the adaptive variance stays within [0.1, 10] times the initial one.
@@ -85,19 +96,18 @@ pub(crate) fn per_parameter(sigma: &[f64], dim: usize) -> Result<Vec<f64>> {
 }
 
 impl Power {
-    pub fn new(theta0: &[f64], cfg: PowerConfig) -> Result<Self> {
-        if theta0.is_empty() {
-            return Err(LearnerError::Dimension {
-                name: "theta0",
-                expected: "at least 1 entry".into(),
-                got: "0 entries".into(),
-            });
+    /// `sigma`: the exploration standard deviation, one entry or one per weight.
+    pub fn new(theta0: &[f64], sigma: &[f64], cfg: PowerConfig) -> Result<Self> {
+        check_query("theta0", theta0)?;
+        let sigma = per_parameter(sigma, theta0.len())?;
+        let var0: Vec<f64> = sigma.iter().map(|s| s * s).collect();
+        if let Some(i) = var0.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(
+                "sigma",
+                format!("{:e} (at index {i})", sigma[i]),
+                "its square, the exploration variance, overflows",
+            ));
         }
-        check_vector("theta0", theta0, theta0.len())?;
-        let var0: Vec<f64> = per_parameter(&cfg.sigma, theta0.len())?
-            .iter()
-            .map(|s| s * s)
-            .collect();
         if cfg.n_best == 0 {
             return Err(invalid("n_best", 0, "must be at least 1"));
         }
@@ -171,16 +181,15 @@ impl AskTell for Power {
     }
 
     fn ask(&mut self) -> Result<Vec<f64>> {
-        if let Some(q) = self.rec.pending_or_running()? {
-            return Ok(q);
-        }
-        let theta: Vec<f64> = (0..self.mean.len())
-            .map(|p| {
-                let z: f64 = StandardNormal.sample(&mut self.rng);
-                self.mean[p] + self.var[p].sqrt() * z
-            })
-            .collect();
-        Ok(self.rec.set_pending(theta))
+        let (mean, var, rng) = (&self.mean, &self.var, &mut self.rng);
+        self.rec.ask_with(|| {
+            (0..mean.len())
+                .map(|p| {
+                    let z: f64 = StandardNormal.sample(rng);
+                    mean[p] + var[p].sqrt() * z
+                })
+                .collect()
+        })
     }
 
     fn tell(&mut self, theta: &[f64], ret: &[f64]) -> Result<()> {
@@ -197,7 +206,11 @@ impl AskTell for Power {
         self.rollouts.push((theta.to_vec(), r, self.var.clone()));
         self.update();
         let done = self.target.is_some_and(|t| r >= t);
-        self.rec.finish_tell(done.then_some(Status::Converged));
+        // A huge return (or rollout) can overflow the weighted means.
+        let diverged =
+            diverged_unless_finite(&self.mean).or_else(|| diverged_unless_finite(&self.var));
+        self.rec
+            .finish_tell(done.then_some(Status::Converged).or(diverged));
         Ok(())
     }
 

@@ -24,15 +24,29 @@
 //! `HitBound` when one end is an untried limit: the root lies outside [low, high] or the sign
 //! convention is wrong); the trial cap.
 
-use crate::ask_tell::{AskTell, Record, Status};
-use crate::error::{Result, check_scalar, invalid};
+use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
+use crate::bracket::check_bracket;
+use crate::error::Result;
 use crate::golden::GOLDEN_HIGH;
 
 #[derive(Debug, Clone)]
 pub struct RootFinderConfig {
+    /// Converged when |eps| < tol.
     pub tol: f64,
-    pub q_tol: f64,
+    /// Stop when the bracket is narrower than this (query units). None: 1e-4 times the width
+    /// of [low, high].
+    pub q_tol: Option<f64>,
     pub max_trials: usize,
+}
+
+impl Default for RootFinderConfig {
+    fn default() -> Self {
+        Self {
+            tol: 1e-3,
+            q_tol: None,
+            max_trials: 50,
+        }
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -57,19 +71,12 @@ pub struct IllinoisRootFinder {
 
 impl IllinoisRootFinder {
     pub fn new(q0: f64, low: f64, high: f64, cfg: RootFinderConfig) -> Result<Self> {
-        check_scalar("q0", q0, false)?;
-        check_scalar("low", low, false)?;
-        check_scalar("high", high, false)?;
-        if low >= high {
-            return Err(invalid("low", low, &format!("must be < high = {high}")));
-        }
-        check_scalar("tol", cfg.tol, true)?;
-        check_scalar("q_tol", cfg.q_tol, true)?;
+        let q_tol = check_bracket(q0, low, high, cfg.tol, cfg.q_tol)?;
         // Like golden section's robust mode (a): the bracket contains q0.
         let (a, b) = (low.min(q0), high.max(q0));
         Ok(Self {
             tol: cfg.tol,
-            q_tol: cfg.q_tol,
+            q_tol,
             a,
             b,
             fa: None,
@@ -137,10 +144,7 @@ impl AskTell for IllinoisRootFinder {
     }
 
     fn ask(&mut self) -> Result<Vec<f64>> {
-        if let Some(q) = self.rec.pending_or_running()? {
-            return Ok(q);
-        }
-        Ok(self.rec.set_pending(vec![self.next]))
+        self.rec.ask_with(|| vec![self.next])
     }
 
     fn tell(&mut self, q: &[f64], eps: &[f64]) -> Result<()> {
@@ -193,7 +197,8 @@ impl AskTell for IllinoisRootFinder {
         if stop.is_none() {
             self.next = self.safeguard(self.candidate());
         }
-        self.rec.finish_tell(stop);
+        self.rec
+            .finish_tell(stop.or_else(|| diverged_unless_finite(&[self.next])));
         Ok(())
     }
 

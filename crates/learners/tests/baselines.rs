@@ -16,8 +16,8 @@ fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
 fn power(seed: u64, dim: usize) -> Power {
     Power::new(
         &vec![0.0; dim],
+        &[0.3],
         PowerConfig {
-            sigma: vec![0.3],
             n_best: 10,
             adapt_variance: false,
             variance_window: 100,
@@ -47,8 +47,8 @@ fn power_adaptive_variance_stays_within_its_clip() {
     let t = target(dim);
     let mut p = Power::new(
         &[0.0; 3],
+        &[0.3, 0.2, 0.1],
         PowerConfig {
-            sigma: vec![0.3, 0.2, 0.1],
             n_best: 10,
             adapt_variance: true,
             variance_window: 100,
@@ -91,7 +91,6 @@ fn power_rejects_a_non_positive_return() {
 
 fn pi2_cfg(seed: u64, projection: bool) -> Pi2Config {
     Pi2Config {
-        sigma: vec![0.2],
         n_rollouts: 10,
         n_reuse: 5,
         h: 10.0,
@@ -111,7 +110,7 @@ fn pi2_cfg(seed: u64, projection: bool) -> Pi2Config {
 fn pi2_with_a_terminal_cost_and_no_projection_is_pi_bb() {
     let dim = 2 * 8;
     let t = target(dim);
-    let mut l = Pi2::new(&vec![0.1; dim], pi2_cfg(3, false)).unwrap();
+    let mut l = Pi2::new(&vec![0.1; dim], &[0.2], pi2_cfg(3, false)).unwrap();
     let cost = |th: &[f64]| vec![sq_dist(th, &t)];
     // Run two updates (the second reuses 5 rollouts), checking each against PI^BB computed here.
     let mut batch: Vec<(Vec<f64>, f64)> = Vec::new();
@@ -161,8 +160,8 @@ fn pi2_with_projection_blends_neighbouring_weights_and_still_learns() {
     // With the projection the update is not PI^BB (M_i is not the identity) ...
     let dim = 2 * 8;
     let t = target(dim);
-    let mut a = Pi2::new(&vec![0.0; dim], pi2_cfg(4, true)).unwrap();
-    let mut b = Pi2::new(&vec![0.0; dim], pi2_cfg(4, false)).unwrap();
+    let mut a = Pi2::new(&vec![0.0; dim], &[0.2], pi2_cfg(4, true)).unwrap();
+    let mut b = Pi2::new(&vec![0.0; dim], &[0.2], pi2_cfg(4, false)).unwrap();
     for _ in 0..11 {
         let (qa, qb) = (a.ask().unwrap(), b.ask().unwrap());
         assert_eq!(qa, qb); // same seed, same noise before the first update
@@ -180,7 +179,7 @@ fn pi2_with_projection_blends_neighbouring_weights_and_still_learns() {
         start,
         sq_dist(a.theta(), &t)
     );
-    let mut c = Pi2::new(&vec![0.0; dim], pi2_cfg(4, true)).unwrap();
+    let mut c = Pi2::new(&vec![0.0; dim], &[0.2], pi2_cfg(4, true)).unwrap();
     common::run(&mut c, |th| vec![sq_dist(th, &t) / 50.0; 50]);
     assert!(sq_dist(c.theta(), &t) < 0.3 * start);
 }
@@ -192,7 +191,7 @@ fn pi2_reduces_a_quadratic_cost_and_converges_on_an_evaluation_rollout() {
     let mut cfg = pi2_cfg(11, false);
     cfg.cost_tol = Some(0.05);
     cfg.max_trials = 1000;
-    let mut l = Pi2::new(&vec![0.0; dim], cfg).unwrap();
+    let mut l = Pi2::new(&vec![0.0; dim], &[0.2], cfg).unwrap();
     let n = common::run(&mut l, |th| vec![sq_dist(th, &t)]);
     assert!(l.converged(), "{:?} after {n}", l.status());
     // evaluation rollouts are the 1st, 12th, 18th, ... (1 + 10, then 1 + 5 per update)
@@ -208,13 +207,13 @@ fn pi2_is_deterministic_for_a_seed_and_checks_its_cost_shape() {
     let dim = 2 * 8;
     let t = target(dim);
     let go = |seed| {
-        let mut l = Pi2::new(&vec![0.0; dim], pi2_cfg(seed, true)).unwrap();
+        let mut l = Pi2::new(&vec![0.0; dim], &[0.2], pi2_cfg(seed, true)).unwrap();
         common::run(&mut l, |th| vec![sq_dist(th, &t)]);
         l.theta().to_vec()
     };
     assert_eq!(go(1), go(1));
     assert_ne!(go(1), go(2));
-    let mut l = Pi2::new(&vec![0.0; dim], pi2_cfg(1, true)).unwrap();
+    let mut l = Pi2::new(&vec![0.0; dim], &[0.2], pi2_cfg(1, true)).unwrap();
     let th = l.ask().unwrap();
     let e = l.tell(&th, &[1.0, 2.0]).unwrap_err();
     assert!(
@@ -222,6 +221,42 @@ fn pi2_is_deterministic_for_a_seed_and_checks_its_cost_shape() {
             .contains("costs has 2 entries, expected 1 or 50 entries"),
         "{e}"
     );
-    let e = Pi2::new(&[0.0; 15], pi2_cfg(1, true)).unwrap_err();
+    let e = Pi2::new(&[0.0; 15], &[0.2], pi2_cfg(1, true)).unwrap_err();
     assert!(e.is_input_error(), "{e}");
+}
+
+#[test]
+fn power_never_asks_a_non_finite_query() {
+    // sigma = 1e200: the variance sigma^2 overflows; refused up front.
+    let e = Power::new(&[0.0; 3], &[1e200], PowerConfig::default()).unwrap_err();
+    assert!(
+        e.is_input_error() && e.to_string().contains("overflows"),
+        "{e}"
+    );
+    // A return of 1e308 overflows the return-weighted mean: the learner stops as diverged.
+    let mut p = Power::new(&[0.0; 3], &[0.3], PowerConfig::default()).unwrap();
+    let th = p.ask().unwrap();
+    p.tell(&th, &[1e308]).unwrap();
+    assert_eq!(p.status(), Status::Diverged);
+    assert!(p.ask().unwrap_err().is_state_error());
+}
+
+#[test]
+fn pi2_refuses_sizes_no_rollout_has_and_says_why() {
+    for n_steps in [1usize << 40, 1_000_000_000] {
+        let cfg = Pi2Config {
+            n_steps,
+            ..Pi2Config::default()
+        };
+        let e = Pi2::new(&[0.0; 5], &[0.1], cfg).unwrap_err();
+        assert!(
+            e.is_input_error() && e.to_string().contains("n_steps x n_basis"),
+            "{e}"
+        );
+    }
+    let cfg = Pi2Config {
+        n_steps: 100_000,
+        ..Pi2Config::default()
+    };
+    assert!(Pi2::new(&[0.0; 5], &[0.1], cfg).is_ok());
 }

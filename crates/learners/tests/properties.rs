@@ -50,7 +50,7 @@ proptest! {
         let hi = lo + width;
         let (r, q0) = (lo + r_frac * width, lo + q0_frac * width);
         let eps = make_eps(r, s1, s3, jump);
-        let cfg = RootFinderConfig { tol, q_tol, max_trials: 1000 };
+        let cfg = RootFinderConfig { tol, q_tol: Some(q_tol), max_trials: 1000 };
         let mut f = IllinoisRootFinder::new(q0, lo, hi, cfg).unwrap();
         let n = common::run(&mut f, |q| vec![eps(q[0])]);
         let bound = golden_worst_case(q0, lo, hi, eps(q0), q_tol);
@@ -61,7 +61,7 @@ proptest! {
             prop_assert!(a <= r && r <= b);
         }
         // Golden section (robust, no expansion needed) from the same start also stops within the bound.
-        let gcfg = GoldenConfig { mode: GoldenMode::Robust, tol, q_tol, max_trials: 1000, max_expansions: 0 };
+        let gcfg = GoldenConfig { mode: GoldenMode::Robust, tol, q_tol: Some(q_tol), max_trials: 1000, max_expansions: 0 };
         let mut g = GoldenSection::new(q0, lo, hi, gcfg).unwrap();
         let ng = common::run(&mut g, |q| vec![eps(q[0])]);
         prop_assert!(ng <= bound, "golden {} > its own worst case {}", ng, bound);
@@ -72,7 +72,7 @@ proptest! {
         r in 0.1..0.9f64, q0 in 0.0..1.0f64, s1 in 0.05..5.0f64, s3 in 0.0..5.0f64,
     ) {
         let eps = make_eps(r, s1, s3, 0.0);
-        let cfg = GoldenConfig { mode: GoldenMode::Paper, tol: 1e-6, q_tol: 1e-9, max_trials: 40, max_expansions: 0 };
+        let cfg = GoldenConfig { mode: GoldenMode::Paper, tol: 1e-6, q_tol: Some(1e-9), max_trials: 40, max_expansions: 0 };
         let mut g = GoldenSection::new(q0, 0.0, 1.0, cfg).unwrap();
         let mut prev = None;
         while g.status() == Status::Running {

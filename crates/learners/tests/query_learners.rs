@@ -12,7 +12,10 @@ use learners::{
 use nalgebra::{DMatrix, dmatrix};
 
 fn el(q0: &[f64], f: impl FnOnce(&mut ErrorLearningConfig)) -> ErrorLearning {
-    let mut cfg = ErrorLearningConfig::new(q0.len(), 1e-6, 50);
+    let mut cfg = ErrorLearningConfig {
+        tol: 1e-6,
+        ..ErrorLearningConfig::default()
+    };
     f(&mut cfg);
     ErrorLearning::new(q0, cfg).unwrap()
 }
@@ -25,7 +28,7 @@ fn golden(q0: f64, lo: f64, hi: f64, mode: GoldenMode) -> GoldenSection {
         GoldenConfig {
             mode,
             tol: 1e-3,
-            q_tol: 1e-4,
+            q_tol: Some(1e-4),
             max_trials: 60,
             max_expansions: 3,
         },
@@ -40,7 +43,7 @@ fn finder(q0: f64, lo: f64, hi: f64) -> IllinoisRootFinder {
         hi,
         RootFinderConfig {
             tol: 1e-3,
-            q_tol: 1e-4,
+            q_tol: Some(1e-4),
             max_trials: 60,
         },
     )
@@ -72,7 +75,7 @@ fn identity_gain_removes_a_constant_bias_in_one_correction() {
 #[test]
 fn matrix_gain_is_eq16_literally() {
     let k = dmatrix![0.5, 0.1; 0.0, 2.0];
-    let mut l = el(&[0.0, 0.0], |c| c.gain = k.clone());
+    let mut l = el(&[0.0, 0.0], |c| c.gain = k.clone().into());
     let q = l.ask().unwrap();
     l.tell(&q, &[1.0, -1.0]).unwrap();
     let q1 = l.ask().unwrap();
@@ -195,7 +198,7 @@ fn a_bound_is_detected_along_the_step_not_along_eps() {
     // A negative gain walks away from the root at 0.6 although eps > 0: the step, not eps,
     // points past the lower limit.
     let mut l = el(&[0.5], |c| {
-        c.gain = DMatrix::from_element(1, 1, -1.0);
+        c.gain = DMatrix::from_element(1, 1, -1.0).into();
         c.low = Some(vec![0.0]);
         c.high = Some(vec![1.0]);
         c.max_trials = 100;
@@ -362,7 +365,7 @@ fn noisy_measurements_still_converge_near_the_root() {
             GoldenConfig {
                 mode: GoldenMode::Robust,
                 tol: 0.01,
-                q_tol: 1e-3,
+                q_tol: Some(1e-3),
                 max_trials: 40,
                 max_expansions: 3,
             },
@@ -382,7 +385,7 @@ fn noisy_measurements_still_converge_near_the_root() {
             1.8,
             RootFinderConfig {
                 tol: 0.01,
-                q_tol: 1e-3,
+                q_tol: Some(1e-3),
                 max_trials: 40,
             },
         )
@@ -421,9 +424,9 @@ fn policy_gradient_counts_every_perturbed_trial() {
     let mut pg = PolicyGradient::new(
         &[1.0],
         PolicyGradientConfig {
-            alpha0: 0.5,
+            alpha0: Some(0.5),
             decay: 0.602,
-            delta: 0.05,
+            delta: Some(0.05),
             scale: 1.0,
             evaluate_center: true,
             low: None,
@@ -446,9 +449,9 @@ fn policy_gradient_converges_in_two_dimensions_with_decaying_steps() {
     let mut pg = PolicyGradient::new(
         &[0.0, 0.0],
         PolicyGradientConfig {
-            alpha0: 0.3,
+            alpha0: Some(0.3),
             decay: 0.602,
-            delta: 0.01,
+            delta: Some(0.01),
             scale: 1.0,
             evaluate_center: true,
             low: None,
@@ -500,7 +503,7 @@ fn bad_input_is_a_clear_error() {
     let cfg = GoldenConfig {
         mode: GoldenMode::Paper,
         tol: 1e-3,
-        q_tol: 1e-4,
+        q_tol: Some(1e-4),
         max_trials: 10,
         max_expansions: 3,
     };
@@ -515,7 +518,7 @@ fn bad_input_is_a_clear_error() {
         1.0,
         RootFinderConfig {
             tol: 1e-3,
-            q_tol: 1e-4,
+            q_tol: Some(1e-4),
             max_trials: 10,
         },
     )
@@ -526,7 +529,11 @@ fn bad_input_is_a_clear_error() {
         ErrorLearningConfig {
             low: Some(vec![1.0]),
             high: Some(vec![0.0]),
-            ..ErrorLearningConfig::new(1, 1e-3, 10)
+            ..ErrorLearningConfig {
+                tol: 1e-3,
+                max_trials: 10,
+                ..ErrorLearningConfig::default()
+            }
         },
     )
     .unwrap_err();
@@ -537,8 +544,12 @@ fn bad_input_is_a_clear_error() {
     let e = ErrorLearning::new(
         &[0.5],
         ErrorLearningConfig {
-            gain: DMatrix::identity(2, 2),
-            ..ErrorLearningConfig::new(1, 1e-3, 10)
+            gain: DMatrix::identity(2, 2).into(),
+            ..ErrorLearningConfig {
+                tol: 1e-3,
+                max_trials: 10,
+                ..ErrorLearningConfig::default()
+            }
         },
     )
     .unwrap_err();
@@ -550,10 +561,69 @@ fn bad_input_is_a_clear_error() {
     let e = ErrorLearning::new(
         &[0.5],
         ErrorLearningConfig {
-            jacobian: Jacobian::Fixed(DMatrix::zeros(1, 1)),
-            ..ErrorLearningConfig::new(1, 1e-3, 10)
+            jacobian: Jacobian::Fixed(DMatrix::zeros(1, 1).into()),
+            ..ErrorLearningConfig {
+                tol: 1e-3,
+                max_trials: 10,
+                ..ErrorLearningConfig::default()
+            }
         },
     )
     .unwrap_err();
     assert!(e.to_string().contains("invertible"), "{e}");
+}
+
+// ---- never a non-finite query (issue 13 item 6) ---------------------------------------------
+
+#[test]
+fn a_step_that_overflows_stops_the_learner_as_diverged() {
+    // K = 1e308: the eq. 16 step 1e308 * 10 overflows.
+    let cfg = ErrorLearningConfig {
+        gain: 1e308.into(),
+        ..ErrorLearningConfig::default()
+    };
+    let mut l = ErrorLearning::new(&[1.0], cfg).unwrap();
+    let q = l.ask().unwrap();
+    l.tell(&q, &[10.0]).unwrap();
+    assert_eq!(l.status(), Status::Diverged);
+    assert!(l.ask().unwrap_err().is_state_error());
+
+    // delta = 1e300: the cost (eps/s)^2 of the perturbed trials overflows, the gradient is NaN.
+    let cfg = PolicyGradientConfig {
+        delta: Some(1e300),
+        ..PolicyGradientConfig::default()
+    };
+    let mut pg = PolicyGradient::new(&[0.0], cfg).unwrap();
+    run(&mut pg, eps1(0.5, |q| q));
+    assert_eq!(pg.status(), Status::Diverged);
+    assert!(pg.history().iter().all(|t| t.q[0].is_finite()));
+}
+
+#[test]
+fn a_bracket_whose_width_overflows_is_refused_for_what_it_is() {
+    for e in [
+        GoldenSection::new(0.5, -1e308, 1e308, GoldenConfig::default()).unwrap_err(),
+        IllinoisRootFinder::new(0.5, -1e308, 1e308, RootFinderConfig::default()).unwrap_err(),
+    ] {
+        assert!(
+            e.is_input_error() && e.to_string().contains("width overflows"),
+            "{e}"
+        );
+        assert!(!e.to_string().contains("q_tol"), "{e}");
+    }
+}
+
+#[test]
+fn the_default_q_tol_is_a_fraction_of_the_bracket() {
+    // Robust golden section stops as Bracketed once [q_l, q_h] < 1e-4 (high - low) = 2e-4 when
+    // eps jumps across zero at 1 without ever being small.
+    let cfg = GoldenConfig {
+        mode: GoldenMode::Robust,
+        ..GoldenConfig::default()
+    };
+    let mut g = GoldenSection::new(0.5, 0.0, 2.0, cfg).unwrap();
+    run(&mut g, |q| vec![if q[0] < 1.0 { 1.0 } else { -1.0 }]);
+    assert_eq!(g.status(), Status::Bracketed);
+    let (lo, hi) = g.bracket();
+    assert!(hi - lo < 2e-4 && hi - lo > 2e-4 * 0.618 * 0.5, "{lo} {hi}");
 }

@@ -14,7 +14,7 @@ use numpy::{
 use pyo3::prelude::*;
 
 use crate::dmp::{contiguous, time_major};
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 use crate::generalize::{parse_method, parse_queries, query, row_major};
 
 /// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
@@ -44,13 +44,10 @@ fn trajectory_arrays(py: Python<'_>, tr: CartesianTrajectory) -> PyResult<Cartes
 fn pose(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<[f64; POSE_WIDTH]> {
     let slice = contiguous(name, a)?;
     slice.try_into().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!(
-                "{name} has shape ({},), expected (7,): x, y, z, qw, qx, qy, qz",
-                slice.len()
-            ),
-        )
+        invalid_input(format!(
+            "{name} has shape ({},), expected (7,): x, y, z, qw, qx, qy, qz",
+            slice.len()
+        ))
     })
 }
 

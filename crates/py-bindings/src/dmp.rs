@@ -9,7 +9,7 @@ use numpy::{
 };
 use pyo3::prelude::*;
 
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 /// The data of a numpy array that must be contiguous (every array the Python layer passes is:
 /// it goes through `as_float_array`, so this only fails when the bindings are called directly).
@@ -17,12 +17,8 @@ pub(crate) fn contiguous<'a, D: numpy::ndarray::Dimension>(
     name: &str,
     a: &'a numpy::PyReadonlyArray<'_, f64, D>,
 ) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a C-contiguous array"),
-        )
-    })
+    a.as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a C-contiguous array")))
 }
 
 /// A C-ordered `(T, D)` array viewed as the `D x T` matrix the core expects (no copy).

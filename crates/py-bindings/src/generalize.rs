@@ -6,7 +6,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, P
 use pyo3::prelude::*;
 
 use crate::dmp::{PyDmp, contiguous, demonstration, dmp_config, time_major};
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 type DemoArrays<'py> = (
     PyReadonlyArray1<'py, f64>,
@@ -35,10 +35,9 @@ pub(crate) fn parse_method(
         "tricube" => Kernel::Tricube,
         "gaussian" => Kernel::Gaussian,
         other => {
-            return Err(raise(
-                "InvalidInputError",
-                format!("kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"),
-            ));
+            return Err(invalid_input(format!(
+                "kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"
+            )));
         }
     };
     Ok(match method {
@@ -55,10 +54,9 @@ pub(crate) fn parse_method(
             gp_restarts,
         }),
         other => {
-            return Err(raise(
-                "InvalidInputError",
-                format!("method = {other:?} is invalid: use 'linear' or 'lwr-gp'"),
-            ));
+            return Err(invalid_input(format!(
+                "method = {other:?} is invalid: use 'linear' or 'lwr-gp'"
+            )));
         }
     })
 }

@@ -8,14 +8,14 @@ use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntyped
 use pyo3::prelude::*;
 
 use crate::dmp::{contiguous, time_major};
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 fn pairs(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
     if a.shape()[1] != 2 {
-        return Err(raise(
-            "InvalidInputError",
-            format!("{name} must have shape (n, 2); got {:?}", a.shape()),
-        ));
+        return Err(invalid_input(format!(
+            "{name} must have shape (n, 2); got {:?}",
+            a.shape()
+        )));
     }
     Ok(contiguous(name, a)?
         .chunks(2)

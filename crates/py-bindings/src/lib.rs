@@ -24,7 +24,9 @@ mod _core {
     #[pymodule_export]
     use super::gp::PyGaussianProcess;
     #[pymodule_export]
-    use super::learners::PyLearner;
+    use super::learners::{
+        PyErrorLearning, PyGoldenSection, PyIllinoisRootFinder, PyPi2, PyPolicyGradient, PyPower,
+    };
     #[pymodule_export]
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
