@@ -273,7 +273,7 @@ def test_error_learning_limits_and_parameters():
         L.ErrorLearning([0.0, 0.0], jacobian=np.zeros((2, 2)))
     with pytest.raises(InvalidInputError, match="gain has shape"):
         L.ErrorLearning([0.0, 0.0], gain=np.eye(3))
-    with pytest.raises(InvalidInputError, match="scale = 0.0 is invalid"):
+    with pytest.raises(InvalidInputError, match="scale = 0 is invalid"):
         L.ErrorLearning(0.0, scale=0.0)
     with pytest.raises(InvalidInputError, match="max_trials = 0"):
         L.ErrorLearning(0.0, max_trials=0)

@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::basis::Basis;
 use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
-use crate::error::{Error, Result, check_scalar};
+use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales};
 use crate::lwr::{Lwr, LwrOptions};
 
@@ -293,6 +293,13 @@ impl Generalizer {
         let fit = |y: Vec<f64>| -> Result<GaussianProcess> {
             let (ranges, var) = data_scales(&x.as_view(), &y);
             let noise = opts.gp_noise * opts.gp_noise * var;
+            if !(noise > 0.0 && noise.is_finite()) {
+                return Err(Error::InvalidParameter {
+                    name: "gp_noise",
+                    value: fmt_g(opts.gp_noise),
+                    requirement: "gives a noise variance gp_noise^2 x var outside the range of f64",
+                });
+            }
             let initial = Hyperparameters {
                 length_scales: ranges.clone(),
                 signal_var: var,
