@@ -108,6 +108,29 @@ class AdapterSpec:
                 )
         return problems
 
+    def signal_problems(self, signals: Any) -> list[str]:
+        """Every way measured ``signals`` break this spec (empty when they are fine): not a
+        mapping, a declared signal missing, an undeclared one, a value that is not a real number
+        or array of them (a string, None, a bool), or a NaN or infinity."""
+        if not isinstance(signals, Mapping):
+            return [f"signals is a {type(signals).__name__}, not a mapping of signal names to values"]
+        declared = [s.name for s in self.signals]
+        problems = [f"declared signal {name!r} is missing" for name in declared if name not in signals]
+        problems += [f"signal {name!r} is not declared in the spec" for name in signals if name not in declared]
+        for name in declared:
+            if name not in signals:
+                continue
+            value = signals[name]
+            try:
+                arr = np.asarray(value)
+            except Exception:  # noqa: BLE001 - ragged or exotic values are simply the wrong type
+                arr = np.asarray(None)
+            if isinstance(value, (bool, np.bool_)) or arr.dtype.kind not in "fiu":
+                problems.append(f"signal {name!r} is {type(value).__name__} {value!r:.60}, not a real number or array")
+            elif not np.isfinite(arr).all():
+                problems.append(f"signal {name!r} has non-finite values: {value!r:.60}")
+        return problems
+
     def _check_bounds(self, problems, t, what, values, low, high) -> None:
         for bound, sign in ((low, -1.0), (high, 1.0)):
             if bound is None:
