@@ -7,13 +7,19 @@ one complete line followed by flush and fsync.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
+
+try:
+    import fcntl
+except ImportError:  # Windows: no advisory locks; concurrent saves there are not serialized
+    fcntl = None  # type: ignore[assignment]
 
 import numpy as np
 
@@ -30,6 +36,32 @@ def _fsync_dir(path: Path) -> None:
         pass
     finally:
         os.close(fd)
+
+
+LOCK_FILE = ".dmprs.lock"
+
+
+@contextlib.contextmanager
+def directory_lock(directory: Path, *, shared: bool) -> Iterator[None]:
+    """Holds an advisory lock (``flock``) on ``directory/.dmprs.lock`` for the ``with`` block:
+    exclusive for a writer, shared for readers, so concurrent saves into one directory take turns
+    and a reader sees the files of one save, never a mix of two. Where the lock file cannot be
+    created (a read-only directory: nobody can be writing there) it reads without one."""
+    if fcntl is None:
+        yield
+        return
+    try:
+        fd = os.open(Path(directory) / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        if not shared:
+            raise
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH if shared else fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def write_atomic(path: Path, data: bytes) -> None:
