@@ -92,9 +92,30 @@ def write_npz_atomic(path: Path, arrays: Mapping[str, Any]) -> bytes:
     return data
 
 
+_NON_FINITE = {"NaN": float("nan"), "Infinity": float("inf"), "-Infinity": float("-inf")}
+
+
+def strict_json(value: Any) -> Any:
+    """``value`` with every NaN or infinity replaced by the string ``"NaN"``, ``"Infinity"`` or
+    ``"-Infinity"``: strict JSON parsers reject the bare tokens Python writes for them."""
+    if isinstance(value, float) and not np.isfinite(value):
+        return "NaN" if np.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, Mapping):
+        return {k: strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [strict_json(v) for v in value]
+    return value
+
+
+def float_from_json(value: Any) -> Any:
+    """Inverse of :func:`strict_json` for one number: the three strings back to floats."""
+    return _NON_FINITE.get(value, value) if isinstance(value, str) else value
+
+
 def append_jsonl(path: Path, record: Mapping[str, Any]) -> None:
-    """Appends one JSON object as one line and forces it to disk."""
-    line = json.dumps(record, separators=(",", ":"), allow_nan=True) + "\n"
+    """Appends one JSON object as one line (strict JSON: see :func:`strict_json`) and forces it
+    to disk."""
+    line = json.dumps(strict_json(record), separators=(",", ":"), allow_nan=False) + "\n"
     with open(path, "a", encoding="utf-8") as f:
         f.write(line)
         f.flush()

@@ -116,6 +116,7 @@ def check_adapter(
             adapter.reset(seed=0)
             o = adapter.execute(valid_trajectory)
             outcome_shape(o, {Status.OK})
+            assert isinstance(spec, AdapterSpec)
             names = {s.name for s in spec.signals}
             problems = spec.signal_problems(o.signals)
             assert not problems, "; ".join(problems)
