@@ -42,8 +42,13 @@ maybe_count = st.one_of(st.integers(2, 40), count, st.sampled_from(_JUNK))
 
 
 @st.composite
-def samples(draw: Any, n_dof_max: int = 3) -> tuple[np.ndarray, np.ndarray]:
-    """Sample times and positions: usually valid, sometimes short, unsorted, huge or NaN."""
+def samples(draw: Any, n_dof_max: int = 3, hostile: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Sample times and positions: usually valid, sometimes short, unsorted, huge or NaN (never
+    broken when not ``hostile``)."""
+    if not hostile:
+        t = np.linspace(0.0, draw(st.floats(0.05, 20.0)), draw(st.integers(3, 60)))
+        y = draw(st.floats(-5, 5)) * np.sin(draw(st.floats(0.1, 30.0)) * t / t[-1])
+        return t, y
     n = draw(st.one_of(st.integers(3, 60), st.integers(0, 3)))
     d = draw(st.integers(1, n_dof_max))
     span = draw(st.one_of(st.floats(1e-3, 1e2), st.sampled_from([1e-12, 1e-300, 1e300, 0.0, -1.0])))
@@ -200,13 +205,16 @@ def run_gp(a: dict[str, Any]) -> list[Any]:
 # --- Database and Generalizer ------------------------------------------------------------------
 @st.composite
 def generalizer_args(draw: Any) -> dict[str, Any]:
-    n_demos = draw(st.integers(1, 5))
-    queries = [draw(st.one_of(st.floats(-5, 5), st.sampled_from([0.0, 1e-300, 1e300]))) for _ in range(n_demos)]
-    demos = [draw(samples(n_dof_max=1)) for _ in range(n_demos)]
-    fit = _fit_kwargs(draw)
+    n_demos = draw(st.sampled_from([2, 2, 3, 3, 4, 5, 1]))
+    queries = list(draw(st.one_of(
+        st.lists(st.floats(-5, 5), min_size=n_demos, max_size=n_demos, unique=True),
+        st.lists(st.sampled_from([0.0, 1e-300, 1e300, -1e300, 5e-324]), min_size=n_demos, max_size=n_demos),
+    )))
+    demos = [draw(samples(n_dof_max=1, hostile=draw(st.integers(0, 9)) == 0)) for _ in range(n_demos)]
+    fit = _fit_kwargs(draw) if draw(st.integers(0, 3)) == 0 else {"n_basis": draw(st.integers(2, 40))}
     return {
         "queries": queries, "demos": demos, "fit": fit,
-        "method": draw(st.sampled_from(["linear", "lwr-gp", "lwr-gp", "bogus"])),
+        "method": draw(st.sampled_from(["linear"] * 3 + ["lwr-gp"] * 6 + ["bogus"])),
         "gp": {
             "gp_noise": draw(st.one_of(st.just(1e-4), maybe_number)),
             "gp_restarts": draw(st.one_of(st.integers(0, 3), count)),
@@ -214,7 +222,7 @@ def generalizer_args(draw: Any) -> dict[str, Any]:
         },
         "q": draw(st.one_of(st.floats(-6, 6), number, anything)),
         "rel_step": draw(st.one_of(st.just(1e-4), maybe_number)),
-        "names": draw(st.one_of(st.just(["x"]), st.sampled_from([[], ["x", "x"], "x", [1], None]))),
+        "names": draw(st.sampled_from([["x"]] * 10 + [[], ["x", "x"], "x", [1], None])),
     }
 
 

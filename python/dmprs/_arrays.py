@@ -43,7 +43,7 @@ def check_finite(arr: NDArray[np.float64], name: str) -> None:
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         where = "[" + ", ".join(map(str, idx)) + "]"
-        raise InvalidInputError(f"{name}{where} is {arr[idx]}: all values must be finite")
+        raise InvalidInputError(f"{name}{where} is {float(arr[idx])}: all values must be finite")
 
 
 def check_increasing(t: NDArray[np.float64], name: str = "t") -> None:
@@ -53,8 +53,8 @@ def check_increasing(t: NDArray[np.float64], name: str = "t") -> None:
     if (steps <= 0).any():
         j = int(np.argmax(steps <= 0)) + 1
         raise InvalidInputError(
-            f"{name} must be strictly increasing, but {name}[{j}] = {t[j]} is not greater than "
-            f"{name}[{j - 1}] = {t[j - 1]}"
+            f"{name} must be strictly increasing, but {name}[{j}] = {t[j]:.6g} is not greater than "
+            f"{name}[{j - 1}] = {t[j - 1]:.6g}"
         )
 
 

@@ -286,6 +286,13 @@ impl Generalizer {
         opts: &LwrGpOptions,
     ) -> Result<LwrGp> {
         check_scalar("gp_noise", opts.gp_noise, true)?;
+        if opts.gp_restarts > crate::gp::MAX_RESTARTS {
+            return Err(Error::InvalidParameter {
+                name: "gp_restarts",
+                value: opts.gp_restarts.to_string(),
+                requirement: "must be at most 1000 (each restart is a full optimization of each GP)",
+            });
+        }
         let lwr = Lwr::new(queries, normal, opts.lwr)?;
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
