@@ -246,3 +246,13 @@ def test_conformance_fails_bad_signals(signals, problem):
 
     with pytest.raises(AdapterConformanceError, match=problem):
         check_adapter(BadSignals(), line())
+
+
+def test_declared_labels_and_absent_nans_pass_conformance_undeclared_ones_fail():
+    from dmprs.adapters import SignalSpec
+
+    declared = (SignalSpec("s", "m"), SignalSpec("t0", "s", nan_if_absent=True), SignalSpec("r", "", kind="label"))
+    sp = spec(signals=declared)
+    assert sp.signal_problems({"s": 1.0, "t0": float("nan"), "r": "upright"}) == []
+    problems = sp.signal_problems({"s": float("nan"), "t0": float("inf"), "r": 3})
+    assert len(problems) == 3 and "not a label" in problems[2]

@@ -15,7 +15,7 @@ from types import TracebackType
 
 from dmprs._arrays import as_scalar
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import DmprsError
+from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.trajectory import Trajectory
 
 
@@ -135,7 +135,9 @@ class BaseAdapter(Adapter):
             return Outcome(Status.REJECTED, message="; ".join(problems))
         if dry_run:
             return Outcome(Status.DRY_RUN, message="checked, not executed")
-        limit = None if timeout_s is None else as_scalar(timeout_s, "timeout_s", positive=True)
+        limit = None if timeout_s is None else as_scalar(timeout_s, "timeout_s")
+        if limit is not None and limit < 0:
+            raise InvalidInputError(f"timeout_s = {limit:g} is invalid: must be >= 0 (or None for no limit)")
         self._stop.clear()
         deadline = None if limit is None else time.monotonic() + limit
         self._deadline = deadline
