@@ -204,7 +204,7 @@ def test_load_adapter_by_name_and_unknown_names():
 def test_third_party_adapters_come_from_entry_points(monkeypatch):
     from importlib.metadata import EntryPoint
 
-    import dmprs.adapters.registry as registry
+    from dmprs.adapters import registry
 
     ep = EntryPoint(name="toy_arm", value="tests.test_adapters:Toy", group="dmprs.adapters")
     monkeypatch.setattr(registry, "entry_points", lambda group: [ep] if group == "dmprs.adapters" else [])
