@@ -46,11 +46,12 @@ def main() -> None:
 @click.argument("task")
 @click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root, pg; pouring also fixed (default: the paper's choice for the task)")
 @click.option("--desired", type=float, default=None, help="desired query (task units)")
-@click.option("--max-trials", type=int, default=20, show_default=True)
+@click.option("--max-trials", type=click.IntRange(min=1, max=10**6), default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")
 @click.option("--log-dir", type=click.Path(path_type=Path), default=None, help="run directory for the trial log")
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--noise", type=float, default=None, help="measurement noise (analytic task)")
+@click.option("--noise", type=click.FloatRange(min=0.0, max=1e6), default=None,
+              help="measurement noise (analytic task)")
 @click.option("--volume", type=float, default=None, help="bottle volume in litres (pouring)")
 @click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
 def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
@@ -71,9 +72,26 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
     sys.exit(0 if result.converged else 1)
 
 
+_MISSING = object()
+
+
+def _field(meta: dict[str, Any], name: str, kind: Any, where: Path, default: Any = _MISSING) -> Any:
+    """``meta[name]`` if it has the type ``kind`` (booleans are not numbers here), else an error
+    naming the file and the field; ``default`` when it is absent (or null, for optional ones)."""
+    value = meta.get(name, _MISSING)
+    if value is _MISSING or (value is None and default is not _MISSING):
+        if default is _MISSING:
+            raise DmprsError(f"{where}: the field {name!r} is missing")
+        return default
+    if isinstance(value, bool) or not isinstance(value, kind):
+        want = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
+        raise DmprsError(f"{where}: the field {name!r} is {value!r:.60}, expected {want}")
+    return value
+
+
 @main.command("resume")
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--max-trials", type=int, default=None, help="raise the trial cap of the run")
+@click.option("--max-trials", type=click.IntRange(min=1), default=None, help="raise the trial cap of the run")
 def resume_cmd(run: Path, max_trials: int | None) -> None:
     """Continue the run logged in RUN where it stopped."""
     from dmprs import experiments
@@ -83,14 +101,30 @@ def resume_cmd(run: Path, max_trials: int | None) -> None:
     console = _console()
     try:
         meta = RunLog(run).meta()
+        where = run / "run.json"
         if "experiment" not in meta:
-            raise DmprsError(f"{run / 'run.json'} was not written by 'dmprs learn': resume it from Python")
-        setup = experiments.SETUPS[meta["experiment"]](**meta.get("setup_options", {}))
-        learner = setup.make_learner(meta["learner_name"], **meta.get("learner_options", {}))
+            raise DmprsError(f"{where} was not written by 'dmprs learn': resume it from Python")
+        experiment = _field(meta, "experiment", str, where)
+        if experiment not in experiments.SETUPS:
+            raise DmprsError(f"{where}: experiment {experiment!r} is unknown; "
+                             f"known: {', '.join(sorted(experiments.SETUPS))}")
+        setup_options = _field(meta, "setup_options", dict, where, {})
+        learner_options = _field(meta, "learner_options", dict, where, {})
+        learner_name = _field(meta, "learner_name", str, where)
+        logged_cap = _field(meta, "max_trials", int, where)
+        tol = _field(meta, "tol", (int, float), where, None)
+        seed = _field(meta, "seed", int, where, 0)
+        try:
+            setup = experiments.SETUPS[experiment](**setup_options)
+        except TypeError as exc:
+            raise DmprsError(f"{where}: setup_options {setup_options!r} do not fit {experiment!r} ({exc})") from None
+        try:
+            learner = setup.make_learner(learner_name, **learner_options)
+        except TypeError as exc:
+            raise DmprsError(f"{where}: learner_options do not fit {learner_name!r} ({exc})") from None
         result = learn(setup.task, setup.generalizer, setup.desired_query, learner,
-                       max_trials=max_trials or meta["max_trials"], tol=meta.get("tol"),
-                       log_dir=run, resume=True, seed=meta.get("seed", 0),
-                       on_trial=_progress(console))
+                       max_trials=logged_cap if max_trials is None else max_trials, tol=tol,
+                       log_dir=run, resume=True, seed=seed, on_trial=_progress(console))
     except DmprsError as exc:
         raise click.ClickException(str(exc)) from None
     _report(console, result)
@@ -195,7 +229,9 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
 
 @main.command("plot")
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--out", type=click.Path(path_type=Path), default=None, help="PNG path (default RUN/learning.png)")
+@click.option("--out", type=click.Path(path_type=Path), default=None,
+              help="image file (.png, .pdf, .svg, ...) or an existing folder to write learning.png into "
+                   "(default RUN/learning.png)")
 def plot_cmd(run: Path, out: Path | None) -> None:
     """Plot error and query per trial of RUN (like the paper's Figs. 4 and 9)."""
     from dmprs.plots import plot_run

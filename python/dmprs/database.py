@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_count, as_query
-from dmprs._io import write_atomic
+from dmprs._io import LOCK_FILE, directory_lock, write_atomic
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -241,14 +241,24 @@ class Database:
             root.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise DatabaseError(f"cannot create the database directory {root}: {exc}") from None
-        existing = [p.name for p in root.iterdir()] if root.is_dir() else []
+        try:
+            with directory_lock(root, shared=False):
+                self._save_locked(root)
+        except OSError as exc:
+            raise DatabaseError(f"{root}: cannot save the database ({exc.strerror or exc})") from None
+
+    def _save_locked(self, root: Path) -> None:
+        existing = [p.name for p in root.iterdir() if p.name != LOCK_FILE]
         if existing and _MANIFEST not in existing and not all(_DEMO_FILE.match(n) for n in existing):
             raise DatabaseError(
                 f"{root} is a non-empty directory without a {_MANIFEST}; refusing to write a "
                 "database into it"
             )
+        # Only files the previous manifest listed are ours to delete later: a file that merely
+        # looks like a demo file may be the user's.
+        previous = _manifest_files(root / _MANIFEST)
         entries = []
-        for k, demo in enumerate(self._demos):
+        for demo in self._demos:
             data = _npz_bytes(demo)
             digest = hashlib.sha256(data).hexdigest()
             name = f"demo_{digest[:16]}.npz"
@@ -267,13 +277,12 @@ class Database:
         _atomic_write(root / _MANIFEST, text.encode("utf-8"))
         # The new manifest is durable: files only the old one referred to can go.
         keep = {e["file"] for e in entries}
-        for name in existing:
-            if _DEMO_FILE.match(name) and name not in keep:
-                try:
-                    (root / name).unlink()
-                except OSError:
-                    pass  # a stale file is harmless: no manifest refers to it
-        # Temporary files of an interrupted earlier save.
+        for name in previous - keep:
+            try:
+                (root / name).unlink()
+            except OSError:
+                pass  # a stale file is harmless: no manifest refers to it
+        # Temporary files of an interrupted earlier save (the lock says no save is running).
         for p in root.glob(".*.tmp"):
             try:
                 p.unlink()
@@ -284,6 +293,13 @@ class Database:
     def load(cls, path: str | os.PathLike[str]) -> Database:
         """Reads a database written by :meth:`save`, verifying every file."""
         root = Path(path)
+        if not root.is_dir():
+            raise DatabaseError(f"{root / _MANIFEST}: cannot read the manifest (no directory {root})")
+        with directory_lock(root, shared=True):
+            return cls._load_locked(root)
+
+    @classmethod
+    def _load_locked(cls, root: Path) -> Database:
         mpath = root / _MANIFEST
         try:
             raw = mpath.read_bytes()
@@ -293,6 +309,8 @@ class Database:
             manifest = json.loads(raw.decode("utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise DatabaseError(f"{mpath}: not valid JSON, the file is corrupted or truncated ({exc})") from None
+        except RecursionError:
+            raise DatabaseError(f"{mpath}: nested too deeply to be a dmprs manifest") from None
         if not isinstance(manifest, dict) or manifest.get("format") != _FORMAT:
             raise DatabaseError(f"{mpath}: not a dmprs database manifest (no \"format\": \"{_FORMAT}\")")
         version = manifest.get("schema_version")
@@ -330,6 +348,16 @@ def _npz_bytes(demo: Demo) -> bytes:
     buf = io.BytesIO()
     np.savez(buf, **arrays)
     return buf.getvalue()
+
+
+def _manifest_files(mpath: Path) -> set[str]:
+    """The demo files an existing manifest lists (none if it is missing or unreadable)."""
+    try:
+        entries = json.loads(mpath.read_text(encoding="utf-8")).get("demos", [])
+        return {e["file"] for e in entries if isinstance(e, dict) and isinstance(e.get("file"), str)
+                and _DEMO_FILE.match(e["file"])}
+    except (OSError, ValueError, AttributeError, TypeError, RecursionError):
+        return set()
 
 
 def _sha256_file(path: Path) -> str:
@@ -375,6 +403,10 @@ def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Dem
             arrays = {key: npz[key] for key in keys}
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         raise DatabaseError(f"{fpath}: not a readable demonstration file ({exc})") from None
+    except MemoryError:  # a crafted header claiming far more elements than the file holds
+        raise DatabaseError(
+            f"{fpath}: an array header claims more data than fits in memory ({len(data)} bytes on disk)"
+        ) from None
     for key, arr in arrays.items():
         if arr.dtype != np.float64:
             raise DatabaseError(f"{fpath}: array {key!r} has dtype {arr.dtype}, expected float64")

@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::basis::Basis;
 use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
-use crate::error::{Error, Result, check_scalar};
+use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales};
 use crate::lwr::{Lwr, LwrOptions};
 
@@ -286,6 +286,13 @@ impl Generalizer {
         opts: &LwrGpOptions,
     ) -> Result<LwrGp> {
         check_scalar("gp_noise", opts.gp_noise, true)?;
+        if opts.gp_restarts > crate::gp::MAX_RESTARTS {
+            return Err(Error::InvalidParameter {
+                name: "gp_restarts",
+                value: opts.gp_restarts.to_string(),
+                requirement: "must be at most 1000 (each restart is a full optimization of each GP)",
+            });
+        }
         let lwr = Lwr::new(queries, normal, opts.lwr)?;
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
@@ -293,6 +300,13 @@ impl Generalizer {
         let fit = |y: Vec<f64>| -> Result<GaussianProcess> {
             let (ranges, var) = data_scales(&x.as_view(), &y);
             let noise = opts.gp_noise * opts.gp_noise * var;
+            if !(noise > 0.0 && noise.is_finite()) {
+                return Err(Error::InvalidParameter {
+                    name: "gp_noise",
+                    value: fmt_g(opts.gp_noise),
+                    requirement: "gives a noise variance gp_noise^2 x var outside the range of f64",
+                });
+            }
             let initial = Hyperparameters {
                 length_scales: ranges.clone(),
                 signal_var: var,

@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nalgebra::DMatrixView;
 use rayon::prelude::*;
 
-use crate::error::{Error, Result, check_scalar};
+use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::linalg::{
     Scratch, cholesky_in_place_with, dot, exp_in_place, simd, solve_lower_in_place,
     solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
@@ -219,6 +219,24 @@ fn check_data(x: &DMatrixView<'_, f64>, y: &[f64]) -> Result<()> {
             name: "y",
             location: format!("[{j}]"),
             value: v,
+        });
+    }
+    // The data-relative defaults are multiples of these: an overflow would surface later as a
+    // complaint about a hyperparameter the caller never passed.
+    let (ranges, var) = data_scales(x, y);
+    if let Some(d) = ranges.iter().position(|r| !r.is_finite()) {
+        return Err(Error::InvalidParameter {
+            name: "X",
+            value: format!("column {d} spanning {}", fmt_g(ranges[d])),
+            requirement: "its range overflows f64; rescale the inputs",
+        });
+    }
+    if !var.is_finite() {
+        let max = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        return Err(Error::InvalidParameter {
+            name: "y",
+            value: format!("values up to {}", fmt_g(max)),
+            requirement: "their variance overflows f64; rescale the outputs",
         });
     }
     Ok(())

@@ -129,7 +129,11 @@ impl Dmp {
         let cfg = *self.config();
         let substeps = self.substeps(opts.dt)?;
         if values * substeps as f64 > (MAX_SUBSTEPS * MAX_VALUES) as f64 / 100.0 {
-            return Err(self.too_coarse(opts.dt, substeps, "and the rollout would take too long"));
+            return Err(self.too_coarse(
+                opts.dt,
+                substeps as f64,
+                "the rollout would take too long",
+            ));
         }
         let capacity = (steps as usize + 1) * n_dof;
         let mut out = Trajectory {
@@ -211,19 +215,19 @@ impl Dmp {
         }
         let k = (dt / limit).ceil();
         if k.is_nan() || k > MAX_SUBSTEPS as f64 {
-            return Err(self.too_coarse(dt, MAX_SUBSTEPS + 1, "more than the limit"));
+            return Err(self.too_coarse(dt, k, "at most 1000 are taken"));
         }
         Ok(k as usize)
     }
 
-    fn too_coarse(&self, dt: f64, substeps: usize, why: &str) -> Error {
+    fn too_coarse(&self, dt: f64, substeps: f64, why: &str) -> Error {
         let cfg = self.config();
         Error::Numerical {
             context: "DMP rollout",
             detail: format!(
                 "dt = {} is too coarse for tau = {}, alpha_z = {}, beta_z = {} and alpha_x = {}: \
-                 explicit Euler is stable only for steps below {} s, which needs {substeps} sub-steps per \
-                 sample {why}; use a smaller dt, a larger tau or a smaller alpha_z",
+                 explicit Euler is stable only for steps below {} s, which needs {} sub-steps per \
+                 sample ({why}); use a smaller dt, a larger tau or a smaller alpha_z",
                 fmt_g(dt),
                 fmt_g(self.tau()),
                 fmt_g(cfg.alpha_z),
@@ -233,6 +237,7 @@ impl Dmp {
                     stable_step(cfg.alpha_z, cfg.beta_z, cfg.alpha_x) * self.tau()
                         / STABILITY_MARGIN
                 ),
+                fmt_g(substeps),
             ),
         }
     }

@@ -16,11 +16,22 @@ from dmprs.trajectory import Trajectory
 
 @dataclass(frozen=True)
 class SignalSpec:
-    """One measured outcome signal: a name, its SI unit, and what it means."""
+    """One measured outcome signal: a name, its SI unit, and what it means.
+
+    ``kind`` is ``"real"`` (a finite number or array of them) or ``"label"`` (a string, e.g. a
+    regime name). ``nan_if_absent`` declares that NaN means "did not happen" for this signal
+    (e.g. the time a box never reached); otherwise a NaN or infinity is a broken measurement.
+    """
 
     name: str
     unit: str
     description: str = ""
+    kind: str = "real"
+    nan_if_absent: bool = False
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("real", "label"):
+            raise InvalidInputError(f"signal {self.name!r}: kind = {self.kind!r} is invalid: use 'real' or 'label'")
 
 
 @dataclass(frozen=True)
@@ -106,6 +117,34 @@ class AdapterSpec:
                     f"{off[d]:.3g} from the start pose {self.start_pose[d]:.6g} "
                     f"(tolerance {self.start_tolerance:.3g})"
                 )
+        return problems
+
+    def signal_problems(self, signals: Any) -> list[str]:
+        """Every way measured ``signals`` break this spec (empty when they are fine): not a
+        mapping, a declared signal missing, an undeclared one, a value that is not a real number
+        or array of them (a string, None, a bool), or a NaN or infinity."""
+        if not isinstance(signals, Mapping):
+            return [f"signals is a {type(signals).__name__}, not a mapping of signal names to values"]
+        declared = [s.name for s in self.signals]
+        problems = [f"declared signal {name!r} is missing" for name in declared if name not in signals]
+        problems += [f"signal {name!r} is not declared in the spec" for name in signals if name not in declared]
+        for sig in self.signals:
+            if sig.name not in signals:
+                continue
+            value = signals[sig.name]
+            if sig.kind == "label":
+                if not isinstance(value, str):
+                    problems.append(f"signal {sig.name!r} is {type(value).__name__} {value!r:.60}, not a label (str)")
+                continue
+            try:
+                arr = np.asarray(value)
+            except Exception:  # noqa: BLE001 - ragged or exotic values are simply the wrong type
+                arr = np.asarray(None)
+            if isinstance(value, (bool, np.bool_)) or arr.dtype.kind not in "fiu":
+                problems.append(
+                    f"signal {sig.name!r} is {type(value).__name__} {value!r:.60}, not a real number or array")
+            elif np.isinf(arr).any() or (np.isnan(arr).any() and not sig.nan_if_absent):
+                problems.append(f"signal {sig.name!r} has non-finite values: {value!r:.60}")
         return problems
 
     def _check_bounds(self, problems, t, what, values, low, high) -> None:
