@@ -203,9 +203,9 @@ class CartesianTrajectory:
     def _trusted(cls, *arrays: Any) -> CartesianTrajectory:
         """Wraps arrays fresh from the core (already valid) without re-checking them."""
         self = object.__new__(cls)
-        for name, arr in zip(_CARTESIAN_FIELDS, arrays, strict=True):
+        for arr in arrays:
             arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
+        self.__dict__.update(zip(_CARTESIAN_FIELDS, arrays, strict=True))  # one call: rollouts are hot
         return self
 
     @property

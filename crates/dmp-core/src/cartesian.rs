@@ -475,29 +475,38 @@ impl CartesianDmp {
                 let wd = &w[d * n + range.start..d * n + range.end];
                 *fd = x * wd.iter().zip(act).map(|(w, p)| w * p).sum::<f64>();
             }
-            out.t.push(step as f64 * dt);
             let mut at_rest = x * max_w / (cfg.alpha_z * cfg.beta_z) <= opts.rest_tol;
+            // One step of both systems into small arrays, appended once per field (fewer
+            // capacity checks than a push per value).
+            let (mut v, mut acc) = ([0.0; 3], [0.0; 3]);
             for d in 0..3 {
                 let dz = (cfg.alpha_z * (cfg.beta_z * (goal_p[d] - p[d]) - z[d]) + f[d]) * inv_tau;
-                let v = z[d] * inv_tau;
-                out.position.push(p[d]);
-                out.velocity.push(v);
-                out.acceleration.push(dz * inv_tau);
+                v[d] = z[d] * inv_tau;
+                acc[d] = dz * inv_tau;
                 at_rest &= (goal_p[d] - p[d]).abs() <= opts.rest_tol && z[d].abs() <= opts.rest_tol;
-                p[d] += v * dt;
                 z[d] += dz * dt;
             }
             // Half the rotation vector from q to the goal.
             let e = quaternion::log(&quaternion::product(&goal_q, &quaternion::conjugate(&q)));
-            out.quaternion.extend_from_slice(&q);
             let turn = quaternion::exp(&eta.map(|c| c * half_step));
+            let (mut omega, mut omega_dot) = ([0.0; 3], [0.0; 3]);
             for d in 0..3 {
                 let to_goal = 2.0 * e[d];
                 let deta = (cfg.alpha_z * (cfg.beta_z * to_goal - eta[d]) + f[3 + d]) * inv_tau;
-                out.angular_velocity.push(eta[d] * inv_tau);
-                out.angular_acceleration.push(deta * inv_tau);
+                omega[d] = eta[d] * inv_tau;
+                omega_dot[d] = deta * inv_tau;
                 at_rest &= to_goal.abs() <= opts.rest_tol && eta[d].abs() <= opts.rest_tol;
                 eta[d] += deta * dt;
+            }
+            out.t.push(step as f64 * dt);
+            out.position.extend_from_slice(&p);
+            out.velocity.extend_from_slice(&v);
+            out.acceleration.extend_from_slice(&acc);
+            out.quaternion.extend_from_slice(&q);
+            out.angular_velocity.extend_from_slice(&omega);
+            out.angular_acceleration.extend_from_slice(&omega_dot);
+            for d in 0..3 {
+                p[d] += v[d] * dt;
             }
             let past_end = step as f64 >= steps;
             if past_end && (!opts.until_rest || at_rest) {
