@@ -426,6 +426,13 @@ impl CartesianDmp {
     /// orientation within `rest_tol` (rad), both at rest to `rest_tol`, and the forcing term can
     /// no longer move them by more than that.
     pub fn rollout(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
+        // Compiled for AVX2 where the CPU has it (wider kernel-weight updates); Rust never fuses
+        // a multiply and an add on its own, so both copies give the same bits.
+        crate::linalg::simd(|| self.integrate(opts))
+    }
+
+    #[inline(always)]
+    fn integrate(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
         opts.validate()?;
         let tau = self.tau();
         let steps = n_steps(opts.duration.unwrap_or(tau), opts.dt);
@@ -456,8 +463,13 @@ impl CartesianDmp {
         let (dt, inv_tau) = (opts.dt, 1.0 / tau);
         let half_step = 0.5 * dt * inv_tau;
         let n = cfg.n_basis;
-        let w = self.weights().as_slice();
+        let w = self.weights();
         let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+        // Kernel-major copy: the six weights of kernel k side by side, so that one pass over the
+        // active kernels updates all six forcing terms (independent sums, same order per term).
+        let wk: Vec<[f64; N_COORDS]> = (0..n)
+            .map(|k| [0, 1, 2, 3, 4, 5].map(|d| w[(k, d)]))
+            .collect();
         let goal_p = self.dmp.goal().as_slice();
         let goal_q = self.goal;
         let mut p: [f64; 3] = [0, 1, 2].map(|d| self.dmp.y0()[d]);
@@ -471,10 +483,12 @@ impl CartesianDmp {
             let range = self.basis().normalized_activations(x, &mut psi);
             let act = &psi[range.clone()];
             let mut f = [0.0; N_COORDS];
-            for (d, fd) in f.iter_mut().enumerate() {
-                let wd = &w[d * n + range.start..d * n + range.end];
-                *fd = x * wd.iter().zip(act).map(|(w, p)| w * p).sum::<f64>();
+            for (wk, a) in wk[range.clone()].iter().zip(act) {
+                for d in 0..N_COORDS {
+                    f[d] += wk[d] * a;
+                }
             }
+            let f = f.map(|s| x * s);
             let mut at_rest = x * max_w / (cfg.alpha_z * cfg.beta_z) <= opts.rest_tol;
             // One step of both systems into small arrays, appended once per field (fewer
             // capacity checks than a push per value).
