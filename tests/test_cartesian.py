@@ -136,6 +136,8 @@ def test_serialization_batch_and_tau() -> None:
     batch = dmprs.rollout_batch([dmp, dmprs.DMP.fit(t, pose[:, :3], 20), slow], 0.001)
     assert batch[0] == dmp.rollout(0.001) and batch[2] == slow.rollout(0.001)
     assert isinstance(batch[1], dmprs.Trajectory)
+    for tr in (a, batch[2]):  # rollouts are immutable
+        assert not any(getattr(tr, n).flags.writeable for n in ("t", "position", "quaternion", "angular_velocity"))
     with pytest.raises(AttributeError):
         dmp.tau = 3.0  # type: ignore[misc]
 

@@ -29,7 +29,7 @@ from dmprs._io import (
 )
 from dmprs.adapters import Outcome
 from dmprs.errors import RunLogError
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 LOG_SCHEMA_VERSION = 1
 
@@ -159,14 +159,16 @@ class RunLog:
         """Drops a cut last line before appending to a resumed run."""
         truncate_cut_line(self.trials_path)
 
-    def append(self, record: TrialRecord, command: Trajectory | None, outcome: Outcome | None) -> None:
+    def append(
+        self, record: TrialRecord, command: Trajectory | CartesianTrajectory | None, outcome: Outcome | None
+    ) -> None:
         """Writes the trial's arrays, then its line: the line is the commit point."""
         arrays: dict[str, Any] = {"query": record.query}
         if command is not None:
-            arrays.update(cmd_t=command.t, cmd_y=command.y)
+            arrays.update(cmd_t=command.t, cmd_y=_samples(command))
         if outcome is not None:
             if outcome.executed is not None:
-                arrays.update(exe_t=outcome.executed.t, exe_y=outcome.executed.y)
+                arrays.update(exe_t=outcome.executed.t, exe_y=_samples(outcome.executed))
             for k, v in outcome.signals.items():
                 arrays[f"sig_{k}"] = np.asarray(v)
         name = f"trial_{record.index:04d}.npz"
@@ -195,3 +197,8 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, Path):
         return str(value)
     return repr(value)
+
+
+def _samples(tr: Trajectory | CartesianTrajectory) -> np.ndarray:
+    """The samples a log keeps: y, or the (T, 7) pose of a pose trajectory."""
+    return tr.pose if isinstance(tr, CartesianTrajectory) else tr.y

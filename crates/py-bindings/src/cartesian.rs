@@ -28,16 +28,28 @@ type CartesianArrays<'py> = (
     Bound<'py, PyArray2<f64>>,
 );
 
+/// `a`, read-only: numpy's `PyArray_CLEARFLAGS(a, NPY_ARRAY_WRITEABLE)`, in place of seven
+/// `setflags(write=False)` calls from Python on every rollout.
+fn read_only<D>(a: Bound<'_, numpy::PyArray<f64, D>>) -> Bound<'_, numpy::PyArray<f64, D>> {
+    // SAFETY: `a` is a live array object that this function owns a reference to; clearing a flag
+    // bit is what the C macro does.
+    unsafe { (*a.as_array_ptr()).fields.flags &= !numpy::npyffi::flags::NPY_ARRAY_WRITEABLE };
+    a
+}
+
 fn trajectory_arrays(py: Python<'_>, tr: CartesianTrajectory) -> PyResult<CartesianArrays<'_>> {
     let n = tr.t.len();
+    let block = |v: Vec<f64>, width: usize| -> PyResult<Bound<'_, PyArray2<f64>>> {
+        Ok(read_only(v.into_pyarray(py).reshape([n, width])?))
+    };
     Ok((
-        tr.t.into_pyarray(py),
-        tr.position.into_pyarray(py).reshape([n, 3])?,
-        tr.quaternion.into_pyarray(py).reshape([n, 4])?,
-        tr.velocity.into_pyarray(py).reshape([n, 3])?,
-        tr.angular_velocity.into_pyarray(py).reshape([n, 3])?,
-        tr.acceleration.into_pyarray(py).reshape([n, 3])?,
-        tr.angular_acceleration.into_pyarray(py).reshape([n, 3])?,
+        read_only(tr.t.into_pyarray(py)),
+        block(tr.position, 3)?,
+        block(tr.quaternion, 4)?,
+        block(tr.velocity, 3)?,
+        block(tr.angular_velocity, 3)?,
+        block(tr.acceleration, 3)?,
+        block(tr.angular_acceleration, 3)?,
     ))
 }
 
