@@ -129,3 +129,14 @@ def test_glass_geometry_matches_the_counting_region():
         normal = d.geom_xmat[g].reshape(3, 3)[:, 0]
         inner_face = centre - m.geom_size[g][0] * normal
         assert math.hypot(inner_face[0] - gx, inner_face[1] - gy) == pytest.approx(am.GLASS_RADIUS, abs=1e-9)
+
+
+def test_sphere_radii_are_polydisperse_and_seeded():
+    r = granular.radii(500, seed=0)
+    assert np.array_equal(r, granular.radii(500, seed=0))
+    assert not np.array_equal(r, granular.radii(500, seed=1))
+    assert r.min() >= am.PARTICLE_RADIUS * (1 - am.POLYDISPERSITY)
+    assert r.max() <= am.PARTICLE_RADIUS * (1 + am.POLYDISPERSITY)
+    m = am.load(granular.spawn_sites(5, 0), particle_radii=r[:5])
+    sizes = [m.geom_size[m.body(f"p{i}").geomadr[0]][0] for i in range(5)]
+    np.testing.assert_allclose(sizes, r[:5])

@@ -22,9 +22,10 @@ from dmprs.experiments import ExperimentSetup, query_learners
 from dmprs.loop import LearningResult, learn
 
 #: l: success when |V_poured - 0.2 l| < this. Set from the measured noise floor of the granular
-#: outcome (docs/arm.md): a query change of +-5 ml moves the poured volume by up to ~10 ml, so the
-#: 2-D scene's 10 ml is the floor's size and 12 ml leaves a margin of one sphere.
-TOLERANCE = 0.012
+#: outcome (docs/arm.md): changes of the movement far too small to matter (1e-4 rad of peak tilt)
+#: move the poured volume with a standard deviation of 13-16 ml (a range of 28-36 ml), so the 2-D
+#: scene's 10 ml is below the floor; 20 ml is ~1.3 standard deviations.
+TOLERANCE = 0.020
 #: rad: the calibration's bracket of peak tilts (1.4 rad pours nothing from 0.3 l, 2.7 rad
 #: nearly everything from 1.0 l)
 DEMO_BRACKET = (1.4, 2.7)
@@ -189,3 +190,30 @@ def figure(rows: list[dict[str, Any]], path: Path) -> Path:
     fig.savefig(path, dpi=120, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def frame_strip(out: str | Path, bottle_volume: float = 0.6, learner_query: float | None = None) -> Path | None:
+    """A frame strip ``out/arm_pouring_strip.png`` of the generalized pour for ``bottle_volume``
+    (at the assumed volume ``learner_query``, default the true one) through MuJoCo's offscreen
+    renderer; None, with a one-line note on stderr, where no OpenGL backend is available (set
+    ``MUJOCO_GL=egl`` or ``osmesa``)."""
+    import sys
+
+    from dmprs.errors import DmprsError
+    from dmprs.sim import arm_render, arm_scene
+    from dmprs.tasks.arm_pouring import ArmPouringAdapter
+
+    setup = arm_pouring_setup(bottle_volume)
+    q = setup.desired_query if learner_query is None else np.array([learner_query])
+    adapter = setup.task.adapter
+    assert isinstance(adapter, ArmPouringAdapter)
+    joints, _, _, problems = adapter.plan(setup.task.trajectory(setup.generalizer.predict(q)))
+    if problems or joints is None or joints.yd is None:
+        raise DmprsError(f"the pour to render was refused: {'; '.join(problems)}")
+    liquid = arm_scene.settled_liquid(adapter.n_particles, adapter.liquid_seed)
+    try:
+        return arm_render.frame_strip(joints.t, joints.y, joints.yd, liquid,
+                                      (0.0, 0.5, 1.4, 2.2, 2.8, 3.6, 4.6), Path(out) / "arm_pouring_strip.png")
+    except DmprsError as exc:
+        print(f"arm pouring: no frame strip ({exc})", file=sys.stderr)
+        return None

@@ -59,11 +59,11 @@ KP = (10000.0, 10000.0, 5000.0, 5000.0, 3000.0, 2000.0, 2000.0)
 KV = (300.0, 300.0, 120.0, 120.0, 35.0, 20.0, 12.0)
 
 # --- the bottle, held at the flange -------------------------------------------------------------
-#: inner radius of the bottle's body (m): 140 mm across, a squat 2-litre bottle (a tall one would
-#: pour from too high: the upright bottle must pass over the glass's rim)
-BOTTLE_RADIUS = 0.07
+#: inner radius of the bottle's body (m): 150 mm across, a squat 2.6-litre bottle (a tall one
+#: would pour from too high: the upright bottle must pass over the glass's rim)
+BOTTLE_RADIUS = 0.075
 #: height of the straight body (m)
-BOTTLE_BODY = 0.14
+BOTTLE_BODY = 0.15
 #: height of the conical shoulder from the body to the neck (m)
 BOTTLE_SHOULDER = 0.03
 #: neck: inner radius (m; the mouth is 56 mm across, 3.6 sphere diameters, so the spheres do not
@@ -100,6 +100,10 @@ PARTICLE_VOLUME = 0.002
 PARTICLE_RADIUS = (3 * PARTICLE_VOLUME * 1e-3 / (4 * math.pi)) ** (1 / 3)
 #: the mass of 2 ml of water (kg)
 PARTICLE_MASS = 0.002
+#: sphere radii are PARTICLE_RADIUS (1 +- POLYDISPERSITY), uniform, drawn from the liquid's seed,
+#: as the 2-D scene's discs: equal spheres settle into a crystal, which a liquid is not. (It does
+#: not make the outcome less noisy: docs/arm.md.) Each sphere counts as 2 ml and weighs 2 g.
+POLYDISPERSITY = 0.1
 
 # --- contact and solver (measured, see docs/arm.md) --------------------------------------------
 #: frictionless contacts (condim 1): an inviscid liquid, like the 2-D scene's frictionless discs;
@@ -209,18 +213,23 @@ def _arm_bodies(bottle: list[str]) -> str:
     return "\n".join(open_tags) + "\n" + bracket + "\n" + bottle_body + "\n" + "</body>\n" * 7
 
 
-def particle_bodies(positions: NDArray[np.float64]) -> str:
-    """One free sphere per row of ``positions`` (m, world frame)."""
+def particle_bodies(positions: NDArray[np.float64], radii: NDArray[np.float64] | None = None) -> str:
+    """One free sphere per row of ``positions`` (m, world frame), of ``radii`` (m; default
+    PARTICLE_RADIUS)."""
+    p = np.asarray(positions, dtype=float)
+    r = np.full(len(p), PARTICLE_RADIUS) if radii is None else np.asarray(radii, dtype=float)
     return "\n".join(
-        f'<body name="p{i}" pos="{_fmt(p)}"><freejoint/><geom class="particle"/></body>'
-        for i, p in enumerate(np.asarray(positions, dtype=float)))
+        f'<body name="p{i}" pos="{_fmt(x)}"><freejoint/><geom class="particle" size="{ri:.9g}"/></body>'
+        for i, (x, ri) in enumerate(zip(p, r, strict=True)))
 
 
-def scene_xml(particle_positions: NDArray[np.float64] | None = None, *, solver: str = SOLVER,
+def scene_xml(particle_positions: NDArray[np.float64] | None = None, *,
+              particle_radii: NDArray[np.float64] | None = None, solver: str = SOLVER,
               iterations: int = ITERATIONS, condim: int = CONDIM, tolerance: float = TOLERANCE,
               with_glass: bool = True) -> str:
     """The whole scene as an MJCF string: table, floor, arm with bottle, glass and one sphere per
-    row of ``particle_positions`` (none: the kinematic model used by the IK and the checks)."""
+    row of ``particle_positions`` with ``particle_radii`` (none: the kinematic model used by the IK
+    and the checks)."""
     parts = np.zeros((0, 3)) if particle_positions is None else np.asarray(particle_positions, dtype=float)
     tx, ty = TABLE_CENTER
     glass = "\n".join(glass_geoms()) if with_glass else ""
@@ -251,7 +260,7 @@ def scene_xml(particle_positions: NDArray[np.float64] | None = None, *, solver: 
       contype="0" conaffinity="0" rgba="0.9 0.9 0.9 1"/>
 {_arm_bodies(bottle_geoms())}
 {glass}
-{particle_bodies(parts)}
+{particle_bodies(parts, particle_radii)}
 </worldbody>
 <actuator>
 {actuators}

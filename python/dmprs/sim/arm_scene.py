@@ -32,7 +32,7 @@ from dmprs.sim import arm_model as am
 from dmprs.sim import granular
 
 #: the mouth's start pose (x, y, z, qw, qx, qy, qz): upright, beside the glass and above its rim
-HOME_POSE = (0.75, 0.0, 0.32, 1.0, 0.0, 0.0, 0.0)
+HOME_POSE = (0.75, 0.0, 0.34, 1.0, 0.0, 0.0, 0.0)
 #: the IK's seed for the home configuration: elbow up, wrist bent down (deg 0, 34, 0, -69, 0, -57, 0)
 HOME_SEED = (0.0, 0.6, 0.0, -1.2, 0.0, -1.0, 0.0)
 #: s of settling before a pour (the spheres come to rest within ~0.2 s)
@@ -129,7 +129,8 @@ def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOL
     local = granular.spawn_sites(n, seed)
     world = pos + local @ mat.T
     name, iterations, condim = solver
-    model = am.load(world, solver=name, iterations=iterations, condim=condim)
+    model = am.load(world, particle_radii=granular.radii(n, seed), solver=name, iterations=iterations,
+                    condim=condim)
     data = mujoco.MjData(model)
     data.qpos[:7] = q_home
     data.ctrl[:] = q_home

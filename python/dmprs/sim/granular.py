@@ -21,6 +21,13 @@ SPAWN_GAP = 0.0004
 MAX_PARTICLES = 500
 
 
+def radii(n: int, seed: int) -> NDArray[np.float64]:
+    """The radii (m) of the ``n`` spheres of the liquid of ``seed``: PARTICLE_RADIUS
+    (1 +- POLYDISPERSITY), uniform (a generator of its own, so the lattice's draws do not move)."""
+    rng = np.random.default_rng([seed, 1])
+    return am.PARTICLE_RADIUS * (1 + am.POLYDISPERSITY * rng.uniform(-1, 1, size=n))
+
+
 def cavity_radius(z: NDArray[np.float64]) -> NDArray[np.float64]:
     """The bottle's inner radius at height ``z`` of its own frame (mouth at 0, bottom at
     ``-BOTTLE_LENGTH``): the body, the conical shoulder, the neck."""
@@ -39,7 +46,7 @@ def spawn_sites(n: int, seed: int) -> NDArray[np.float64]:
     if not 1 <= n <= MAX_PARTICLES:
         raise ValueError(f"n = {n} spheres: the bottle holds 1..{MAX_PARTICLES}")
     rng = np.random.default_rng(seed)
-    r = am.PARTICLE_RADIUS
+    r = am.PARTICLE_RADIUS * (1 + am.POLYDISPERSITY)  # room for the largest sphere
     d = 2 * r + SPAWN_GAP
     layer_height = d * math.sqrt(2.0 / 3.0)
     z = -am.BOTTLE_LENGTH + r + SPAWN_GAP

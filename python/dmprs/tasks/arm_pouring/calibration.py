@@ -83,7 +83,7 @@ def _calibrate(bottle_volume: float, target_volume: float, liquid_seed: int, tol
     # eps = target - poured (method.md §5.3).
     finder = IllinoisRootFinder(0.5 * (lo + hi), low=lo, high=hi, tol=tol, max_trials=max_evaluations)
     evals: list[tuple[float, float]] = []
-    while len(evals) < max_evaluations and not finder.converged:
+    while len(evals) < max_evaluations and not (finder.converged or finder.done):
         peak = float(np.atleast_1d(finder.ask())[0])
         poured = poured_volume(v, pour_poses(peak), liquid_seed)
         evals.append((peak, poured))

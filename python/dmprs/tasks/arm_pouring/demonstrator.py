@@ -17,7 +17,7 @@ DEMO_VOLUMES = (0.3, 1.0)  #: l, the demonstrations' bottles (method.md §9.1)
 #: the scripted demonstration (s): reach over the glass, tilt up, hold, tilt back (method.md §9.3)
 DEMO_TIMING = (0.5, 1.5, 0.7, 1.5)
 #: the mouth's pose while pouring: over the glass's near edge, upright (see docs/arm.md)
-POUR_POSITION = (0.75, -0.175, 0.32)
+POUR_POSITION = (0.75, -0.175, 0.34)
 
 
 def _min_jerk(s: NDArray[np.float64]) -> NDArray[np.float64]:
