@@ -169,7 +169,8 @@ def figure_growing(results: list[dict[str, Any]], out: str | Path) -> Path:
         sizes = sorted({run["n_demos"] for run, _ in runs})
         jitter = 0.12 * (k - 0.5)
         trials = [[_trials(run, cap) for run, cap in runs if run["n_demos"] == n] for n in sizes]
-        errs = [[abs(run["first_error_ml"]) for run, _ in runs
+        # below one disc (2 ml) the error is plotted at 1 ml, so the log axis shows exact pours
+        errs = [[max(abs(run["first_error_ml"]), 1.0) for run, _ in runs
                  if run["n_demos"] == n and run["first_error_ml"] is not None] for n in sizes]
         line, = ax[0].plot(sizes, [np.mean(t) for t in trials], "o-", label=gen)
         for n, t, e in zip(sizes, trials, errs):

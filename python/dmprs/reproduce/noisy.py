@@ -23,6 +23,10 @@ from typing import Any
 #: tracking, 1 deg on the measured angle, 5 % friction and restitution; pouring: 0.01 rad tilt
 #: tracking, 3 ml on the poured volume (a kitchen scale).
 NOISE = {"matchbox": (0.0005, math.radians(1.0), 0.05), "pouring": (0.01, 0.003, 0.0)}
+#: success is judged on the noisy reading; for pouring the reading can be lucky, so the table
+#: also counts successes whose noise-free error is within the task's 10 ml (the matchbox's
+#: success, the upright regime, is physical: no reading involved)
+TRUE_TOL = {"pouring": 0.010}
 LEARNERS = {"matchbox": ("error", "golden", "golden-robust"), "pouring": ("golden", "golden-robust", "root")}
 
 
@@ -91,10 +95,13 @@ def summarize_noisy(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
         runs = [r for r in results if r.get("kind") == "noisy" and r["experiment"] == exp and r["learner"] == lrn]
         ok = [r["trials_to_success"] for r in runs if r["trials_to_success"] is not None]
         hit = [r for r in runs if r["wrong_signs"]]
+        tol = TRUE_TOL.get(exp)
+        true_ok = [r for r in runs if r["converged"] and (
+            tol is None or abs(r["trials"][r["trials_to_success"] - 1]["true_eps"] or 0.0) < tol)]
         rows.append({"experiment": exp, "learner": lrn, "seeds": len(runs), "successes": len(ok),
                      "median_trials": statistics.median(ok) if ok else None,
                      "min_trials": min(ok) if ok else None, "max_trials": max(ok) if ok else None,
-                     "runs_with_wrong_sign": len(hit),
+                     "truly_within_tol": len(true_ok), "runs_with_wrong_sign": len(hit),
                      "succeeded_despite_wrong_sign": sum(r["converged"] for r in hit),
                      "noise": runs[0]["noise"], "cap": runs[0]["max_trials"]})
     return rows
@@ -102,11 +109,13 @@ def summarize_noisy(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def markdown_noisy(rows: list[dict[str, Any]]) -> str:
     lines = [("| experiment | learner | noise (execution, measurement, contact) | succeeded | trials to success "
-             "median [range] | runs with a wrong-signed error (of them succeeded) |"), "|---|---|---|---|---|---|"]
+             "median [range] | success also without the reading's noise | runs with a wrong-signed error (of them "
+             "succeeded) |"), "|---|---|---|---|---|---|---|"]
     for r in rows:
         med = "-" if r["median_trials"] is None else f"{r['median_trials']:g} [{r['min_trials']}-{r['max_trials']}]"
         noise = ", ".join(f"{v:.3g}" for v in r["noise"])
         lines.append(f"| {r['experiment']} | {r['learner']} | {noise} | {r['successes']}/{r['seeds']} | {med} | "
+                     f"{r['truly_within_tol']}/{r['seeds']} | "
                      f"{r['runs_with_wrong_sign']} ({r['succeeded_despite_wrong_sign']}) |")
     return "\n".join(lines) + "\n"
 
