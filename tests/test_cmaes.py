@@ -11,6 +11,7 @@ from dmprs.cmaes import CMAES
 from dmprs.errors import InvalidInputError, LearnerStateError
 from dmprs.loop import learn
 from dmprs.runlog import RunLog
+from tests.conftest import crash_after
 
 TARGET = np.array([0.3, -1.2, 2.0])
 
@@ -105,8 +106,7 @@ def test_query_space_run_resumes_from_its_log(tmp_path):
     full = learn(s.task, s.generalizer, s.desired_query, s.make_learner("cma", seed=2), max_trials=40)
     cut = tmp_path / "run"
     learn(s.task, s.generalizer, s.desired_query, s.make_learner("cma", seed=2), max_trials=40, log_dir=cut)
-    lines = (cut / "trials.jsonl").read_text().splitlines(keepends=True)
-    (cut / "trials.jsonl").write_text("".join(lines[:3]))
+    crash_after(cut, 3)
     s2 = experiments.analytic_setup()
     resumed = learn(s2.task, s2.generalizer, s2.desired_query, s2.make_learner("cma", seed=2), max_trials=40,
                     log_dir=cut, resume=True)
@@ -122,6 +122,5 @@ def test_weight_space_baseline_logs_every_rollout_and_resumes_identically(tmp_pa
     assert len(trials) == reference["n_trials"]
     cut = tmp_path / "cut"
     run_baseline(spec, log_dir=cut)
-    lines = (cut / "trials.jsonl").read_text().splitlines(keepends=True)
-    (cut / "trials.jsonl").write_text("".join(lines[:4]))
+    crash_after(cut, 4)
     assert run_baseline(spec, log_dir=cut, resume=True) == reference
