@@ -18,7 +18,7 @@ from dmprs.trajectory import Trajectory
 #: 1.48, 1.31 and 2.36 rad/s.
 SWING = (0.0, -0.5, 0.0, 0.45, 0.0, -0.8, 0.0)
 #: s: the base's turn to the throwing direction, then the swing
-TURN_TIME = 0.5
+TURN_TIME = 0.8
 SWING_TIME = 0.7
 #: the demonstrations: (strength, base yaw in rad): the corners of a 2 x 2 grid and its centre.
 #: Strengths 0.75-0.9 land the ball ~0.9-1.4 m from the base (measured: the labels); the yaw
