@@ -155,3 +155,21 @@ def test_an_unseen_basket_is_hit_within_the_floor(generalizer: str, target: tupl
     last = r.trials[-1]
     landing = np.array([last.signals["landing_x"], last.signals["landing_y"]])
     assert np.linalg.norm(landing - target) < 0.05
+
+
+def test_the_reproduction_part_runs_summarizes_and_draws(tmp_path) -> None:
+    import pickle
+
+    from dmprs.reproduce.throwing import figure_throwing, plan_throwing, run_throwing, summarize_throwing
+
+    specs = plan_throwing(quick=True)
+    assert pickle.loads(pickle.dumps(specs)) == specs  # they go to worker processes
+    results = [run_throwing(s) for s in specs]
+    rows = summarize_throwing(results)
+    assert {r["experiment"].split(" baskets")[0] for r in rows} == {"arm throwing, 2", "arm throwing, 1"}
+    for row in rows:
+        assert row["meets_floor"] and row["successes"] == row["runs"]
+    for r in results:  # the reported trials are the landings that decided success
+        last = r["trials"][-1]
+        assert last["success"] and np.linalg.norm(np.subtract(last["landing"], r["target"])) < 0.05
+    assert figure_throwing(results, tmp_path).stat().st_size > 10_000
