@@ -1,8 +1,8 @@
 """Arm-throwing benchmark (MuJoCo): CPU seconds (time.process_time) of one throw trial, against
 the bare physics it runs (issue 16's budget: at most 1 s of CPU per throw).
 
-A throw is one ``ArmThrowingAdapter.execute`` of a generalized DMP's rollout (base turn 0.5 s,
-swing 0.7 s, then the flight until the ball touches the floor: ~1.65 s of simulated time, ~1650
+A throw is one ``ArmThrowingAdapter.execute`` of a generalized DMP's rollout (base turn 0.8 s,
+swing 0.7 s, then the flight until the ball touches the floor: ~1.97 s of simulated time, ~1970
 steps of 1 ms). It is split into
 
 * generalize: ``Generalizer.predict`` at an unseen basket + the rollout at 2 ms (``linear``,
