@@ -3,7 +3,7 @@ generalized over the 2-D query (x, y) with ``"linear"`` (piecewise linear on the
 triangulation of the five landing points) or ``"lwr-gp"``, learned with the n-D query learners.
 
 The coordinator registers :func:`arm_throwing_setup` as ``SETUPS["arm-throwing"]`` (it is not
-imported by :mod:`dmprs.experiments`: this module imports it, in the direction design.md §2 allows).
+imported by :mod:`dmprs.experiments`: this module imports it: dependencies point one way).
 Requires the ``robot`` extra (MuJoCo).
 """
 
