@@ -173,3 +173,10 @@ def test_the_reproduction_part_runs_summarizes_and_draws(tmp_path) -> None:
         last = r["trials"][-1]
         assert last["success"] and np.linalg.norm(np.subtract(last["landing"], r["target"])) < 0.05
     assert figure_throwing(results, tmp_path).stat().st_size > 10_000
+
+
+def test_the_adapter_passes_the_conformance_suite() -> None:
+    from dmprs.adapters import check_adapter
+
+    passed = check_adapter(ArmThrowingAdapter(), throw_trajectory(*DEMOS[4]))
+    assert "execute returns the declared signals" in passed
