@@ -180,3 +180,16 @@ def test_the_adapter_passes_the_conformance_suite() -> None:
 
     passed = check_adapter(ArmThrowingAdapter(), throw_trajectory(*DEMOS[4]))
     assert "execute returns the declared signals" in passed
+
+
+def test_bad_setup_options_are_refused_with_reasons() -> None:
+    with pytest.raises(ValueError, match="generalizer = 'gp' is invalid"):
+        arm_throwing_setup((1.0, 0.0), "gp")
+    with pytest.raises(ValueError, match="tol = -0.01 must be > 0 m"):
+        ArmThrowing(-0.01)
+    with pytest.raises(ValueError, match="target|desired_query"):
+        arm_throwing_setup((1.0, float("nan")))
+    with pytest.raises(ValueError):
+        arm_throwing_setup((1.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="unknown learner 'golden'"):
+        arm_throwing_setup((1.0, 0.0)).make_learner("golden")
