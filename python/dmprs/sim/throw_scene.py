@@ -5,8 +5,8 @@ limits, masses and joint servo at 1 kHz (``arm_model._arm_bodies``, ``KP``, ``KV
 ``TORQUE_LIMITS``), standing on a pedestal ``PEDESTAL_HEIGHT`` above the floor (z = 0) and turned
 by pi about z, so that the swing of A2, A4 and A6 that throws toward the arm's -x throws toward
 the world's +x. Where the pouring scene holds a bottle, the flange holds a tight **cup** (a short
-launch tube) with a **ball** in it; the cup's opening looks along the flange's -x (the bottle's mouth axis of
-``arm_model``), i.e. along the direction the swing moves the cup. Nothing grasps or releases the
+launch tube) with a **ball** in it; the cup's opening looks along the flange's -x (the bottle's
+mouth axis of ``arm_model``), i.e. along the direction the swing moves the cup. Nothing grasps or releases the
 ball: it rests in the cup while the cup accelerates and leaves it when the cup decelerates
 faster than gravity pulls it back in.
 
