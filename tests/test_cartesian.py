@@ -219,3 +219,9 @@ def test_bad_goal_and_start_poses_are_refused() -> None:
         dmp.with_start([0, 0, 0, 1.0, 0, 0])
     with pytest.raises(dmprs.InvalidInputError, match=r"(?i)goal\[2\] is nan"):
         dmp.with_goal([0, 0, np.nan, 1.0, 0, 0, 0])
+
+
+def test_a_diverging_rollout_is_an_error_not_a_nan_trajectory() -> None:
+    dmp = dmprs.CartesianDMP.fit(*pose_demo(), 10)
+    with pytest.raises(dmprs.NumericalError, match="diverged"):
+        dmp.rollout(dt=0.2, duration=500.0)

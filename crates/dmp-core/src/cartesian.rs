@@ -539,6 +539,18 @@ impl CartesianDmp {
             x -= cfg.alpha_x * x * inv_tau * dt;
             step += 1;
         }
+        // An unstable step (dt far above tau / alpha_z) overflows, and inf and NaN then persist
+        // to the last sample: checking it is enough to never return a non-finite trajectory.
+        let last = [&p[..], &z[..], &q[..], &eta[..]].concat();
+        if last.iter().any(|v| !v.is_finite()) {
+            return Err(Error::Numerical {
+                context: "Cartesian DMP rollout",
+                detail: format!(
+                    "the integration diverged (dt = {} s is too large for tau = {tau} s and alpha_z = {})",
+                    opts.dt, cfg.alpha_z
+                ),
+            });
+        }
         Ok(out)
     }
 }
