@@ -38,7 +38,7 @@ def test_generalize_database(tmp_path):
 def test_write_an_adapter():
     out = load("write_an_adapter").main()
     assert len(out["full"]) > len(out["dry"]) and out["outcome"].ok
-    assert out["too_fast"].status.value == "rejected" and "undeclared signals ['gripper']" in out["caught"]
+    assert out["too_fast"].status.value == "rejected" and "signal 'gripper' is not declared" in out["caught"]
 
 
 def test_cma_es_on_a_gymnasium_environment():

@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core as _native
-from dmprs._arrays import as_count, as_float_array
+from dmprs._arrays import as_count, as_float_array, short
 from dmprs.errors import InvalidInputError
 
 __all__ = [
@@ -106,8 +106,11 @@ def _real(value: Any, name: str) -> float | None:
     if value is None:
         return None
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise InvalidInputError(f"{name} must be a real number; got {value!r}")
-    return float(value)
+        raise InvalidInputError(f"{name} must be a real number; got {short(value)}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise InvalidInputError(f"{name} = {short(value)} does not fit a 64-bit float") from None
 
 
 def _count(value: Any, name: str) -> int | None:

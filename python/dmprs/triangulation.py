@@ -128,8 +128,15 @@ class PiecewiseLinear:
 
     def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """``[w.ravel(), tau, goal, y0]`` at ``q``, without the tau check."""
-        idx, b = self._coordinates(self._check_query(q))
-        return b @ self._theta[idx]
+        q = self._check_query(q)
+        idx, b = self._coordinates(q)
+        with np.errstate(all="ignore"):
+            theta = b @ self._theta[idx]
+        if not np.isfinite(theta).all():
+            raise ExtrapolationError(
+                f"cannot generalize to query {q.tolist()}: its barycentric coordinates {b.tolist()} "
+                "overflow (the query is too far from the demonstrations for their spacing)")
+        return theta
 
     def predict(self, q: NDArray[np.float64]) -> _core.Dmp:
         q = self._check_query(q)
@@ -159,6 +166,10 @@ class PiecewiseLinear:
             step = np.zeros_like(q)
             step[d] = h
             jac[:, d] = (self.parameters(q + step) - self.parameters(q - step)) / (2.0 * h)
+        if not np.isfinite(jac).all():
+            raise ExtrapolationError(
+                f"the Jacobian at query {q.tolist()} overflows with rel_step = {rel_step:g}: the step "
+                "reaches too far from the demonstrations for their spacing")
         return jac
 
     # --- the core Generalizer's properties --------------------------------------------------
