@@ -64,9 +64,9 @@ CASES = [
 ]
 
 LEARNERS: dict[str, Callable[[Case, float], L._Learner]] = {
-    "golden, paper": lambda c, q0: L.GoldenSection(q0, c.low, c.high, "paper", tol=c.tol, max_trials=MAX_TRIALS),
-    "golden, robust": lambda c, q0: L.GoldenSection(q0, c.low, c.high, "robust", tol=c.tol, max_trials=MAX_TRIALS),
-    "Illinois root finder": lambda c, q0: L.IllinoisRootFinder(q0, c.low, c.high, tol=c.tol, max_trials=MAX_TRIALS),
+    "golden, paper": lambda c, q0: L.GoldenSection(q0, low=c.low, high=c.high, mode="paper", tol=c.tol, max_trials=MAX_TRIALS),
+    "golden, robust": lambda c, q0: L.GoldenSection(q0, low=c.low, high=c.high, mode="robust", tol=c.tol, max_trials=MAX_TRIALS),
+    "Illinois root finder": lambda c, q0: L.IllinoisRootFinder(q0, low=c.low, high=c.high, tol=c.tol, max_trials=MAX_TRIALS),
     "error learning, K = I": lambda c, q0: L.ErrorLearning(q0, low=c.low, high=c.high, tol=c.tol, max_trials=MAX_TRIALS),
     "error learning, secant": lambda c, q0: L.ErrorLearning(
         q0, jacobian="secant", low=c.low, high=c.high, tol=c.tol, max_trials=MAX_TRIALS

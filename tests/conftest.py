@@ -13,3 +13,14 @@ def demo() -> tuple[np.ndarray, np.ndarray]:
     s = min_jerk(t)
     y = np.stack([s, 0.5 - 2.0 * s, 0.3 * np.sin(np.pi * t) ** 2], axis=1)
     return t, y
+
+
+def crash_after(run_dir, n_trials: int) -> None:
+    """Leaves a run directory as a crash after ``n_trials`` finished trials would: their lines in
+    trials.jsonl, and beyond them at most the next trial's arrays (written just before its line)."""
+    log = run_dir / "trials.jsonl"
+    lines = log.read_text().splitlines(keepends=True)
+    log.write_text("".join(lines[:n_trials]))
+    for npz in run_dir.glob("trial_*.npz"):
+        if int(npz.stem[6:]) > n_trials:
+            npz.unlink()

@@ -192,7 +192,7 @@ def test_conformance_catches_a_broken_adapter():
     with pytest.raises(AdapterConformanceError) as info:
         check_adapter(Broken(), line())
     msg = str(info.value)
-    assert "check rejects NaN" in msg and "declared signals" in msg
+    assert "check rejects NaN" in msg and "declared signal" in msg
 
 
 def test_load_adapter_by_name_and_unknown_names():
@@ -204,10 +204,55 @@ def test_load_adapter_by_name_and_unknown_names():
 def test_third_party_adapters_come_from_entry_points(monkeypatch):
     from importlib.metadata import EntryPoint
 
-    import dmprs.adapters.registry as registry
+    from dmprs.adapters import registry
 
     ep = EntryPoint(name="toy_arm", value="tests.test_adapters:Toy", group="dmprs.adapters")
     monkeypatch.setattr(registry, "entry_points", lambda group: [ep] if group == "dmprs.adapters" else [])
     monkeypatch.syspath_prepend(str(__import__("pathlib").Path(__file__).parent.parent))
     assert "toy_arm" in registry.available_adapters()
     assert type(load_adapter("toy_arm")).__name__ == "Toy"
+
+
+def test_timeout_holds_for_an_adapter_that_never_polls():
+    class Sleeper(Toy):
+        def _execute(self, trajectory):
+            time.sleep(0.3)  # ignores _interrupted()
+            return Outcome(Status.OK, signals={"s": 1.0}, executed=trajectory)
+
+    with Sleeper() as adapter:
+        outcome = adapter.execute(line(), timeout_s=0.05)
+        assert outcome.status is Status.TIMEOUT and "timeout_s = 0.05" in outcome.message
+        assert adapter.execute(line(), timeout_s=5.0).status is Status.OK
+        with pytest.raises(dmprs.InvalidInputError, match="timeout_s"):
+            adapter.execute(line(), timeout_s=-1)
+
+
+@pytest.mark.parametrize(
+    "signals, problem",
+    [
+        ({"s": float("nan")}, "non-finite"),
+        ({"s": np.array([1.0, np.inf])}, "non-finite"),
+        ({"s": "1.0"}, "not a real number"),
+        ({"s": None}, "not a real number"),
+        ({"s": True}, "not a real number"),
+        ({"s": 1.0, "t": 2.0}, "not declared"),
+        ({}, "missing"),
+    ],
+)
+def test_conformance_fails_bad_signals(signals, problem):
+    class BadSignals(Toy):
+        def _execute(self, trajectory):
+            return Outcome(Status.OK, signals=signals, executed=trajectory)
+
+    with pytest.raises(AdapterConformanceError, match=problem):
+        check_adapter(BadSignals(), line())
+
+
+def test_declared_labels_and_absent_nans_pass_conformance_undeclared_ones_fail():
+    from dmprs.adapters import SignalSpec
+
+    declared = (SignalSpec("s", "m"), SignalSpec("t0", "s", nan_if_absent=True), SignalSpec("r", "", kind="label"))
+    sp = spec(signals=declared)
+    assert sp.signal_problems({"s": 1.0, "t0": float("nan"), "r": "upright"}) == []
+    problems = sp.signal_problems({"s": float("nan"), "t0": float("inf"), "r": 3})
+    assert len(problems) == 3 and "not a label" in problems[2]

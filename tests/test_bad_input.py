@@ -175,7 +175,7 @@ def test_weights_goal_mismatch():
 
 
 def test_bad_constants(t, y):
-    with raises("alpha_z = -1.0 is invalid"):
+    with raises("alpha_z = -1 is invalid"):
         dmprs.DMP.fit(t, y, alpha_z=-1.0)
     with raises("alpha_x is nan"):
         dmprs.DMP.fit(t, y, alpha_x=float("nan"))

@@ -136,6 +136,8 @@ def test_serialization_batch_and_tau() -> None:
     batch = dmprs.rollout_batch([dmp, dmprs.DMP.fit(t, pose[:, :3], 20), slow], 0.001)
     assert batch[0] == dmp.rollout(0.001) and batch[2] == slow.rollout(0.001)
     assert isinstance(batch[1], dmprs.Trajectory)
+    for tr in (a, batch[2]):  # rollouts are immutable
+        assert not any(getattr(tr, n).flags.writeable for n in ("t", "position", "quaternion", "angular_velocity"))
     with pytest.raises(AttributeError):
         dmp.tau = 3.0  # type: ignore[misc]
 
@@ -217,3 +219,9 @@ def test_bad_goal_and_start_poses_are_refused() -> None:
         dmp.with_start([0, 0, 0, 1.0, 0, 0])
     with pytest.raises(dmprs.InvalidInputError, match=r"(?i)goal\[2\] is nan"):
         dmp.with_goal([0, 0, np.nan, 1.0, 0, 0, 0])
+
+
+def test_a_diverging_rollout_is_an_error_not_a_nan_trajectory() -> None:
+    dmp = dmprs.CartesianDMP.fit(*pose_demo(), 10)
+    with pytest.raises(dmprs.NumericalError, match="diverged"):
+        dmp.rollout(dt=0.2, duration=500.0)

@@ -1,5 +1,6 @@
 """dmprs.Database: records, the on-disk format, integrity checks and crash safety."""
 
+import hashlib
 import io
 import json
 import zipfile
@@ -52,7 +53,7 @@ def test_round_trip_is_bit_exact(db, tmp_path):
     back = dmprs.Database.load(tmp_path / "db")
     assert_same(db, back)
     manifest = json.loads((tmp_path / "db" / "manifest.json").read_text())
-    assert manifest["schema_version"] == dbmod.SCHEMA_VERSION
+    assert manifest["schema_version"] == 1  # joint-space databases stay readable by older dmprs
     assert manifest["query_units"] == ["l", "1"]
     assert all(len(e["sha256"]) == 64 for e in manifest["demos"])
 
@@ -65,7 +66,8 @@ def test_saving_again_replaces_and_cleans_up(db, tmp_path):
     smaller.save(path)
     assert_same(smaller, dmprs.Database.load(path))
     assert sorted(p.name for p in path.iterdir()) == sorted(
-        ["manifest.json"] + [e["file"] for e in json.loads((path / "manifest.json").read_text())["demos"]]
+        [".dmprs.lock", "manifest.json"]
+        + [e["file"] for e in json.loads((path / "manifest.json").read_text())["demos"]]
     )
 
 
@@ -188,7 +190,7 @@ def test_a_newer_schema_fails_clearly(db, tmp_path):
     manifest = json.loads(m.read_text())
     manifest["schema_version"] = dbmod.SCHEMA_VERSION + 1
     m.write_text(json.dumps(manifest))
-    with pytest.raises(DatabaseError, match=r"schema version 2 was written by a newer dmprs.*Upgrade"):
+    with pytest.raises(DatabaseError, match=r"schema version 3 was written by a newer dmprs.*Upgrade"):
         dmprs.Database.load(tmp_path / "db")
 
 
@@ -268,3 +270,75 @@ def test_nearest_selects_the_closest_demonstrations_in_order():
         db.nearest([0.6], 5)
     with pytest.raises(dmprs.InvalidInputError, match="query"):
         db.nearest([np.nan], 1)
+
+
+def _two_demo_db(scale: float = 1.0) -> dmprs.Database:
+    db = dmprs.Database(["q"])
+    t = np.linspace(0.0, 1.0, 30)
+    for q in (0.0, 1.0):
+        db.add([q], dmprs.Trajectory(t, scale * (1.0 + q) * t))
+    return db
+
+
+def _save_many(path: str, scale: float, n: int) -> None:
+    for _ in range(n):
+        _two_demo_db(scale).save(path)
+
+
+def test_concurrent_saves_serialize_and_readers_see_old_or_new(tmp_path):
+    import multiprocessing as mp
+
+    path = str(tmp_path / "db")
+    _two_demo_db(1.0).save(path)
+    ctx = mp.get_context("fork")
+    writers = [ctx.Process(target=_save_many, args=(path, s, 15)) for s in (1.0, 2.0, 3.0)]
+    for w in writers:
+        w.start()
+    loads = 0
+    while any(w.is_alive() for w in writers) or loads < 20:
+        db = dmprs.Database.load(path)  # never a DatabaseError: old or new, not a mix
+        scales = {float(d.trajectory.y[-1, 0]) for d in db}
+        assert scales in ({1.0, 2.0}, {2.0, 4.0}, {3.0, 6.0})
+        loads += 1
+    for w in writers:
+        w.join()
+        assert w.exitcode == 0
+    assert sorted(p.name for p in (tmp_path / "db").iterdir() if p.name.endswith(".tmp")) == []
+
+
+def test_save_keeps_a_users_file_named_like_a_demo_file(tmp_path):
+    mine = tmp_path / "db" / "demo_0123456789abcdef.npz"
+    mine.parent.mkdir()
+    mine.write_bytes(b"my own data")
+    _two_demo_db().save(tmp_path / "db")
+    _two_demo_db(2.0).save(tmp_path / "db")
+    assert mine.read_bytes() == b"my own data"
+
+
+def test_a_crafted_manifest_or_header_is_a_database_error(tmp_path):
+    import json as _json
+
+    path = tmp_path / "db"
+    _two_demo_db().save(path)
+    manifest = path / "manifest.json"
+    good = manifest.read_text()
+    manifest.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(DatabaseError, match="nested too deeply"):
+        dmprs.Database.load(path)
+    # An npy header claiming 1e12 elements, in a file whose checksum the manifest matches.
+    entries = _json.loads(good)
+    demo = path / entries["demos"][0]["file"]
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:
+        for key, arr in (("query", np.zeros(1)), ("t", np.zeros(3))):
+            b = io.BytesIO()
+            np.save(b, arr)
+            z.writestr(f"{key}.npy", b.getvalue())
+        header = b"{'descr': '<f8', 'fortran_order': False, 'shape': (1000000000000,), }"
+        header += b" " * (118 - len(header)) + b"\n"
+        z.writestr("y.npy", b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header)
+    demo.write_bytes(buf.getvalue())
+    entries["demos"][0]["sha256"] = hashlib.sha256(buf.getvalue()).hexdigest()
+    manifest.write_text(_json.dumps(entries))
+    with pytest.raises(DatabaseError, match=demo.name):
+        dmprs.Database.load(path)

@@ -194,9 +194,10 @@ def test_too_few_demos(method):
         dmprs.Generalizer(database([0.0]), method)
 
 
-def test_too_many_demos_for_linear():
-    with pytest.raises(InvalidInputError, match=r"at most n \+ 1 = 2 demonstrations.*lwr-gp"):
-        dmprs.Generalizer(database([0.0, 1.0, 2.0]), "linear")
+def test_more_than_n_plus_1_demos_make_linear_piecewise():
+    # tests/test_triangulation.py checks the triangulated path; here only that it is taken
+    gen = dmprs.Generalizer(database([0.0, 1.0, 2.0]), "linear")
+    assert gen.n_demos == 3 and type(gen._core).__name__ == "PiecewiseLinear"
 
 
 def test_collinear_queries_for_linear():

@@ -62,7 +62,7 @@ def test_ask_returns_float_arrays_and_accepts_floats():
 
 @pytest.mark.parametrize("mode", ["paper", "robust"])
 def test_golden_section_on_q_plus_0_3_sin_q(mode):
-    g = L.GoldenSection(1.0, 0.3, 1.8, mode=mode, tol=1e-3)
+    g = L.GoldenSection(1.0, low=0.3, high=1.8, mode=mode, tol=1e-3)
     run(g, sine_eps(1.0))
     assert g.converged
     assert g.best.q[0] == g.history[-1].q[0]  # the last executed query is the answer
@@ -70,8 +70,8 @@ def test_golden_section_on_q_plus_0_3_sin_q(mode):
 
 
 def test_root_finder_needs_fewer_trials_than_golden_section_on_a_smooth_map():
-    g = L.GoldenSection(1.0, 0.3, 1.8, mode="robust")
-    r = L.IllinoisRootFinder(1.0, 0.3, 1.8)
+    g = L.GoldenSection(1.0, low=0.3, high=1.8, mode="robust")
+    r = L.IllinoisRootFinder(1.0, low=0.3, high=1.8)
     assert run(r, sine_eps(1.0)) < run(g, sine_eps(1.0))
     assert r.converged and abs(r.best.q[0] - true_root(1.0)) < 1e-3 / 0.7
     lo, hi = r.bracket
@@ -86,7 +86,7 @@ def matchbox_like(q: np.ndarray) -> float:
 
 
 def test_discontinuous_map():
-    for learner in (L.GoldenSection(1.0, 0.5, 1.5), L.GoldenSection(1.0, 0.5, 1.5, "robust"), L.IllinoisRootFinder(1.0, 0.5, 1.5)):
+    for learner in (L.GoldenSection(1.0, low=0.5, high=1.5), L.GoldenSection(1.0, low=0.5, high=1.5, mode="robust"), L.IllinoisRootFinder(1.0, low=0.5, high=1.5)):
         run(learner, matchbox_like)
         assert learner.converged, learner
         assert 0.93 <= learner.best.q[0] <= 0.97
@@ -103,7 +103,7 @@ def test_noisy_measurements():
         def noisy(q):
             return 1.0 - (q[0] + 0.3 * np.sin(q[0])) + 0.003 * rng.standard_normal()
 
-        for learner in (L.GoldenSection(1.0, 0.3, 1.8, "robust", tol=0.01), L.IllinoisRootFinder(1.0, 0.3, 1.8, tol=0.01), L.ErrorLearning(1.0, tol=0.01)):
+        for learner in (L.GoldenSection(1.0, low=0.3, high=1.8, mode="robust", tol=0.01), L.IllinoisRootFinder(1.0, low=0.3, high=1.8, tol=0.01), L.ErrorLearning(1.0, tol=0.01)):
             run(learner, noisy)
             assert learner.status in ("converged", "bracketed")
             assert abs(learner.best.q[0] - root) < 0.04
@@ -117,9 +117,9 @@ def wrong_sign(q):
     "make",
     [
         lambda: L.ErrorLearning(1.2, low=0.0, high=3.0, max_trials=100),
-        lambda: L.GoldenSection(1.2, 0.5, 2.0, "robust", max_trials=100),
-        lambda: L.GoldenSection(1.2, 0.5, 2.0, "paper", max_trials=100),
-        lambda: L.IllinoisRootFinder(1.2, 0.5, 2.0, max_trials=100),
+        lambda: L.GoldenSection(1.2, low=0.5, high=2.0, mode="robust", max_trials=100),
+        lambda: L.GoldenSection(1.2, low=0.5, high=2.0, mode="paper", max_trials=100),
+        lambda: L.IllinoisRootFinder(1.2, low=0.5, high=2.0, max_trials=100),
     ],
 )
 def test_a_wrong_sign_convention_hits_a_bound_and_reports_it(make):
@@ -218,8 +218,8 @@ def test_pi2_terminal_only_without_projection_is_pi_bb():
 def query_learner(request):
     return {
         "error": lambda: L.ErrorLearning(0.5),
-        "golden": lambda: L.GoldenSection(0.5, 0.0, 1.0),
-        "root": lambda: L.IllinoisRootFinder(0.5, 0.0, 1.0),
+        "golden": lambda: L.GoldenSection(0.5, low=0.0, high=1.0),
+        "root": lambda: L.IllinoisRootFinder(0.5, low=0.0, high=1.0),
         "pg": lambda: L.PolicyGradient(0.5),
     }[request.param]()
 
@@ -257,7 +257,7 @@ def test_tell_of_a_query_that_was_not_asked(query_learner):
 @pytest.mark.parametrize("low, high", [(1.0, 1.0), (2.0, 1.0)])
 def test_low_not_below_high(cls, low, high):
     with pytest.raises(InvalidInputError, match="must be < high"):
-        cls(0.5, low, high)
+        cls(0.5, low=low, high=high)
 
 
 def test_error_learning_limits_and_parameters():
@@ -273,12 +273,12 @@ def test_error_learning_limits_and_parameters():
         L.ErrorLearning([0.0, 0.0], jacobian=np.zeros((2, 2)))
     with pytest.raises(InvalidInputError, match="gain has shape"):
         L.ErrorLearning([0.0, 0.0], gain=np.eye(3))
-    with pytest.raises(InvalidInputError, match="scale = 0.0 is invalid"):
+    with pytest.raises(InvalidInputError, match="scale = 0 is invalid"):
         L.ErrorLearning(0.0, scale=0.0)
     with pytest.raises(InvalidInputError, match="max_trials = 0"):
         L.ErrorLearning(0.0, max_trials=0)
     with pytest.raises(InvalidInputError, match="mode = 'fast'|mode = \"fast\""):
-        L.GoldenSection(0.5, 0.0, 1.0, mode="fast")
+        L.GoldenSection(0.5, low=0.0, high=1.0, mode="fast")
 
 
 def test_baseline_bad_input():
@@ -309,3 +309,77 @@ def test_policy_gradient_reports_a_root_beyond_its_limit():
     run(pg, sine_eps(1.0))  # root at 0.787 > high
     assert pg.status == "hit-bound" and "upper limit 0.5" in pg.status_detail
     assert pg.n_trials < 200
+
+
+# ---- one constructor shape ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("cls", [L.ErrorLearning, L.GoldenSection, L.IllinoisRootFinder, L.PolicyGradient])
+def test_every_query_learner_takes_q0_as_a_float_or_a_1d_array(cls):
+    a, b = cls(0.5, low=0.0, high=1.0), cls(np.array([0.5]), low=[0.0], high=np.array([1.0]))
+    np.testing.assert_array_equal(a.ask(), b.ask())
+    a.tell(a.ask(), 0.1)
+    b.tell(b.ask(), 0.1)
+    np.testing.assert_array_equal(a.ask(), b.ask())
+
+
+@pytest.mark.parametrize("cls", [L.GoldenSection, L.IllinoisRootFinder])
+def test_the_bracketing_learners_require_their_limits(cls):
+    with pytest.raises(InvalidInputError, match="low is required"):
+        cls(0.5, high=1.0)
+    with pytest.raises(InvalidInputError, match="high is required"):
+        cls(0.5, low=0.0)
+    with pytest.raises(InvalidInputError, match="q0 has 2 entries, expected 1 entry"):
+        cls([0.5, 0.5], low=0.0, high=1.0)
+
+
+def test_a_default_left_out_is_the_core_default():
+    # PolicyGradient's decay defaults to Spall's 0.602 in the core (alpha_m = alpha0/(m+1)^decay)
+    pg, explicit = L.PolicyGradient(1.0), L.PolicyGradient(1.0, decay=0.602, alpha0=0.5, delta=0.05)
+    for p in (pg, explicit):
+        run(p, lambda q: 1.0 - 2.0 * q[0])
+    assert [t.q.tolist() for t in pg.history] == [t.q.tolist() for t in explicit.history]
+    assert L.GoldenSection(0.5, low=0.0, high=2.0).bracket == (0.0, 2.0)
+
+
+def test_out_of_range_counts_are_clear_errors():
+    with pytest.raises(InvalidInputError, match="max_trials = 1180591620717411303424 is invalid"):
+        L.ErrorLearning(0.5, max_trials=2**70)
+    with pytest.raises(InvalidInputError, match="max_trials must be an integer"):
+        L.GoldenSection(0.5, low=0.0, high=1.0, max_trials=2.5)
+    with pytest.raises(InvalidInputError, match="tol must be a real number"):
+        L.IllinoisRootFinder(0.5, low=0.0, high=1.0, tol="abc")
+    with pytest.raises(InvalidInputError, match="mode must be a string"):
+        L.GoldenSection(0.5, low=0.0, high=1.0, mode=5)
+
+
+def test_a_bracket_whose_width_overflows_is_named():
+    with pytest.raises(InvalidInputError, match="width overflows") as info:
+        L.GoldenSection(0.5, low=-1e308, high=1e308)
+    assert "q_tol" not in str(info.value)
+
+
+# ---- never a non-finite query (issue 13) ------------------------------------------------------
+
+
+def test_a_learner_never_asks_a_non_finite_query():
+    p = L.PoWER(np.zeros(3), 0.3)
+    p.tell(p.ask(), 1e308)  # overflows the return-weighted mean
+    assert p.status == "diverged" and p.done
+    with pytest.raises(LearnerStateError, match="diverged"):
+        p.ask()
+    with pytest.raises(InvalidInputError, match="sigma = 1e200 .* overflows"):
+        L.PoWER(np.zeros(3), 1e200)
+    el = L.ErrorLearning(1.0, gain=1e308)
+    el.tell(el.ask(), 10.0)
+    assert el.status == "diverged"
+    pg = L.PolicyGradient(0.0, delta=1e300)
+    run(pg, lambda q: 0.5 - q[0])
+    assert pg.status == "diverged"
+    assert all(np.isfinite(t.q).all() for t in pg.history)
+
+
+def test_pi2_refuses_sizes_that_cannot_be_meant():
+    for n_steps in (2**40, 10**9):
+        with pytest.raises(InvalidInputError, match="n_steps x n_basis"):
+            L.PI2(np.zeros(5), 0.1, n_steps=n_steps)

@@ -211,3 +211,44 @@ def test_learned_movements_grow_the_database_and_speed_up_nearby_queries():
     assert before.converged and after.converged
     assert abs(after.trials[0].eps[0]) < abs(before.trials[0].eps[0]) / 3
     assert after.n_trials < before.n_trials, (before.n_trials, after.n_trials)
+
+
+def _analytic_run(tmp_path, trials=3):
+    from click.testing import CliRunner
+
+    from dmprs.cli import main
+
+    CliRunner().invoke(main, ["learn", "analytic", "--log-dir", str(tmp_path), "--max-trials", str(trials),
+                              "--noise", "0.05", "--desired", "1.2"])
+    return tmp_path
+
+
+def test_damage_to_a_run_log_is_reported_not_resumed_over(tmp_path):
+    from dmprs.runlog import RunLog, RunLogError
+
+    path = _analytic_run(tmp_path / "a")
+    trials, _ = RunLog(path).read()
+    assert len(trials) >= 2
+    (path / "trial_0001.npz").unlink()
+    with pytest.raises(RunLogError, match=r"trial_0001\.npz is missing"):
+        RunLog(path).read()
+    path = _analytic_run(tmp_path / "b")
+    (path / "trials.jsonl").write_text("")
+    with pytest.raises(RunLogError, match=r"lists 0 trial\(s\) but the directory also holds trial_0001"):
+        RunLog(path).read()
+
+
+def test_the_trial_log_is_strict_json_and_reads_back_non_finite_values(tmp_path):
+    import json
+
+    import numpy as np
+
+    from dmprs.runlog import RunLog, TrialRecord
+
+    log = RunLog.create(tmp_path, {"task": "t"})
+    record = TrialRecord(0, np.array([np.nan]), "ok", eps=np.array([np.inf]), signals={"s": -np.inf})
+    log.append(record, None, None)
+    line = (tmp_path / "trials.jsonl").read_text()
+    json.loads(line, parse_constant=lambda c: pytest.fail(f"bare {c} in the log"))
+    back = RunLog(tmp_path).read()[0][0]
+    assert np.isnan(back.query[0]) and back.eps[0] == np.inf and back.signals["s"] == -np.inf

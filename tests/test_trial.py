@@ -13,6 +13,7 @@ from dmprs.baselines import BaselineSpec, run_baseline
 from dmprs.errors import RunLogError
 from dmprs.loop import learn
 from dmprs.runlog import RunLog
+from tests.conftest import crash_after
 
 
 def setup():
@@ -106,7 +107,7 @@ def test_a_database_that_refuses_the_success_does_not_lose_the_run():
     s = setup()
 
     class Refusing:
-        def add(self, query, trajectory):
+        def add(self, query, trajectory, *, on_duplicate="refuse"):
             from dmprs.errors import DatabaseError
 
             raise DatabaseError("the database is read-only")
@@ -131,8 +132,7 @@ def test_baselines_log_every_rollout_and_resume_identically(method, tmp_path):
     # cut the log after a few rollouts (as a crash would) and resume: the same run, bit for bit
     cut = tmp_path / "cut"
     run_baseline(spec, log_dir=cut)
-    lines = (cut / "trials.jsonl").read_text().splitlines(keepends=True)
-    (cut / "trials.jsonl").write_text("".join(lines[:4]))
+    crash_after(cut, 4)
     assert run_baseline(spec, log_dir=cut, resume=True) == reference
 
 

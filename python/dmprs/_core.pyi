@@ -1,16 +1,38 @@
 # Type stubs for the Rust extension dmprs._core (crates/py-bindings). The documented API is in
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
-from typing import Any, final
+from typing import TypeAlias, final
 
 import numpy as np
 from numpy.typing import NDArray
 
+__all__ = [
+    "PI2",
+    "CartesianDmp",
+    "CartesianGeneralizer",
+    "Dmp",
+    "ErrorLearning",
+    "GaussianProcess",
+    "Generalizer",
+    "GoldenSection",
+    "IllinoisRootFinder",
+    "MatchboxConfig",
+    "PoWER",
+    "PolicyGradient",
+    "__version__",
+    "matchbox_check",
+    "matchbox_simulate",
+    "matchbox_simulate_batch",
+    "rollout_batch",
+    "rollout_batch_cartesian",
+]
+
 __version__: str
 
-_TrajectoryArrays = tuple[
+_TrajectoryArrays: TypeAlias = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
 ]
 
+@final
 class Dmp:
     def __new__(
         cls,
@@ -76,7 +98,7 @@ def rollout_batch(
     rest_tol: float = 1e-4,
 ) -> list[_TrajectoryArrays]: ...
 
-_CartesianArrays = tuple[
+_CartesianArrays: TypeAlias = tuple[
     NDArray[np.float64],
     NDArray[np.float64],
     NDArray[np.float64],
@@ -157,72 +179,30 @@ def rollout_batch_cartesian(
     rest_tol: float = 1e-4,
 ) -> list[_CartesianArrays]: ...
 
-class Learner:
-    """Every ask/tell learner of crates/learner; built and documented by dmprs.learners."""
+# The ask/tell learners of crates/learners; built and documented by dmprs.learners. An option
+# left at None takes the default of the core's config struct.
+_Trial: TypeAlias = tuple[NDArray[np.float64], NDArray[np.float64], float]
+_Vector: TypeAlias = NDArray[np.float64]
 
-    @staticmethod
-    def error_learning(
-        q0: NDArray[np.float64],
-        gain: NDArray[np.float64],
-        weighted: bool,
-        scale: float,
-        jacobian: str,
-        jacobian_matrix: NDArray[np.float64] | None,
-        delta: float,
-        low: NDArray[np.float64] | None,
-        high: NDArray[np.float64] | None,
-        tol: float,
-        max_trials: int,
-        pin_limit: int,
-    ) -> Learner: ...
-    @staticmethod
-    def golden(
-        q0: float, low: float, high: float, mode: str, tol: float, q_tol: float, max_trials: int, max_expansions: int
-    ) -> Learner: ...
-    @staticmethod
-    def root_finder(q0: float, low: float, high: float, tol: float, q_tol: float, max_trials: int) -> Learner: ...
-    @staticmethod
-    def policy_gradient(
-        q0: NDArray[np.float64],
-        alpha0: float,
-        decay: float,
-        delta: float,
-        scale: float,
-        evaluate_center: bool,
-        low: NDArray[np.float64] | None,
-        high: NDArray[np.float64] | None,
-        tol: float,
-        max_trials: int,
-        pin_limit: int,
-    ) -> Learner: ...
-    @staticmethod
-    def power(
-        theta0: NDArray[np.float64],
-        sigma: NDArray[np.float64],
-        n_best: int,
-        adapt_variance: bool,
-        variance_window: int,
-        target_return: float | None,
-        max_trials: int,
-        seed: int,
-    ) -> Learner: ...
-    @staticmethod
-    def pi2(
-        theta0: NDArray[np.float64],
-        sigma: NDArray[np.float64],
-        n_rollouts: int,
-        n_reuse: int,
-        h: float,
-        n_updates: int,
-        n_dof: int,
-        n_steps: int,
-        alpha_x: float,
-        width_factor: float,
-        projection: bool,
-        cost_tol: float | None,
-        max_trials: int,
-        seed: int,
-    ) -> Learner: ...
+@final
+class ErrorLearning:
+    def __new__(
+        cls,
+        q0: _Vector,
+        *,
+        low: _Vector | None = None,
+        high: _Vector | None = None,
+        gain: float | NDArray[np.float64] | None = None,
+        weighted: bool | None = None,
+        scale: float | None = None,
+        jacobian: str | float | NDArray[np.float64] | None = None,
+        delta: float | None = None,
+        tol: float | None = None,
+        max_trials: int | None = None,
+        pin_limit: int | None = None,
+    ) -> ErrorLearning: ...
+    @property
+    def jacobian(self) -> NDArray[np.float64]: ...
     def ask(self) -> NDArray[np.float64]: ...
     def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
     @property
@@ -236,11 +216,187 @@ class Learner:
     @property
     def n_told(self) -> int: ...
     @property
-    def best(self) -> tuple[NDArray[np.float64], NDArray[np.float64], float] | None: ...
+    def best(self) -> _Trial | None: ...
     @property
-    def history(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], float]]: ...
-    def state(self) -> dict[str, Any]: ...
+    def history(self) -> list[_Trial]: ...
 
+@final
+class GoldenSection:
+    def __new__(
+        cls,
+        q0: _Vector,
+        *,
+        low: _Vector | None = None,
+        high: _Vector | None = None,
+        mode: str | None = None,
+        tol: float | None = None,
+        q_tol: float | None = None,
+        max_trials: int | None = None,
+        max_expansions: int | None = None,
+    ) -> GoldenSection: ...
+    @property
+    def bracket(self) -> tuple[float, float]: ...
+    def ask(self) -> NDArray[np.float64]: ...
+    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def n_told(self) -> int: ...
+    @property
+    def best(self) -> _Trial | None: ...
+    @property
+    def history(self) -> list[_Trial]: ...
+
+@final
+class IllinoisRootFinder:
+    def __new__(
+        cls,
+        q0: _Vector,
+        *,
+        low: _Vector | None = None,
+        high: _Vector | None = None,
+        tol: float | None = None,
+        q_tol: float | None = None,
+        max_trials: int | None = None,
+    ) -> IllinoisRootFinder: ...
+    @property
+    def bracket(self) -> tuple[float, float]: ...
+    def ask(self) -> NDArray[np.float64]: ...
+    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def n_told(self) -> int: ...
+    @property
+    def best(self) -> _Trial | None: ...
+    @property
+    def history(self) -> list[_Trial]: ...
+
+@final
+class PolicyGradient:
+    def __new__(
+        cls,
+        q0: _Vector,
+        *,
+        low: _Vector | None = None,
+        high: _Vector | None = None,
+        alpha0: float | None = None,
+        decay: float | None = None,
+        delta: float | None = None,
+        scale: float | None = None,
+        evaluate_center: bool | None = None,
+        tol: float | None = None,
+        max_trials: int | None = None,
+        pin_limit: int | None = None,
+    ) -> PolicyGradient: ...
+    @property
+    def center(self) -> NDArray[np.float64]: ...
+    def ask(self) -> NDArray[np.float64]: ...
+    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def n_told(self) -> int: ...
+    @property
+    def best(self) -> _Trial | None: ...
+    @property
+    def history(self) -> list[_Trial]: ...
+
+@final
+class PoWER:
+    def __new__(
+        cls,
+        theta0: _Vector,
+        sigma: _Vector,
+        *,
+        seed: int | None = None,
+        n_best: int | None = None,
+        adapt_variance: bool | None = None,
+        variance_window: int | None = None,
+        target_return: float | None = None,
+        max_trials: int | None = None,
+    ) -> PoWER: ...
+    @property
+    def mean(self) -> NDArray[np.float64]: ...
+    @property
+    def variance(self) -> NDArray[np.float64]: ...
+    def ask(self) -> NDArray[np.float64]: ...
+    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def n_told(self) -> int: ...
+    @property
+    def best(self) -> _Trial | None: ...
+    @property
+    def history(self) -> list[_Trial]: ...
+
+@final
+class PI2:
+    def __new__(
+        cls,
+        theta0: _Vector,
+        sigma: _Vector,
+        *,
+        seed: int | None = None,
+        n_rollouts: int | None = None,
+        n_reuse: int | None = None,
+        h: float | None = None,
+        n_updates: int | None = None,
+        n_dof: int | None = None,
+        n_steps: int | None = None,
+        alpha_x: float | None = None,
+        width_factor: float | None = None,
+        projection: bool | None = None,
+        cost_tol: float | None = None,
+        max_trials: int | None = None,
+    ) -> PI2: ...
+    @property
+    def theta(self) -> NDArray[np.float64]: ...
+    @property
+    def n_updates_done(self) -> int: ...
+    def ask(self) -> NDArray[np.float64]: ...
+    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def n_told(self) -> int: ...
+    @property
+    def best(self) -> _Trial | None: ...
+    @property
+    def history(self) -> list[_Trial]: ...
+
+@final
 class MatchboxConfig:
     def __new__(
         cls,
@@ -271,6 +427,7 @@ def matchbox_simulate_batch(
     paths: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]],
     config: MatchboxConfig,
 ) -> list[dict[str, object]]: ...
+@final
 class GaussianProcess:
     @staticmethod
     def fit(
@@ -308,10 +465,11 @@ class GaussianProcess:
     @property
     def n_train(self) -> int: ...
 
-_DemoArrays = tuple[
+_DemoArrays: TypeAlias = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None
 ]
 
+@final
 class Generalizer:
     def __new__(
         cls,
@@ -337,6 +495,59 @@ class Generalizer:
     def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]: ...
     @property
     def demo_dmps(self) -> list[Dmp]: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def n_query(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_demos(self) -> int: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def n_parameters(self) -> int: ...
+    @property
+    def tau_bounds(self) -> tuple[float, float]: ...
+
+_PoseDemoArrays: TypeAlias = tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+    NDArray[np.float64] | None,
+]
+
+@final
+class CartesianGeneralizer:
+    """crates/dmp-core/src/cartesian_generalize.rs; built and documented by dmprs.Generalizer.
+    Demos are (t, pose, velocity, acceleration, angular_velocity, angular_acceleration)."""
+
+    def __new__(
+        cls,
+        queries: NDArray[np.float64],
+        demos: list[_PoseDemoArrays],
+        method: str,
+        *,
+        n_basis: int,
+        alpha_z: float,
+        beta_z: float,
+        alpha_x: float,
+        width_factor: float,
+        kernel: str,
+        bandwidth: float,
+        ridge: float,
+        interpolate: bool,
+        gp_noise: float,
+        gp_optimize: bool | None,
+        gp_restarts: int,
+    ) -> CartesianGeneralizer: ...
+    def predict(self, q: NDArray[np.float64]) -> CartesianDmp: ...
+    def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]: ...
+    def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]: ...
+    @property
+    def demo_dmps(self) -> list[CartesianDmp]: ...
     @property
     def method(self) -> str: ...
     @property

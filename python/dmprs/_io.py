@@ -7,13 +7,19 @@ one complete line followed by flush and fsync.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
+
+try:
+    import fcntl
+except ImportError:  # Windows: no advisory locks; concurrent saves there are not serialized
+    fcntl = None  # type: ignore[assignment]
 
 import numpy as np
 
@@ -30,6 +36,32 @@ def _fsync_dir(path: Path) -> None:
         pass
     finally:
         os.close(fd)
+
+
+LOCK_FILE = ".dmprs.lock"
+
+
+@contextlib.contextmanager
+def directory_lock(directory: Path, *, shared: bool) -> Iterator[None]:
+    """Holds an advisory lock (``flock``) on ``directory/.dmprs.lock`` for the ``with`` block:
+    exclusive for a writer, shared for readers, so concurrent saves into one directory take turns
+    and a reader sees the files of one save, never a mix of two. Where the lock file cannot be
+    created (a read-only directory: nobody can be writing there) it reads without one."""
+    if fcntl is None:
+        yield
+        return
+    try:
+        fd = os.open(Path(directory) / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        if not shared:
+            raise
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH if shared else fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def write_atomic(path: Path, data: bytes) -> None:
@@ -60,9 +92,30 @@ def write_npz_atomic(path: Path, arrays: Mapping[str, Any]) -> bytes:
     return data
 
 
+_NON_FINITE = {"NaN": float("nan"), "Infinity": float("inf"), "-Infinity": float("-inf")}
+
+
+def strict_json(value: Any) -> Any:
+    """``value`` with every NaN or infinity replaced by the string ``"NaN"``, ``"Infinity"`` or
+    ``"-Infinity"``: strict JSON parsers reject the bare tokens Python writes for them."""
+    if isinstance(value, float) and not np.isfinite(value):
+        return "NaN" if np.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, Mapping):
+        return {k: strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [strict_json(v) for v in value]
+    return value
+
+
+def float_from_json(value: Any) -> Any:
+    """Inverse of :func:`strict_json` for one number: the three strings back to floats."""
+    return _NON_FINITE.get(value, value) if isinstance(value, str) else value
+
+
 def append_jsonl(path: Path, record: Mapping[str, Any]) -> None:
-    """Appends one JSON object as one line and forces it to disk."""
-    line = json.dumps(record, separators=(",", ":"), allow_nan=True) + "\n"
+    """Appends one JSON object as one line (strict JSON: see :func:`strict_json`) and forces it
+    to disk."""
+    line = json.dumps(strict_json(record), separators=(",", ":"), allow_nan=False) + "\n"
     with open(path, "a", encoding="utf-8") as f:
         f.write(line)
         f.flush()

@@ -1,11 +1,6 @@
 """Learning in the full DMP weight space: the baselines the paper cites (PoWER, PI²) but
-<<<<<<< HEAD
 reports no numbers for (docs/method.md §7). They start from the same first trial as error
 learning, theta0 = the weights of G(q0), and every executed rollout counts as a trial.
-=======
-reports no numbers for (docs/method.md §7). They start from the same first trial as error learning,
-theta0 = the weights of G(q0), and every executed rollout counts as a trial.
->>>>>>> docs
 
 The return is ``R = exp(-(eps / scale)^2)`` (PoWER, maximized) or the terminal cost
 ``(eps / scale)^2`` (PI², minimized), with the task's signed error eps (docs/method.md §7.1). A
@@ -48,7 +43,7 @@ class BaselineSpec:
     """One baseline run: which experiment, which method, its exploration and seed."""
 
     experiment: str
-    method: str  # "power" | "pi2"
+    method: str  # "power" | "pi2" | "cma"
     seed: int
     budget: int = 200
     sigma_frac: float = 0.05  # sigma = sigma_frac x max|w| of each DOF (docs/method.md §7.2)
@@ -84,6 +79,13 @@ def _pi2(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
                alpha_x=dmp0.alpha_x, width_factor=dmp0.width_factor)
 
 
+def _cma(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
+    from dmprs.cmaes import CMAES
+
+    # sigma per weight as PoWER's exploration; the cost of PI²; theta0 executed first, as PoWER
+    return CMAES(dmp0.weights.ravel(), sigma, seed=spec.seed, max_trials=spec.budget, feedback="cost")
+
+
 METHODS = {
     "power": _Method(
         "PoWER", _power,
@@ -95,6 +97,10 @@ METHODS = {
         theta0_first=False,
         # PI2 asks its mean theta (noiseless) for the evaluation rollout of each update
         evaluation=lambda learner, theta: bool(np.array_equal(theta, learner.theta))),  # type: ignore[attr-defined]
+    "cma": _Method(
+        "CMA-ES", _cma,
+        feedback=lambda eps, scale: WORST_COST if eps is None else (eps / scale) ** 2,
+        theta0_first=True, evaluation=lambda learner, theta: True),
 }
 
 

@@ -10,8 +10,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
-from dmprs._core import CartesianDmp as _CoreDmp
 from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs._core import CartesianDmp as _CoreDmp
 from dmprs.dmp import _constants, _rollout_options
 from dmprs.errors import InvalidInputError
 from dmprs.trajectory import CartesianTrajectory

@@ -46,11 +46,12 @@ def main() -> None:
 @click.argument("task")
 @click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root, pg; pouring also fixed (default: the paper's choice for the task)")
 @click.option("--desired", type=float, default=None, help="desired query (task units)")
-@click.option("--max-trials", type=int, default=20, show_default=True)
+@click.option("--max-trials", type=click.IntRange(min=1, max=10**6), default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")
 @click.option("--log-dir", type=click.Path(path_type=Path), default=None, help="run directory for the trial log")
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--noise", type=float, default=None, help="measurement noise (analytic task)")
+@click.option("--noise", type=click.FloatRange(min=0.0, max=1e6), default=None,
+              help="measurement noise (analytic task)")
 @click.option("--volume", type=float, default=None, help="bottle volume in litres (pouring)")
 @click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
 def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
@@ -71,9 +72,26 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
     sys.exit(0 if result.converged else 1)
 
 
+_MISSING = object()
+
+
+def _field(meta: dict[str, Any], name: str, kind: Any, where: Path, default: Any = _MISSING) -> Any:
+    """``meta[name]`` if it has the type ``kind`` (booleans are not numbers here), else an error
+    naming the file and the field; ``default`` when it is absent (or null, for optional ones)."""
+    value = meta.get(name, _MISSING)
+    if value is _MISSING or (value is None and default is not _MISSING):
+        if default is _MISSING:
+            raise DmprsError(f"{where}: the field {name!r} is missing")
+        return default
+    if isinstance(value, bool) or not isinstance(value, kind):
+        want = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
+        raise DmprsError(f"{where}: the field {name!r} is {value!r:.60}, expected {want}")
+    return value
+
+
 @main.command("resume")
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--max-trials", type=int, default=None, help="raise the trial cap of the run")
+@click.option("--max-trials", type=click.IntRange(min=1), default=None, help="raise the trial cap of the run")
 def resume_cmd(run: Path, max_trials: int | None) -> None:
     """Continue the run logged in RUN where it stopped."""
     from dmprs import experiments
@@ -83,21 +101,52 @@ def resume_cmd(run: Path, max_trials: int | None) -> None:
     console = _console()
     try:
         meta = RunLog(run).meta()
+        where = run / "run.json"
         if "experiment" not in meta:
-            raise DmprsError(f"{run / 'run.json'} was not written by 'dmprs learn': resume it from Python")
-        setup = experiments.SETUPS[meta["experiment"]](**meta.get("setup_options", {}))
-        learner = setup.make_learner(meta["learner_name"], **meta.get("learner_options", {}))
+            raise DmprsError(f"{where} was not written by 'dmprs learn': resume it from Python")
+        experiment = _field(meta, "experiment", str, where)
+        if experiment not in experiments.SETUPS:
+            raise DmprsError(f"{where}: experiment {experiment!r} is unknown; "
+                             f"known: {', '.join(sorted(experiments.SETUPS))}")
+        setup_options = _field(meta, "setup_options", dict, where, {})
+        learner_options = _field(meta, "learner_options", dict, where, {})
+        learner_name = _field(meta, "learner_name", str, where)
+        logged_cap = _field(meta, "max_trials", int, where)
+        tol = _field(meta, "tol", (int, float), where, None)
+        seed = _field(meta, "seed", int, where, 0)
+        try:
+            setup = experiments.SETUPS[experiment](**setup_options)
+        except TypeError as exc:
+            raise DmprsError(f"{where}: setup_options {setup_options!r} do not fit {experiment!r} ({exc})") from None
+        try:
+            learner = setup.make_learner(learner_name, **learner_options)
+        except TypeError as exc:
+            raise DmprsError(f"{where}: learner_options do not fit {learner_name!r} ({exc})") from None
         result = learn(setup.task, setup.generalizer, setup.desired_query, learner,
-                       max_trials=max_trials or meta["max_trials"], tol=meta.get("tol"),
-                       log_dir=run, resume=True, seed=meta.get("seed", 0),
-                       on_trial=_progress(console))
+                       max_trials=logged_cap if max_trials is None else max_trials, tol=tol,
+                       log_dir=run, resume=True, seed=seed, on_trial=_progress(console))
     except DmprsError as exc:
         raise click.ClickException(str(exc)) from None
     _report(console, result)
     sys.exit(0 if result.converged else 1)
 
 
-@main.command("demos")
+class _RecordByDefault(click.Group):
+    """``dmprs demos TASK`` still records TASK's demonstrations: a first word that is not a
+    subcommand is taken as ``record``'s argument."""
+
+    def resolve_command(self, ctx: click.Context, args: list[str]) -> Any:
+        if args and args[0] not in self.commands and not args[0].startswith("-"):
+            args = ["record", *args]
+        return super().resolve_command(ctx, args)
+
+
+@main.group("demos", cls=_RecordByDefault)
+def demos_group() -> None:
+    """Demonstration databases: record a task's scripted ones, or import your own."""
+
+
+@demos_group.command("record")
 @click.argument("task")
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="database directory to write")
 @click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
@@ -115,9 +164,74 @@ def demos_cmd(task: str, out: Path, demos: str | None) -> None:
     click.echo(f"{len(setup.database)} demonstrations of {task} written to {out}")
 
 
+def _ranges(text: str | None) -> list[tuple[float, float]] | None:
+    if text is None:
+        return None
+    try:
+        return [(float(a), float(b)) for a, b in (part.split(":") for part in text.split(","))]
+    except ValueError:
+        raise click.BadParameter(f"{text!r}: expected START:STOP[,START:STOP...] in seconds") from None
+
+
+def _names(text: str | None) -> list[str] | None:
+    return None if text is None else [n.strip() for n in text.split(",") if n.strip()]
+
+
+@demos_group.command("import")
+@click.argument("sources", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="database directory to write")
+@click.option("--queries", type=click.Path(path_type=Path), default=None,
+              help="CSV or JSON table: a 'demo' column naming each demonstration, one column per query dimension")
+@click.option("--query-field", "query_fields", default=None,
+              help="take the query from these label fields instead (comma-separated; LeRobot episode fields, npz scalars)")
+@click.option("--units", default=None, help="units of the query dimensions (comma-separated)")
+@click.option("--format", "fmt", type=click.Choice(["auto", "rosbag", "lerobot", "csv", "npz"]), default="auto",
+              show_default=True)
+@click.option("--topic", default="/joint_states", show_default=True, help="sensor_msgs/JointState topic (bags)")
+@click.option("--joints", default=None, help="joints to keep, in order (comma-separated; bags)")
+@click.option("--pose-topic", default=None, help="read poses from this geometry_msgs/PoseStamped topic instead (bags)")
+@click.option("--tf", "tf_frames", default=None, help="read poses of CHILD in FRAME from TF instead, as FRAME:CHILD (bags)")
+@click.option("--column", default="observation.state", show_default=True, help="frame column (LeRobot)")
+@click.option("--dims", default=None, help="components of the column to keep, by name (LeRobot)")
+@click.option("--time-column", default="t", show_default=True, help="time column (CSV)")
+@click.option("--ranges", default=None, help="cut each recording at START:STOP,... (s of its own clock)")
+@click.option("--rest-speed", type=float, default=None, help="cut each recording where its speed falls below this")
+@click.option("--rest-angular-speed", type=float, default=0.05, show_default=True,
+              help="rad/s; with poses, a rest also needs the angular speed below this")
+@click.option("--rate", type=float, default=None, help="resample every demonstration at this rate (Hz)")
+def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None, query_fields: str | None,
+                     units: str | None, fmt: str, topic: str, joints: str | None, pose_topic: str | None,
+                     tf_frames: str | None, column: str, dims: str | None, time_column: str,
+                     ranges: str | None, rest_speed: float | None, rest_angular_speed: float,
+                     rate: float | None) -> None:
+    """Build a database from SOURCES: ROS bags, LeRobot datasets, CSV or npz files."""
+    from dmprs.io.importer import build_database, load_demos
+
+    tf = None
+    if tf_frames is not None:
+        frame, _, child = tf_frames.partition(":")
+        if not frame or not child:
+            raise click.BadParameter(f"{tf_frames!r}: expected FRAME:CHILD", param_hint="--tf")
+        tf = (frame, child)
+    try:
+        demos = load_demos(sources, format=fmt, topic=topic, joints=_names(joints), column=column,
+                           dims=_names(dims), time_column=time_column, ranges=_ranges(ranges),
+                           rest_speed=rest_speed, rest_angular_speed=rest_angular_speed, rate=rate,
+                           pose_topic=pose_topic, tf=tf)
+        db = build_database(demos, queries=queries, query_fields=_names(query_fields), query_units=_names(units))
+        db.save(out)
+    except DmprsError as exc:
+        raise click.ClickException(str(exc)) from None
+    labels = [d.label or "" for d in db]
+    shown = ", ".join(labels[:8]) + (f", ... {labels[-1]}" if len(labels) > 8 else "")
+    click.echo(f"{len(db)} demonstrations ({shown}) written to {out}")
+
+
 @main.command("plot")
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--out", type=click.Path(path_type=Path), default=None, help="PNG path (default RUN/learning.png)")
+@click.option("--out", type=click.Path(path_type=Path), default=None,
+              help="image file (.png, .pdf, .svg, ...) or an existing folder to write learning.png into "
+                   "(default RUN/learning.png)")
 def plot_cmd(run: Path, out: Path | None) -> None:
     """Plot error and query per trial of RUN (like the paper's Figs. 4 and 9)."""
     from dmprs.plots import plot_run

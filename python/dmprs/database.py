@@ -5,7 +5,9 @@ On disk a database is a directory::
 
     manifest.json          format, schema version, query names and units, and per demo its
                            file, sha256, label and metadata
-    demo_<sha256[:16]>.npz one per demo: query, t, y and optionally yd, ydd (float64)
+    demo_<sha256[:16]>.npz one per demo: query, t, y and optionally yd, ydd (float64); for a pose
+                           demonstration query, t, position, quaternion and optionally
+                           velocity, angular_velocity, acceleration, angular_acceleration
 
 Saving never leaves a half-written database: every file is
 written to a temporary file in the same directory, flushed, fsync'ed and renamed into place; the
@@ -35,27 +37,35 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_count, as_query
-from dmprs._io import write_atomic
+from dmprs._io import LOCK_FILE, directory_lock, write_atomic
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = ["Database", "Demo", "SCHEMA_VERSION"]
 
-#: The schema this version writes and the newest it reads.
-SCHEMA_VERSION = 1
+#: The newest schema this version reads and writes. Schema 2 adds pose demonstrations; a
+#: database of joint-space demonstrations is still written as schema 1, so older dmprs read it.
+SCHEMA_VERSION = 2
+_POSE_SCHEMA = 2
 _FORMAT = "dmprs.Database"
 _MANIFEST = "manifest.json"
 _DEMO_FILE = re.compile(r"^demo_[0-9a-f]{16}\.npz$")
 _ARRAY_KEYS = {"query", "t", "y", "yd", "ydd"}
+_POSE_KEYS = {
+    "query", "t", "position", "quaternion", "velocity", "angular_velocity", "acceleration",
+    "angular_acceleration",
+}
+#: what :meth:`Database.add` can do with a query already present
+DUPLICATE_POLICIES = ("refuse", "replace", "keep")
 
 
 @dataclass(frozen=True, eq=False)
 class Demo:
-    """One demonstration: its task ``query`` (n,), its ``trajectory``, an optional ``label`` and
-    JSON-safe ``metadata``."""
+    """One demonstration: its task ``query`` (n,), its ``trajectory`` (joint space, or a pose
+    trajectory), an optional ``label`` and JSON-safe ``metadata``."""
 
     query: NDArray[np.float64]
-    trajectory: Trajectory
+    trajectory: Trajectory | CartesianTrajectory
     label: str | None = None
     metadata: Mapping[str, Any] = field(default_factory=dict)
 
@@ -77,8 +87,10 @@ class Database:
     """Demonstrations ``(query, trajectory)`` with named, unit-labelled query dimensions.
 
     ``Database(query_names=("bottle_volume",), query_units=("l",))``: the query of every demo has
-    ``len(query_names)`` entries. All demos must have the same number of DOFs and distinct
-    queries (a generalizer could not tell two demos at the same query apart).
+    ``len(query_names)`` entries. All demos must have the same number of DOFs. A query that is
+    already present is handled by :meth:`add`'s ``on_duplicate`` policy. The demos are either all
+    joint-space :class:`~dmprs.Trajectory` s or all pose :class:`~dmprs.CartesianTrajectory` s
+    (then :attr:`is_cartesian`).
     """
 
     def __init__(self, query_names: Sequence[str], query_units: Sequence[str] | None = None) -> None:
@@ -114,34 +126,63 @@ class Database:
         """DOFs of the trajectories (None while empty)."""
         return self._demos[0].trajectory.n_dof if self._demos else None
 
+    @property
+    def is_cartesian(self) -> bool:
+        """True when the demonstrations are pose trajectories (False while empty)."""
+        return bool(self._demos) and isinstance(self._demos[0].trajectory, CartesianTrajectory)
+
     def _check_query(self, query: ArrayLike) -> NDArray[np.float64]:
         return as_query(query, "query", self._names)
 
     def add(
         self,
         query: ArrayLike,
-        trajectory: Trajectory,
+        trajectory: Trajectory | CartesianTrajectory,
         *,
         label: str | None = None,
         metadata: Mapping[str, Any] | None = None,
+        on_duplicate: str = "refuse",
     ) -> Demo:
-        """Appends a demonstration and returns its record. ``metadata`` must be JSON-serializable."""
-        q = self._check_query(query)
-        if not isinstance(trajectory, Trajectory):
+        """Appends a demonstration and returns its record. ``metadata`` must be JSON-serializable.
+
+        ``on_duplicate`` says what happens when a demo with exactly this query is present:
+
+        * ``"refuse"`` (default): raise :class:`~dmprs.errors.InvalidInputError` and change
+          nothing. The default because the other two silently change what the database means
+          (replace drops a demonstration, keep gives generalizers a repeat to deal with); a
+          caller that grows a database on purpose picks one (``dmprs.learn`` uses "replace").
+        * ``"replace"``: the new demo takes the place (and index) of every demo at that query.
+        * ``"keep"``: both are kept, in order. Generalizer ``"linear"`` averages the DMP
+          parameters of repeats (their mean is the least-squares estimate at that query);
+          ``"lwr-gp"`` refuses repeats with a message saying so.
+        """
+        if on_duplicate not in DUPLICATE_POLICIES:
             raise InvalidInputError(
-                f"trajectory is a {type(trajectory).__name__}; expected a dmprs.Trajectory"
+                f"on_duplicate = {on_duplicate!r} is invalid: use one of {DUPLICATE_POLICIES}"
+            )
+        q = self._check_query(query)
+        if not isinstance(trajectory, (Trajectory, CartesianTrajectory)):
+            raise InvalidInputError(
+                f"trajectory is a {type(trajectory).__name__}; expected a dmprs.Trajectory or "
+                "dmprs.CartesianTrajectory"
+            )
+        if self._demos and isinstance(trajectory, CartesianTrajectory) != self.is_cartesian:
+            kinds = ("joint-space trajectories", "pose trajectories")
+            raise InvalidInputError(
+                f"the trajectory is one of the {kinds[not self.is_cartesian]}, but the demonstrations "
+                f"in this database are {kinds[self.is_cartesian]}"
             )
         if self._demos and trajectory.n_dof != self.n_dof:
             raise InvalidInputError(
                 f"the trajectory has {trajectory.n_dof} DOFs, but the demonstrations in this "
                 f"database have {self.n_dof}"
             )
-        for k, d in enumerate(self._demos):
-            if np.array_equal(d.query, q):
-                raise InvalidInputError(
-                    f"demonstration {k} already has the query {q.tolist()}; two demonstrations at "
-                    "the same query cannot be generalized"
-                )
+        same = [k for k, d in enumerate(self._demos) if np.array_equal(d.query, q)]
+        if same and on_duplicate == "refuse":
+            raise InvalidInputError(
+                f"demonstration {same[0]} already has the query {q.tolist()}; pass "
+                "on_duplicate='replace' or 'keep' to add another demonstration at the same query"
+            )
         if label is not None and not isinstance(label, str):
             raise InvalidInputError(f"label must be a string or None; got {label!r}")
         meta = dict(metadata or {})
@@ -151,7 +192,12 @@ class Database:
             raise InvalidInputError(f"metadata must be JSON-serializable: {exc}") from None
         q.setflags(write=False)
         demo = Demo(q, trajectory, label, meta)
-        self._demos.append(demo)
+        if same and on_duplicate == "replace":
+            self._demos[same[0]] = demo
+            for k in reversed(same[1:]):
+                del self._demos[k]
+        else:
+            self._demos.append(demo)
         return demo
 
     def __len__(self) -> int:
@@ -195,14 +241,24 @@ class Database:
             root.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise DatabaseError(f"cannot create the database directory {root}: {exc}") from None
-        existing = [p.name for p in root.iterdir()] if root.is_dir() else []
+        try:
+            with directory_lock(root, shared=False):
+                self._save_locked(root)
+        except OSError as exc:
+            raise DatabaseError(f"{root}: cannot save the database ({exc.strerror or exc})") from None
+
+    def _save_locked(self, root: Path) -> None:
+        existing = [p.name for p in root.iterdir() if p.name != LOCK_FILE]
         if existing and _MANIFEST not in existing and not all(_DEMO_FILE.match(n) for n in existing):
             raise DatabaseError(
                 f"{root} is a non-empty directory without a {_MANIFEST}; refusing to write a "
                 "database into it"
             )
+        # Only files the previous manifest listed are ours to delete later: a file that merely
+        # looks like a demo file may be the user's.
+        previous = _manifest_files(root / _MANIFEST)
         entries = []
-        for k, demo in enumerate(self._demos):
+        for demo in self._demos:
             data = _npz_bytes(demo)
             digest = hashlib.sha256(data).hexdigest()
             name = f"demo_{digest[:16]}.npz"
@@ -212,7 +268,7 @@ class Database:
             entries.append({"file": name, "sha256": digest, "label": demo.label, "metadata": dict(demo.metadata)})
         manifest = {
             "format": _FORMAT,
-            "schema_version": SCHEMA_VERSION,
+            "schema_version": _POSE_SCHEMA if self.is_cartesian else 1,
             "query_names": list(self._names),
             "query_units": list(self._units),
             "demos": entries,
@@ -221,13 +277,12 @@ class Database:
         _atomic_write(root / _MANIFEST, text.encode("utf-8"))
         # The new manifest is durable: files only the old one referred to can go.
         keep = {e["file"] for e in entries}
-        for name in existing:
-            if _DEMO_FILE.match(name) and name not in keep:
-                try:
-                    (root / name).unlink()
-                except OSError:
-                    pass  # a stale file is harmless: no manifest refers to it
-        # Temporary files of an interrupted earlier save.
+        for name in previous - keep:
+            try:
+                (root / name).unlink()
+            except OSError:
+                pass  # a stale file is harmless: no manifest refers to it
+        # Temporary files of an interrupted earlier save (the lock says no save is running).
         for p in root.glob(".*.tmp"):
             try:
                 p.unlink()
@@ -238,6 +293,13 @@ class Database:
     def load(cls, path: str | os.PathLike[str]) -> Database:
         """Reads a database written by :meth:`save`, verifying every file."""
         root = Path(path)
+        if not root.is_dir():
+            raise DatabaseError(f"{root / _MANIFEST}: cannot read the manifest (no directory {root})")
+        with directory_lock(root, shared=True):
+            return cls._load_locked(root)
+
+    @classmethod
+    def _load_locked(cls, root: Path) -> Database:
         mpath = root / _MANIFEST
         try:
             raw = mpath.read_bytes()
@@ -247,6 +309,8 @@ class Database:
             manifest = json.loads(raw.decode("utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise DatabaseError(f"{mpath}: not valid JSON, the file is corrupted or truncated ({exc})") from None
+        except RecursionError:
+            raise DatabaseError(f"{mpath}: nested too deeply to be a dmprs manifest") from None
         if not isinstance(manifest, dict) or manifest.get("format") != _FORMAT:
             raise DatabaseError(f"{mpath}: not a dmprs database manifest (no \"format\": \"{_FORMAT}\")")
         version = manifest.get("schema_version")
@@ -267,7 +331,8 @@ class Database:
         for k, entry in enumerate(entries):
             demo = _read_demo(root, mpath, k, entry, db.n_query)
             try:
-                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata)
+                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata,
+                       on_duplicate="keep")  # as saved
             except DmprsError as exc:
                 raise DatabaseError(f"{root / entry['file']}: {exc}") from None
         return db
@@ -275,14 +340,24 @@ class Database:
 
 def _npz_bytes(demo: Demo) -> bytes:
     tr = demo.trajectory
-    arrays = {"query": demo.query, "t": tr.t, "y": tr.y}
-    if tr.yd is not None:
-        arrays["yd"] = tr.yd
-    if tr.ydd is not None:
-        arrays["ydd"] = tr.ydd
+    arrays = {"query": demo.query}
+    names = sorted(_POSE_KEYS if isinstance(tr, CartesianTrajectory) else _ARRAY_KEYS)
+    for name in names:
+        if name != "query" and getattr(tr, name) is not None:
+            arrays[name] = getattr(tr, name)
     buf = io.BytesIO()
     np.savez(buf, **arrays)
     return buf.getvalue()
+
+
+def _manifest_files(mpath: Path) -> set[str]:
+    """The demo files an existing manifest lists (none if it is missing or unreadable)."""
+    try:
+        entries = json.loads(mpath.read_text(encoding="utf-8")).get("demos", [])
+        return {e["file"] for e in entries if isinstance(e, dict) and isinstance(e.get("file"), str)
+                and _DEMO_FILE.match(e["file"])}
+    except (OSError, ValueError, AttributeError, TypeError, RecursionError):
+        return set()
 
 
 def _sha256_file(path: Path) -> str:
@@ -317,13 +392,21 @@ def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Dem
     try:
         with np.load(io.BytesIO(data), allow_pickle=False) as npz:
             keys = set(npz.files)
-            missing = {"query", "t", "y"} - keys
-            extra = keys - _ARRAY_KEYS
+            pose = "position" in keys
+            missing = ({"query", "t", "position", "quaternion"} if pose else {"query", "t", "y"}) - keys
+            extra = keys - (_POSE_KEYS if pose else _ARRAY_KEYS)
             if missing or extra:
-                raise ValueError(f"arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd")
+                raise ValueError(
+                    f"arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd, or query, "
+                    "t, position, quaternion and optionally their derivatives"
+                )
             arrays = {key: npz[key] for key in keys}
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         raise DatabaseError(f"{fpath}: not a readable demonstration file ({exc})") from None
+    except MemoryError:  # a crafted header claiming far more elements than the file holds
+        raise DatabaseError(
+            f"{fpath}: an array header claims more data than fits in memory ({len(data)} bytes on disk)"
+        ) from None
     for key, arr in arrays.items():
         if arr.dtype != np.float64:
             raise DatabaseError(f"{fpath}: array {key!r} has dtype {arr.dtype}, expected float64")
@@ -331,7 +414,11 @@ def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Dem
     if q.shape != (n_query,):
         raise DatabaseError(f"{fpath}: query has shape {q.shape}, expected ({n_query},)")
     try:
-        traj = Trajectory(arrays["t"], arrays["y"], arrays.get("yd"), arrays.get("ydd"))
+        traj: Trajectory | CartesianTrajectory
+        if pose:
+            traj = CartesianTrajectory(**{k: v for k, v in arrays.items() if k != "query"})
+        else:
+            traj = Trajectory(arrays["t"], arrays["y"], arrays.get("yd"), arrays.get("ydd"))
     except DmprsError as exc:
         raise DatabaseError(f"{fpath}: invalid trajectory ({exc})") from None
     label = entry.get("label")

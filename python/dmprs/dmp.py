@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
-from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs._arrays import as_count, as_flag, as_float_array, as_scalar, short
 from dmprs.errors import InvalidInputError
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -38,7 +38,7 @@ def _rollout_options(dt: Any, duration: Any, until_rest: bool, rest_tol: Any) ->
     return {
         "dt": as_scalar(dt, "dt", positive=True),
         "duration": None if duration is None else as_scalar(duration, "duration", positive=True),
-        "until_rest": bool(until_rest),
+        "until_rest": as_flag(until_rest, "until_rest"),
         "rest_tol": as_scalar(rest_tol, "rest_tol", positive=True),
     }
 
@@ -264,14 +264,19 @@ class DMP:
         if data.get("type") != _DICT_TYPE:
             raise InvalidInputError(f"not a DMP dict: 'type' is {data.get('type')!r}, expected {_DICT_TYPE!r}")
         version = data.get("version")
-        if not isinstance(version, int) or version > _DICT_VERSION or version < 1:
+        if type(version) is not int or version > _DICT_VERSION or version < 1:
             raise InvalidInputError(
-                f"DMP dict version {version!r} is not supported (this dmprs reads version {_DICT_VERSION})"
+                f"DMP dict version {short(version)} is not supported (this dmprs reads version {_DICT_VERSION})"
             )
         required = ("tau", "goal", "y0", "weights", "alpha_z", "beta_z", "alpha_x", "width_factor")
         missing = [k for k in required if k not in data]
         if missing:
             raise InvalidInputError(f"DMP dict is missing {', '.join(missing)}")
+        unknown = sorted(set(data) - set(required) - {"type", "version"}, key=str)
+        if unknown:
+            raise InvalidInputError(f"DMP dict has unknown keys {', '.join(map(short, unknown))}")
+        if data["beta_z"] is None:
+            raise InvalidInputError("DMP dict has beta_z = None; to_dict() always writes a number")
         return cls(
             data["weights"], data["goal"], data["y0"], data["tau"],
             alpha_z=data["alpha_z"], beta_z=data["beta_z"],
@@ -326,6 +331,8 @@ def rollout_batch(
     """
     from dmprs.cartesian import CartesianDMP  # cartesian builds on this module
 
+    if isinstance(dmps, DMP) or not isinstance(dmps, Iterable):
+        raise InvalidInputError(f"dmps must be an iterable of dmprs.DMP or dmprs.CartesianDMP; got {short(dmps)}")
     items = list(dmps)
     for i, d in enumerate(items):
         if not isinstance(d, (DMP, CartesianDMP)):

@@ -48,34 +48,46 @@ def query_learners(low: float | None, high: float | None, scale: float = 1.0,
     """The paper's query-space learners by name, for a one-dimensional query."""
     from dmprs import learners as L
 
-    def bracket() -> tuple[float, float]:
+    def bracket() -> dict[str, Any]:
         if low is None or high is None:
             raise InvalidInputError("this learner needs search limits (low, high)")
-        return low, high
+        return {"low": low, "high": high}
 
     return {
         "error": lambda q0, **kw: L.ErrorLearning(q0, max_trials=max_trials, **kw),
         "weighted": lambda q0, **kw: L.ErrorLearning(q0, weighted=True, scale=scale, max_trials=max_trials, **kw),
         "secant": lambda q0, **kw: L.ErrorLearning(q0, jacobian="secant", max_trials=max_trials, **kw),
-        "golden": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="paper", max_trials=max_trials, **kw),
-        "golden-robust": lambda q0, **kw: L.GoldenSection(float(q0[0]), *bracket(), mode="robust", max_trials=max_trials, **kw),
-        "root": lambda q0, **kw: L.IllinoisRootFinder(float(q0[0]), *bracket(), max_trials=max_trials, **kw),
+        "golden": lambda q0, **kw: L.GoldenSection(q0, **bracket(), mode="paper", max_trials=max_trials, **kw),
+        "golden-robust": lambda q0, **kw: L.GoldenSection(q0, **bracket(), mode="robust", max_trials=max_trials, **kw),
+        "root": lambda q0, **kw: L.IllinoisRootFinder(q0, **bracket(), max_trials=max_trials, **kw),
         # constrained-domain policy gradient (eq. 12): finite differences in q, every trial counted
         "pg": lambda q0, **kw: L.PolicyGradient(q0, scale=scale, max_trials=max_trials, **kw),
+        # black-box baseline (dmprs.cmaes): from the same first trial q0, step a quarter of the
+        # search range (or ``scale``), within the search limits when there are any
+        "cma": lambda q0, **kw: _cma(q0, low, high, scale, max_trials, **kw),
     }
+
+
+def _cma(q0: NDArray[np.float64], low: float | None, high: float | None, scale: float, max_trials: int,
+         **kw: Any) -> Any:
+    from dmprs.cmaes import CMAES
+
+    sigma = kw.pop("sigma0", 0.25 * (high - low) if low is not None and high is not None else scale)
+    kw.setdefault("max_trials", max_trials)
+    return CMAES(q0, sigma, first_x0=True, **kw)
 
 
 # --- the analytic task ------------------------------------------------------------------------
 
 def analytic_setup(noise: float = 0.0, tol: float = 0.01, desired: float = 1.5,
-                   amplitudes: tuple[float, float] = (0.5, 2.5)) -> ExperimentSetup:
+                   amplitudes: tuple[float, float] = (0.5, 2.5), execution_noise: float = 0.0) -> ExperimentSetup:
     """Two demonstrations (bumps of the given amplitudes, labelled with their outcomes), linear
     generalization, desired outcome ``desired``."""
     from dmprs.database import Database
     from dmprs.generalize import Generalizer
     from dmprs.tasks.analytic import AnalyticTask
 
-    task = AnalyticTask(noise=noise, tol=tol)
+    task = AnalyticTask(noise=noise, tol=tol, execution_noise=execution_noise)
     db = Database(query_names=task.query_names, query_units=task.query_units)
     labels = []
     for a in amplitudes:
@@ -105,7 +117,7 @@ POURING_FIXED_GAIN = 1.0
 
 def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: float = 0.010,
                   liquid_seed: int = 0, demo_seed: int = 0, fixed_gain: float = POURING_FIXED_GAIN,
-                  reseed_liquid: bool = False, cache_dir: str | None = None) -> ExperimentSetup:
+                  reseed_liquid: bool = False, cache_dir: str | None = None, noise: Any = None) -> ExperimentSetup:
     """Pour ``target_volume`` (0.2 l) from a bottle holding ``bottle_volume`` l (docs/method.md §9).
 
     Two scripted demonstrations pour ``target_volume`` from bottles of 0.3 l and 1.0 l (their
@@ -115,13 +127,14 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
     Learners: ``golden`` (default, the paper's choice, paper mode, bracket [0.3, 1.0] l),
     ``fixed`` (eq. 16 with the scalar gain ``fixed_gain`` in l/l) and the generic query learners
     (``error``, ``weighted`` with scale 0.05 l, ``secant``, ``golden-robust``, ``root``).
+    ``noise``: a :class:`dmprs.tasks.noise.Noise` for the trials (the demonstrations stay exact).
     """
     from dmprs.database import Database
     from dmprs.generalize import Generalizer
     from dmprs.tasks.pouring import DEMO_VOLUMES, Pouring, demonstration
 
     task = Pouring(bottle_volume, target_volume=target_volume, tol=tol,
-                   liquid_seed=liquid_seed, reseed_liquid=reseed_liquid)
+                   liquid_seed=liquid_seed, reseed_liquid=reseed_liquid, noise=noise)
     gain = float(fixed_gain)
     if not (np.isfinite(gain) and gain > 0):
         raise InvalidInputError(f"fixed_gain = {fixed_gain!r} must be > 0 l/l")
@@ -151,7 +164,7 @@ def pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, tol: f
 
 # --- matchbox flip-up --------------------------------------------------------------------------
 
-def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
+def matchbox_setup(demos: str = "default", noise: Any = None, **config: float) -> ExperimentSetup:
     """Stand the matchbox upright (docs/method.md §8): two scripted strikes labelled with their
     measured outcome angles, linear generalization with N = 25 kernels (the paper's matchbox
     setting), desired query pi/2.
@@ -160,7 +173,8 @@ def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
     ``"both_flipped_back"``: two that flip back, so pi/2 lies outside the demos and the
     generalizer extrapolates (Fig. 7). Learners: ``error`` (default; eq. 16, K = I, the paper's),
     ``weighted`` (eq. 17 with scale 1 rad, recommended for extrapolation), ``secant``, and the
-    bracketing ones between the demos' labels. ``config`` overrides simulation parameters.
+    bracketing ones between the demos' labels. ``config`` overrides simulation parameters;
+    ``noise`` is a :class:`dmprs.tasks.noise.Noise` for the trials (the demos are measured exactly).
     """
     from dmprs.database import Database
     from dmprs.generalize import Generalizer
@@ -168,7 +182,7 @@ def matchbox_setup(demos: str = "default", **config: float) -> ExperimentSetup:
 
     if demos not in DEMO_SETS:
         raise InvalidInputError(f"unknown demonstration set {demos!r}; choose from {', '.join(DEMO_SETS)}")
-    task = MatchboxFlip(**config)
+    task = MatchboxFlip(noise, **config)
     db = Database(query_names=task.query_names, query_units=task.query_units)
     labels = []
     for duration in DEMO_SETS[demos]:

@@ -24,7 +24,10 @@ def _bounds_pair(value: Any, name: str) -> tuple[float, float] | None:
     arr = as_float_array(value, name, 1)
     if arr.shape != (2,):
         raise InvalidInputError(f"{name} must be a (low, high) pair; got shape {arr.shape}")
-    return (as_scalar(arr[0], f"{name}[0]", positive=True), as_scalar(arr[1], f"{name}[1]", positive=True))
+    low, high = as_scalar(arr[0], f"{name}[0]", positive=True), as_scalar(arr[1], f"{name}[1]", positive=True)
+    if low > high:  # checked here too, not only when fit optimizes: bad input is bad either way
+        raise InvalidInputError(f"{name} = ({low:g}, {high:g}) is invalid: low must not exceed high")
+    return (low, high)
 
 
 class GaussianProcess:

@@ -3,7 +3,7 @@ DMP weight space.
 
 Every learner has the shape of cma, optuna and nevergrad::
 
-    learner = dmprs.learners.GoldenSection(q0=0.5, low=0.3, high=1.0)
+    learner = dmprs.learners.GoldenSection(0.5, low=0.3, high=1.0)
     while not learner.done:
         q = learner.ask()                 # 1-D float64 array: the query to execute next
         eps = run_trial(q)                # one physical trial
@@ -32,20 +32,28 @@ after the learner stopped. NaN, inf or a wrong number of entries raise
 scalar learners (so that one learn loop serves all of them); a Python float is accepted wherever
 a one-entry query or error is expected.
 
+Every query learner is built as ``Learner(q0, *, low=None, high=None, ...)`` with ``q0`` a float
+or a 1-D array (the bracketing learners :class:`GoldenSection` and :class:`IllinoisRootFinder`
+require ``low`` and ``high``); the baselines as ``Baseline(theta0, sigma, *, seed=None, ...)``. An
+option left at ``None`` takes the default of the learner's configuration in the Rust core
+(``crates/learners``, e.g. ``ErrorLearningConfig::default``), which also validates every value.
+
 Common properties: ``status`` (``"running"``, ``"converged"``, ``"bracketed"``,
 ``"trial-cap"``, ``"hit-bound"``, ``"diverged"``), ``status_detail``, ``done``, ``converged``,
-``best`` and ``history`` (:class:`Trial` tuples), ``n_trials``.
+``best`` and ``history`` (:class:`Trial` tuples), ``n_trials``. A learner never asks a
+non-finite query: when a step, a gain or a return overflows it stops with ``"diverged"``.
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+import numbers
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmprs import _core
-from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs import _core as _native
+from dmprs._arrays import as_count, as_float_array, short
 from dmprs.errors import InvalidInputError
 
 __all__ = [
@@ -69,12 +77,17 @@ class Trial(NamedTuple):
     score: float
 
 
+# Conversions only: types and shapes become what the core takes. The core validates the values
+# (finite, positive, low < high, ...) and holds the defaults (None: the default).
+
+
 def _vector(value: Any, name: str) -> NDArray[np.float64]:
-    """A scalar or 1-D array as a 1-D float64 array (finiteness is checked by the core)."""
+    """A scalar or 1-D array as a 1-D float64 array."""
     return np.atleast_1d(as_float_array(value, name, (0, 1)))
 
 
-def _optional_limit(value: Any, name: str, n: int) -> NDArray[np.float64] | None:
+def _optional_vector(value: Any, name: str, n: int) -> NDArray[np.float64] | None:
+    """None, or a 1-D array; a scalar is repeated for all ``n`` dimensions."""
     if value is None:
         return None
     v = _vector(value, name)
@@ -83,38 +96,74 @@ def _optional_limit(value: Any, name: str, n: int) -> NDArray[np.float64] | None
     return v
 
 
-def _square(value: Any, name: str, n: int) -> NDArray[np.float64]:
+def _matrix(value: Any, name: str) -> float | NDArray[np.float64]:
     """A scalar (times I), a diagonal (n,) or an (n, n) matrix."""
     m = as_float_array(value, name, (0, 1, 2))
-    if np.ndim(value) == 0:  # as_float_array returns at least 1-D
-        return np.ascontiguousarray(float(m.reshape(-1)[0]) * np.eye(n))
-    if m.ndim == 1:
-        if m.shape != (n,):
-            raise InvalidInputError(f"{name} has shape {m.shape}; expected a scalar, ({n},) or ({n}, {n})")
-        return np.ascontiguousarray(np.diag(m))
-    if m.shape != (n, n):
-        raise InvalidInputError(f"{name} has shape {m.shape}; expected a scalar, ({n},) or ({n}, {n})")
-    return m
+    return float(m.reshape(-1)[0]) if np.ndim(value) == 0 else m
 
 
-def _seed(value: Any) -> int:
-    seed = as_count(value, "seed", 0)
-    if seed >= 2**64:
-        raise InvalidInputError(f"seed = {seed} is invalid: must be < 2**64")
-    return seed
+def _real(value: Any, name: str) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise InvalidInputError(f"{name} must be a real number; got {short(value)}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise InvalidInputError(f"{name} = {short(value)} does not fit a 64-bit float") from None
 
 
-def _flag(value: Any, name: str) -> bool:
+def _count(value: Any, name: str) -> int | None:
+    """None, or a non-negative integer the core can hold (< 2**64)."""
+    if value is None:
+        return None
+    n = as_count(value, name, 0)
+    if n >= 2**64:
+        raise InvalidInputError(f"{name} = {n} is invalid: must be < 2**64")
+    return n
+
+
+def _text(value: Any, name: str) -> str | None:
+    if value is None or isinstance(value, str):
+        return value
+    raise InvalidInputError(f"{name} must be a string; got {value!r}")
+
+
+def _flag(value: Any, name: str) -> bool | None:
+    if value is None:
+        return None
     if not isinstance(value, (bool, np.bool_)):
         raise InvalidInputError(f"{name} must be True or False; got {value!r}")
     return bool(value)
+
+
+class _CoreLearner(Protocol):
+    """What every class of ``dmprs._core``'s learners offers."""
+
+    def ask(self) -> NDArray[np.float64]: ...
+    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def status_detail(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def n_told(self) -> int: ...
+    @property
+    def best(self) -> tuple[NDArray[np.float64], NDArray[np.float64], float] | None: ...
+    @property
+    def history(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], float]]: ...
 
 
 class _Learner:
     """The ask/tell interface shared by every learner (see the module docs)."""
 
     __slots__ = ("_core",)
-    _core: _core.Learner
+    _core: _CoreLearner
+    _feedback_name = "eps"
 
     def ask(self) -> NDArray[np.float64]:
         """The next query (1-D float64) to execute. Asking again before :meth:`tell` returns
@@ -124,8 +173,6 @@ class _Learner:
     def tell(self, q: ArrayLike, feedback: ArrayLike) -> None:
         """Reports the outcome of executing ``q``, the query :meth:`ask` returned."""
         self._core.tell(_vector(q, "q"), _vector(feedback, self._feedback_name))
-
-    _feedback_name = "eps"
 
     @property
     def status(self) -> str:
@@ -200,53 +247,43 @@ class ErrorLearning(_Learner):
     """
 
     __slots__ = ()
+    _core: _native.ErrorLearning
 
     def __init__(
         self,
         q0: ArrayLike,
-        gain: ArrayLike = 1.0,
-        weighted: bool = False,
-        scale: float = 1.0,
-        jacobian: str | ArrayLike = "identity",
+        *,
         low: ArrayLike | None = None,
         high: ArrayLike | None = None,
-        *,
-        tol: float = 1e-3,
-        max_trials: int = 50,
-        delta: float = 0.01,
-        pin_limit: int = 3,
+        gain: ArrayLike | None = None,
+        weighted: bool | None = None,
+        scale: float | None = None,
+        jacobian: str | ArrayLike | None = None,
+        delta: float | None = None,
+        tol: float | None = None,
+        max_trials: int | None = None,
+        pin_limit: int | None = None,
     ) -> None:
         q = _vector(q0, "q0")
         n = q.shape[0]
-        if isinstance(jacobian, str):
-            mode, matrix = jacobian, None
-        else:
-            mode, matrix = "matrix", _square(jacobian, "jacobian", n)
-        self._core = _core.Learner.error_learning(
+        self._core = _native.ErrorLearning(
             q,
-            _square(gain, "gain", n),
-            _flag(weighted, "weighted"),
-            as_scalar(scale, "scale", positive=True),
-            mode,
-            matrix,
-            as_scalar(delta, "delta", positive=True),
-            _optional_limit(low, "low", n),
-            _optional_limit(high, "high", n),
-            as_scalar(tol, "tol", positive=True),
-            as_count(max_trials, "max_trials", 1),
-            as_count(pin_limit, "pin_limit", 1),
+            low=_optional_vector(low, "low", n),
+            high=_optional_vector(high, "high", n),
+            gain=None if gain is None else _matrix(gain, "gain"),
+            weighted=_flag(weighted, "weighted"),
+            scale=_real(scale, "scale"),
+            jacobian=jacobian if jacobian is None or isinstance(jacobian, str) else _matrix(jacobian, "jacobian"),
+            delta=_real(delta, "delta"),
+            tol=_real(tol, "tol"),
+            max_trials=_count(max_trials, "max_trials"),
+            pin_limit=_count(pin_limit, "pin_limit"),
         )
 
     @property
     def jacobian(self) -> NDArray[np.float64]:
         """The current estimate J of dq_a/dq, ``(n, n)``."""
-        return self._core.state()["jacobian"]
-
-
-def _bracket_tol(q_tol: Any, low: float, high: float) -> float:
-    if q_tol is None:
-        return 1e-4 * abs(high - low) if high != low else 1e-12
-    return as_scalar(q_tol, "q_tol", positive=True)
+        return self._core.jacobian
 
 
 class GoldenSection(_Learner):
@@ -270,35 +307,35 @@ class GoldenSection(_Learner):
     """
 
     __slots__ = ()
+    _core: _native.GoldenSection
 
     def __init__(
         self,
-        q0: float,
-        low: float,
-        high: float,
-        mode: str = "paper",
+        q0: ArrayLike,
         *,
-        tol: float = 1e-3,
+        low: ArrayLike | None = None,
+        high: ArrayLike | None = None,
+        mode: str | None = None,
+        tol: float | None = None,
         q_tol: float | None = None,
-        max_trials: int = 50,
-        max_expansions: int = 4,
+        max_trials: int | None = None,
+        max_expansions: int | None = None,
     ) -> None:
-        lo, hi = as_scalar(low, "low"), as_scalar(high, "high")
-        self._core = _core.Learner.golden(
-            as_scalar(q0, "q0"),
-            lo,
-            hi,
-            mode,
-            as_scalar(tol, "tol", positive=True),
-            _bracket_tol(q_tol, lo, hi),
-            as_count(max_trials, "max_trials", 1),
-            as_count(max_expansions, "max_expansions", 0),
+        self._core = _native.GoldenSection(
+            _vector(q0, "q0"),
+            low=_optional_vector(low, "low", 1),
+            high=_optional_vector(high, "high", 1),
+            mode=_text(mode, "mode"),
+            tol=_real(tol, "tol"),
+            q_tol=_real(q_tol, "q_tol"),
+            max_trials=_count(max_trials, "max_trials"),
+            max_expansions=_count(max_expansions, "max_expansions"),
         )
 
     @property
     def bracket(self) -> tuple[float, float]:
         """The current search limits (q_l, q_h)."""
-        return self._core.state()["bracket"]
+        return self._core.bracket
 
 
 class IllinoisRootFinder(_Learner):
@@ -317,31 +354,31 @@ class IllinoisRootFinder(_Learner):
     """
 
     __slots__ = ()
+    _core: _native.IllinoisRootFinder
 
     def __init__(
         self,
-        q0: float,
-        low: float,
-        high: float,
+        q0: ArrayLike,
         *,
-        tol: float = 1e-3,
+        low: ArrayLike | None = None,
+        high: ArrayLike | None = None,
+        tol: float | None = None,
         q_tol: float | None = None,
-        max_trials: int = 50,
+        max_trials: int | None = None,
     ) -> None:
-        lo, hi = as_scalar(low, "low"), as_scalar(high, "high")
-        self._core = _core.Learner.root_finder(
-            as_scalar(q0, "q0"),
-            lo,
-            hi,
-            as_scalar(tol, "tol", positive=True),
-            _bracket_tol(q_tol, lo, hi),
-            as_count(max_trials, "max_trials", 1),
+        self._core = _native.IllinoisRootFinder(
+            _vector(q0, "q0"),
+            low=_optional_vector(low, "low", 1),
+            high=_optional_vector(high, "high", 1),
+            tol=_real(tol, "tol"),
+            q_tol=_real(q_tol, "q_tol"),
+            max_trials=_count(max_trials, "max_trials"),
         )
 
     @property
     def bracket(self) -> tuple[float, float]:
         """The current bracket (a, b)."""
-        return self._core.state()["bracket"]
+        return self._core.bracket
 
 
 class PolicyGradient(_Learner):
@@ -360,42 +397,43 @@ class PolicyGradient(_Learner):
     """
 
     __slots__ = ()
+    _core: _native.PolicyGradient
 
     def __init__(
         self,
         q0: ArrayLike,
         *,
-        alpha0: float | None = None,
-        delta: float | None = None,
-        scale: float = 1.0,
-        decay: float = 0.602,
-        evaluate_center: bool = True,
         low: ArrayLike | None = None,
         high: ArrayLike | None = None,
-        tol: float = 1e-3,
-        max_trials: int = 100,
-        pin_limit: int = 3,
+        alpha0: float | None = None,
+        delta: float | None = None,
+        scale: float | None = None,
+        decay: float | None = None,
+        evaluate_center: bool | None = None,
+        tol: float | None = None,
+        max_trials: int | None = None,
+        pin_limit: int | None = None,
     ) -> None:
         q = _vector(q0, "q0")
-        s = as_scalar(scale, "scale", positive=True)
-        self._core = _core.Learner.policy_gradient(
+        n = q.shape[0]
+        self._core = _native.PolicyGradient(
             q,
-            0.5 * s * s if alpha0 is None else as_scalar(alpha0, "alpha0", positive=True),
-            as_scalar(decay, "decay", positive=True),
-            0.05 * s if delta is None else as_scalar(delta, "delta", positive=True),
-            s,
-            _flag(evaluate_center, "evaluate_center"),
-            _optional_limit(low, "low", q.shape[0]),
-            _optional_limit(high, "high", q.shape[0]),
-            as_scalar(tol, "tol", positive=True),
-            as_count(max_trials, "max_trials", 1),
-            as_count(pin_limit, "pin_limit", 1),
+            low=_optional_vector(low, "low", n),
+            high=_optional_vector(high, "high", n),
+            alpha0=_real(alpha0, "alpha0"),
+            decay=_real(decay, "decay"),
+            delta=_real(delta, "delta"),
+            scale=_real(scale, "scale"),
+            evaluate_center=_flag(evaluate_center, "evaluate_center"),
+            tol=_real(tol, "tol"),
+            max_trials=_count(max_trials, "max_trials"),
+            pin_limit=_count(pin_limit, "pin_limit"),
         )
 
     @property
     def center(self) -> NDArray[np.float64]:
         """The current iterate q_m."""
-        return self._core.state()["center"]
+        return self._core.center
 
 
 def _weights(theta0: Any) -> tuple[NDArray[np.float64], int | None]:
@@ -421,6 +459,7 @@ class PoWER(_Learner):
     """
 
     __slots__ = ()
+    _core: _native.PoWER
     _feedback_name = "return"
 
     def __init__(
@@ -428,34 +467,34 @@ class PoWER(_Learner):
         theta0: ArrayLike,
         sigma: ArrayLike,
         *,
-        seed: int = 0,
-        n_best: int = 10,
-        adapt_variance: bool = False,
-        variance_window: int = 100,
+        seed: int | None = None,
+        n_best: int | None = None,
+        adapt_variance: bool | None = None,
+        variance_window: int | None = None,
         target_return: float | None = None,
-        max_trials: int = 200,
+        max_trials: int | None = None,
     ) -> None:
         t, _ = _weights(theta0)
-        self._core = _core.Learner.power(
+        self._core = _native.PoWER(
             t,
             _vector(sigma, "sigma"),
-            as_count(n_best, "n_best", 1),
-            _flag(adapt_variance, "adapt_variance"),
-            as_count(variance_window, "variance_window", 1),
-            None if target_return is None else as_scalar(target_return, "target_return", positive=True),
-            as_count(max_trials, "max_trials", 1),
-            _seed(seed),
+            seed=_count(seed, "seed"),
+            n_best=_count(n_best, "n_best"),
+            adapt_variance=_flag(adapt_variance, "adapt_variance"),
+            variance_window=_count(variance_window, "variance_window"),
+            target_return=_real(target_return, "target_return"),
+            max_trials=_count(max_trials, "max_trials"),
         )
 
     @property
     def mean(self) -> NDArray[np.float64]:
         """The current mean weight vector."""
-        return self._core.state()["mean"]
+        return self._core.mean
 
     @property
     def variance(self) -> NDArray[np.float64]:
         """The current exploration variance per weight."""
-        return self._core.state()["variance"]
+        return self._core.variance
 
 
 class PI2(_Learner):
@@ -477,6 +516,7 @@ class PI2(_Learner):
     """
 
     __slots__ = ()
+    _core: _native.PI2
     _feedback_name = "costs"
 
     def __init__(
@@ -484,42 +524,48 @@ class PI2(_Learner):
         theta0: ArrayLike,
         sigma: ArrayLike,
         *,
-        seed: int = 0,
-        n_rollouts: int = 10,
-        n_reuse: int = 5,
-        h: float = 10.0,
-        n_updates: int = 20,
+        seed: int | None = None,
+        n_rollouts: int | None = None,
+        n_reuse: int | None = None,
+        h: float | None = None,
+        n_updates: int | None = None,
         n_dof: int | None = None,
-        n_steps: int = 100,
-        alpha_x: float = 2.0,
-        width_factor: float = 2.0,
-        projection: bool = True,
+        n_steps: int | None = None,
+        alpha_x: float | None = None,
+        width_factor: float | None = None,
+        projection: bool | None = None,
         cost_tol: float | None = None,
-        max_trials: int = 200,
+        max_trials: int | None = None,
     ) -> None:
         t, d = _weights(theta0)
+        n_dof = _count(n_dof, "n_dof")
         if n_dof is None:
-            n_dof = 1 if d is None else d
+            n_dof = d
         elif d is not None and n_dof != d:
             raise InvalidInputError(f"n_dof = {n_dof} does not match theta0 of shape ({d}, {t.size // d})")
-        self._core = _core.Learner.pi2(
+        self._core = _native.PI2(
             t,
             _vector(sigma, "sigma"),
-            as_count(n_rollouts, "n_rollouts", 2),
-            as_count(n_reuse, "n_reuse", 0),
-            as_scalar(h, "h", positive=True),
-            as_count(n_updates, "n_updates", 1),
-            as_count(n_dof, "n_dof", 1),
-            as_count(n_steps, "n_steps", 2),
-            as_scalar(alpha_x, "alpha_x", positive=True),
-            as_scalar(width_factor, "width_factor", positive=True),
-            _flag(projection, "projection"),
-            None if cost_tol is None else as_scalar(cost_tol, "cost_tol"),
-            as_count(max_trials, "max_trials", 1),
-            _seed(seed),
+            seed=_count(seed, "seed"),
+            n_rollouts=_count(n_rollouts, "n_rollouts"),
+            n_reuse=_count(n_reuse, "n_reuse"),
+            h=_real(h, "h"),
+            n_updates=_count(n_updates, "n_updates"),
+            n_dof=n_dof,
+            n_steps=_count(n_steps, "n_steps"),
+            alpha_x=_real(alpha_x, "alpha_x"),
+            width_factor=_real(width_factor, "width_factor"),
+            projection=_flag(projection, "projection"),
+            cost_tol=_real(cost_tol, "cost_tol"),
+            max_trials=_count(max_trials, "max_trials"),
         )
 
     @property
     def theta(self) -> NDArray[np.float64]:
         """The current weight vector."""
-        return self._core.state()["theta"]
+        return self._core.theta
+
+    @property
+    def n_updates_done(self) -> int:
+        """PI² updates completed."""
+        return self._core.n_updates_done

@@ -23,6 +23,8 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs._arrays import as_query
 from dmprs._core import __version__
 from dmprs.adapters.spec import Status
+from dmprs.database import DUPLICATE_POLICIES
+from dmprs.cartesian import CartesianDMP
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError, RunLogError
 from dmprs.runlog import RunLog, TrialRecord
@@ -48,7 +50,7 @@ class AskTell(Protocol):
 
 
 class GeneralizerLike(Protocol):
-    def predict(self, q: Any) -> DMP: ...
+    def predict(self, q: Any) -> DMP | CartesianDMP: ...
 
 
 @dataclass(frozen=True)
@@ -95,6 +97,7 @@ def learn(
     seed: int = 0,
     timeout_s: float | None = None,
     database: Any | None = None,
+    database_policy: str = "replace",
     on_trial: Callable[[TrialRecord], None] | None = None,
     meta: dict[str, Any] | None = None,
 ) -> LearningResult:
@@ -111,7 +114,11 @@ def learn(
     executed trials. With ``resume=True`` the logged trials are replayed into the (fresh,
     identically configured) learner, which must ask the same queries again, and the run
     continues. With a ``database``, a successful (desired query, executed trajectory) is added
-    to it; if the database refuses it, the run's result is kept and says why.
+    to it with ``on_duplicate=database_policy`` (default ``"replace"``: re-learning a query the
+    database has replaces its demo, so a grown database stays one demo per query and every
+    generalizer can use it; see :meth:`dmprs.Database.add`). If the database still refuses it
+    (e.g. ``"refuse"`` and a repeat, or another number of DOFs), the run's result is kept and its
+    ``stop_reason`` says why.
     """
     q0 = task.validate_query(desired_query)
     if isinstance(max_trials, bool) or not isinstance(max_trials, (int, np.integer)) or max_trials < 1:
@@ -120,6 +127,8 @@ def learn(
         raise InvalidInputError(f"tol = {tol!r} must be > 0")
     if resume and log_dir is None:
         raise InvalidInputError("resume=True needs the log_dir of the run to resume")
+    if database_policy not in DUPLICATE_POLICIES:
+        raise InvalidInputError(f"database_policy = {database_policy!r} is invalid: use one of {DUPLICATE_POLICIES}")
 
     log: RunLog | None = None
     trials: list[TrialRecord] = []
@@ -174,7 +183,8 @@ def learn(
                 if database is not None:
                     executed = result.outcome.executed
                     try:
-                        database.add(q0, executed if executed is not None else result.command)
+                        database.add(q0, executed if executed is not None else result.command,
+                                     on_duplicate=database_policy)
                     except DmprsError as exc:  # the run succeeded: keep it, say what the database refused
                         reason += f"; not added to the database: {exc}"
                 return finish(reason, True)

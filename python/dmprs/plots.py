@@ -53,7 +53,26 @@ def plot_run(run: str | Path, out: str | Path | None = None) -> Path:
     ax[0].set_title(f"{meta.get('task', '')}: {meta.get('learner', '')}")
     ax[1].set_xticks(n)
     fig.tight_layout()
-    path = Path(out) if out is not None else log.directory / "learning.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    path = _figure_path(out, log.directory)
+    try:
+        fig.savefig(path, dpi=120)
+    except (OSError, ValueError) as exc:  # matplotlib's error for an unknown format is a ValueError
+        raise DmprsError(f"cannot write the figure {path}: {exc}") from None
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _figure_path(out: str | Path | None, run_dir: Path) -> Path:
+    """Where the figure goes: ``out`` itself, ``out/learning.png`` when ``out`` is a folder."""
+    if out is None:
+        return run_dir / "learning.png"
+    path = Path(out)
+    if path.is_dir():
+        return path / "learning.png"
+    if not path.parent.is_dir():
+        raise DmprsError(f"cannot write the figure {path}: the folder {path.parent} does not exist")
+    if not path.suffix:
+        raise DmprsError(f"cannot write the figure {path}: give an existing folder or a file name with an "
+                         "extension such as .png or .pdf")
     return path

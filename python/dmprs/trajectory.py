@@ -201,11 +201,10 @@ class CartesianTrajectory:
 
     @classmethod
     def _trusted(cls, *arrays: Any) -> CartesianTrajectory:
-        """Wraps arrays fresh from the core (already valid) without re-checking them."""
+        """Wraps arrays fresh from the core (already valid and read-only) without re-checking
+        them."""
         self = object.__new__(cls)
-        for name, arr in zip(_CARTESIAN_FIELDS, arrays, strict=True):
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
+        self.__dict__.update(zip(_CARTESIAN_FIELDS, arrays, strict=True))  # one call: rollouts are hot
         return self
 
     @property

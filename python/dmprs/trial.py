@@ -24,6 +24,7 @@ from dmprs.runlog import RunLog, TrialRecord
 from dmprs.tasks.base import Task
 
 if TYPE_CHECKING:
+    from dmprs.cartesian import CartesianDMP
     from dmprs.dmp import DMP
     from dmprs.trajectory import Trajectory
 
@@ -45,7 +46,7 @@ def run_trial(
     task: Task,
     index: int,
     query: NDArray[np.float64],
-    make_dmp: Callable[[], DMP],
+    make_dmp: Callable[[], DMP | CartesianDMP],
     desired_query: NDArray[np.float64],
     *,
     seed: int,
@@ -98,20 +99,11 @@ def _execute(task: Task, command: Trajectory, seed: int, timeout_s: float | None
         return Outcome(Status.ERROR, message=(
             f"{adapter.spec.name} returned {type(outcome).__name__} with status {status!r}; "
             "execute() must return a dmprs.adapters.Outcome whose status is a Status"))
-    if not isinstance(outcome.signals, Mapping):
-        return Outcome(Status.ERROR, executed=outcome.executed, message=(
-            f"{adapter.spec.name} returned signals of type {type(outcome.signals).__name__}; "
-            "expected a mapping of signal names to values"))
-    if outcome.status is Status.OK:
-        declared = {s.name for s in adapter.spec.signals}
-        missing = sorted(declared - set(outcome.signals))
-        extra = sorted(set(outcome.signals) - declared)
-        if missing or extra:
-            parts = ([f"missing {', '.join(missing)}"] if missing else []) + (
-                [f"undeclared {', '.join(extra)}"] if extra else [])
+    if outcome.status is Status.OK or not isinstance(outcome.signals, Mapping):
+        problems = adapter.spec.signal_problems(outcome.signals)
+        if problems:
             return Outcome(Status.ERROR, signals=_loggable(outcome.signals), executed=outcome.executed,
-                           message=f"{adapter.spec.name} returned bad signals ({'; '.join(parts)}); "
-                                   f"its spec declares {', '.join(sorted(declared))}")
+                           message=f"{adapter.spec.name} returned bad signals: {'; '.join(problems)}")
     return outcome
 
 

@@ -36,7 +36,7 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use rayon::prelude::*;
 
-use crate::diff;
+use crate::finite_difference as diff;
 use crate::dmp::{Demonstration, Dmp, DmpConfig};
 use crate::error::{Error, Result, check_finite_matrix, check_increasing};
 use crate::quaternion::{self, Quaternion};
@@ -426,6 +426,13 @@ impl CartesianDmp {
     /// orientation within `rest_tol` (rad), both at rest to `rest_tol`, and the forcing term can
     /// no longer move them by more than that.
     pub fn rollout(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
+        // Compiled for AVX2 where the CPU has it (wider kernel-weight updates); Rust never fuses
+        // a multiply and an add on its own, so both copies give the same bits.
+        crate::linalg::simd(|| self.integrate(opts))
+    }
+
+    #[inline(always)]
+    fn integrate(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
         opts.validate()?;
         let tau = self.tau();
         let steps = n_steps(opts.duration.unwrap_or(tau), opts.dt);
@@ -456,8 +463,13 @@ impl CartesianDmp {
         let (dt, inv_tau) = (opts.dt, 1.0 / tau);
         let half_step = 0.5 * dt * inv_tau;
         let n = cfg.n_basis;
-        let w = self.weights().as_slice();
+        let w = self.weights();
         let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+        // Kernel-major copy: the six weights of kernel k side by side, so that one pass over the
+        // active kernels updates all six forcing terms (independent sums, same order per term).
+        let wk: Vec<[f64; N_COORDS]> = (0..n)
+            .map(|k| [0, 1, 2, 3, 4, 5].map(|d| w[(k, d)]))
+            .collect();
         let goal_p = self.dmp.goal().as_slice();
         let goal_q = self.goal;
         let mut p: [f64; 3] = [0, 1, 2].map(|d| self.dmp.y0()[d]);
@@ -471,33 +483,44 @@ impl CartesianDmp {
             let range = self.basis().normalized_activations(x, &mut psi);
             let act = &psi[range.clone()];
             let mut f = [0.0; N_COORDS];
-            for (d, fd) in f.iter_mut().enumerate() {
-                let wd = &w[d * n + range.start..d * n + range.end];
-                *fd = x * wd.iter().zip(act).map(|(w, p)| w * p).sum::<f64>();
+            for (wk, a) in wk[range.clone()].iter().zip(act) {
+                for d in 0..N_COORDS {
+                    f[d] += wk[d] * a;
+                }
             }
-            out.t.push(step as f64 * dt);
+            let f = f.map(|s| x * s);
             let mut at_rest = x * max_w / (cfg.alpha_z * cfg.beta_z) <= opts.rest_tol;
+            // One step of both systems into small arrays, appended once per field (fewer
+            // capacity checks than a push per value).
+            let (mut v, mut acc) = ([0.0; 3], [0.0; 3]);
             for d in 0..3 {
                 let dz = (cfg.alpha_z * (cfg.beta_z * (goal_p[d] - p[d]) - z[d]) + f[d]) * inv_tau;
-                let v = z[d] * inv_tau;
-                out.position.push(p[d]);
-                out.velocity.push(v);
-                out.acceleration.push(dz * inv_tau);
+                v[d] = z[d] * inv_tau;
+                acc[d] = dz * inv_tau;
                 at_rest &= (goal_p[d] - p[d]).abs() <= opts.rest_tol && z[d].abs() <= opts.rest_tol;
-                p[d] += v * dt;
                 z[d] += dz * dt;
             }
             // Half the rotation vector from q to the goal.
             let e = quaternion::log(&quaternion::product(&goal_q, &quaternion::conjugate(&q)));
-            out.quaternion.extend_from_slice(&q);
             let turn = quaternion::exp(&eta.map(|c| c * half_step));
+            let (mut omega, mut omega_dot) = ([0.0; 3], [0.0; 3]);
             for d in 0..3 {
                 let to_goal = 2.0 * e[d];
                 let deta = (cfg.alpha_z * (cfg.beta_z * to_goal - eta[d]) + f[3 + d]) * inv_tau;
-                out.angular_velocity.push(eta[d] * inv_tau);
-                out.angular_acceleration.push(deta * inv_tau);
+                omega[d] = eta[d] * inv_tau;
+                omega_dot[d] = deta * inv_tau;
                 at_rest &= to_goal.abs() <= opts.rest_tol && eta[d].abs() <= opts.rest_tol;
                 eta[d] += deta * dt;
+            }
+            out.t.push(step as f64 * dt);
+            out.position.extend_from_slice(&p);
+            out.velocity.extend_from_slice(&v);
+            out.acceleration.extend_from_slice(&acc);
+            out.quaternion.extend_from_slice(&q);
+            out.angular_velocity.extend_from_slice(&omega);
+            out.angular_acceleration.extend_from_slice(&omega_dot);
+            for d in 0..3 {
+                p[d] += v[d] * dt;
             }
             let past_end = step as f64 >= steps;
             if past_end && (!opts.until_rest || at_rest) {
@@ -515,6 +538,18 @@ impl CartesianDmp {
             q = quaternion::renormalize(&quaternion::product(&turn, &q));
             x -= cfg.alpha_x * x * inv_tau * dt;
             step += 1;
+        }
+        // An unstable step (dt far above tau / alpha_z) overflows, and inf and NaN then persist
+        // to the last sample: checking it is enough to never return a non-finite trajectory.
+        let last = [&p[..], &z[..], &q[..], &eta[..]].concat();
+        if last.iter().any(|v| !v.is_finite()) {
+            return Err(Error::Numerical {
+                context: "Cartesian DMP rollout",
+                detail: format!(
+                    "the integration diverged (dt = {} s is too large for tau = {tau} s and alpha_z = {})",
+                    opts.dt, cfg.alpha_z
+                ),
+            });
         }
         Ok(out)
     }

@@ -15,13 +15,16 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use crate::basis::Basis;
-use crate::design::{PreparedDemo, normal_equations, solve_ridge};
+use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::error::{Error, Result, check_scalar};
 
 /// Relative ridge added to the normal equations of the fit. It keeps a kernel that no sample
 /// activates at weight 0 instead of making the system singular, and changes well-posed fits by
 /// about 1e-10 relative.
 pub(crate) const FIT_RIDGE: f64 = 1e-10;
+
+/// The most kernels a DMP may have (see [`DmpConfig::validate`]).
+pub const MAX_BASIS: usize = 1000;
 
 /// The meta-parameters of a DMP: its constants and the size of its basis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,6 +62,14 @@ impl DmpConfig {
                 name: "n_basis",
                 value: self.n_basis.to_string(),
                 requirement: "must be at least 2",
+            });
+        }
+        if self.n_basis > MAX_BASIS {
+            return Err(Error::InvalidParameter {
+                name: "n_basis",
+                value: self.n_basis.to_string(),
+                requirement: "must be at most 1000: the fit solves an n_basis x n_basis system \
+                              (10000 kernels take minutes and gigabytes; 25-40 shape a movement)",
             });
         }
         Ok(())
@@ -142,7 +153,7 @@ impl Dmp {
     /// `F_j = tau^2 ydd_j - alpha_z (beta_z (g - y_j) - tau yd_j)`, and `w = argmin |A w - F|`
     /// with `A_jk = Psi_k(x_j) x_j / sum_i Psi_i(x_j)`.
     ///
-    /// Missing derivatives are computed with [`crate::diff::gradient`] (second order, non-uniform grid).
+    /// Missing derivatives are computed with [`crate::finite_difference::gradient`] (second order, non-uniform grid).
     pub fn fit(demo: &Demonstration<'_>, config: DmpConfig) -> Result<Self> {
         config.validate()?;
         let prepared = PreparedDemo::new(demo)?;

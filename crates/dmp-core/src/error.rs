@@ -7,7 +7,7 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum Error {
     /// A NaN or infinity in an input array or parameter.
-    #[error("{name}{location} is {value}: all values must be finite")]
+    #[error("{name}{location} is {}: all values must be finite", fmt_g(*.value))]
     NonFinite {
         name: &'static str,
         /// An index such as `[12, 3]`, or empty for a scalar.
@@ -31,7 +31,9 @@ pub enum Error {
     },
     /// Sample times that repeat or go backwards.
     #[error(
-        "{name} must be strictly increasing, but {name}[{index}] = {value} is not greater than {name}[{prev_index}] = {prev}",
+        "{name} must be strictly increasing, but {name}[{index}] = {} is not greater than {name}[{prev_index}] = {}",
+        fmt_g(*.value),
+        fmt_g(*.prev),
         prev_index = index - 1
     )]
     NotIncreasing {
@@ -81,6 +83,9 @@ pub enum Error {
     /// An error in the data of one demonstration.
     #[error("demonstration {index}: {source}")]
     InDemo { index: usize, source: Box<Error> },
+    /// The caller asked a long computation to stop (e.g. Ctrl-C in Python).
+    #[error("{context} was cancelled")]
+    Cancelled { context: &'static str },
     /// A quaternion that is not a rotation: zero, or (unless asked to normalize) not unit norm.
     #[error(
         "{name}[{index}] has the quaternion (w, x, y, z) = {value} of norm {norm}: {requirement}"
@@ -105,7 +110,7 @@ impl Error {
     /// True when the caller's input was wrong (Python maps these to `ValueError` subclasses).
     pub fn is_input_error(&self) -> bool {
         match self {
-            Error::Numerical { .. } => false,
+            Error::Numerical { .. } | Error::Cancelled { .. } => false,
             Error::InDemo { source, .. } => source.is_input_error(),
             _ => true,
         }
@@ -113,6 +118,39 @@ impl Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// A number as `%g` would print it, to 6 significant digits: plain decimals for magnitudes in
+/// `[1e-4, 1e6)`, exponent notation outside (so 1e300 is not printed with 300 digits).
+pub fn fmt_g(v: f64) -> String {
+    if !v.is_finite() {
+        return if v.is_nan() {
+            "NaN".into()
+        } else if v > 0.0 {
+            "inf".into()
+        } else {
+            "-inf".into()
+        };
+    }
+    let a = v.abs();
+    if a == 0.0 || (1e-4..1e6).contains(&a) {
+        let digits = (5 - a.log10().floor().max(-5.0) as i32).max(0) as usize;
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        let s = format!("{v:.5e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = if m.contains('.') {
+            m.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            m
+        };
+        format!("{m}e{e}")
+    }
+}
 
 /// Checks a scalar: finite and, if `positive`, strictly positive.
 pub(crate) fn check_scalar(name: &'static str, value: f64, positive: bool) -> Result<()> {
@@ -126,7 +164,7 @@ pub(crate) fn check_scalar(name: &'static str, value: f64, positive: bool) -> Re
     if positive && value <= 0.0 {
         return Err(Error::InvalidParameter {
             name,
-            value: value.to_string(),
+            value: fmt_g(value),
             requirement: "must be > 0",
         });
     }
@@ -171,4 +209,26 @@ pub(crate) fn check_increasing(name: &'static str, t: &[f64]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fmt_g;
+
+    #[test]
+    fn numbers_print_like_percent_g() {
+        for (v, want) in [
+            (0.0, "0"),
+            (48.0, "48"),
+            (0.001, "0.001"),
+            (1e-300, "1e-300"),
+            (1e300, "1e300"),
+            (123456.0, "123456"),
+            (1234567.0, "1.23457e6"),
+            (-2.5e-7, "-2.5e-7"),
+            (f64::NAN, "NaN"),
+        ] {
+            assert_eq!(fmt_g(v), want, "{v}");
+        }
+    }
 }

@@ -20,10 +20,10 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::basis::Basis;
-use crate::design::{PreparedDemo, normal_equations, solve_ridge};
+use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
-use crate::error::{Error, Result, check_scalar};
-use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
+use crate::error::{Error, Result, check_scalar, fmt_g};
+use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales};
 use crate::lwr::{Lwr, LwrOptions};
 
 /// tau(q) must lie strictly inside `(TAU_LOW x min tau_k, TAU_HIGH x max tau_k)` (docs/method.md §3.3).
@@ -281,27 +281,32 @@ impl Generalizer {
 
     fn lwr_gp_model(
         queries: &[Vec<f64>],
-        normal: Vec<crate::design::NormalEquations>,
+        normal: Vec<crate::design_matrix::NormalEquations>,
         dmps: &[Dmp],
         opts: &LwrGpOptions,
     ) -> Result<LwrGp> {
         check_scalar("gp_noise", opts.gp_noise, true)?;
+        if opts.gp_restarts > crate::gp::MAX_RESTARTS {
+            return Err(Error::InvalidParameter {
+                name: "gp_restarts",
+                value: opts.gp_restarts.to_string(),
+                requirement: "must be at most 1000 (each restart is a full optimization of each GP)",
+            });
+        }
         let lwr = Lwr::new(queries, normal, opts.lwr)?;
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
         let optimize = opts.gp_optimize.unwrap_or(m >= 4);
-        let ranges: Vec<f64> = x
-            .row_iter()
-            .map(|r| {
-                let s = r.max() - r.min();
-                if s > 0.0 { s } else { 1.0 }
-            })
-            .collect();
         let fit = |y: Vec<f64>| -> Result<GaussianProcess> {
-            let mean = y.iter().sum::<f64>() / m as f64;
-            let var = y.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / m as f64;
-            let var = if var > 0.0 { var } else { 1.0 };
+            let (ranges, var) = data_scales(&x.as_view(), &y);
             let noise = opts.gp_noise * opts.gp_noise * var;
+            if !(noise > 0.0 && noise.is_finite()) {
+                return Err(Error::InvalidParameter {
+                    name: "gp_noise",
+                    value: fmt_g(opts.gp_noise),
+                    requirement: "gives a noise variance gp_noise^2 x var outside the range of f64",
+                });
+            }
             let initial = Hyperparameters {
                 length_scales: ranges.clone(),
                 signal_var: var,

@@ -12,10 +12,12 @@
 //! likelihood (eq. 2.30) with its analytic gradient (eq. 5.9), in log space, with box bounds and
 //! deterministic restarts from Halton points.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use nalgebra::DMatrixView;
 use rayon::prelude::*;
 
-use crate::error::{Error, Result, check_scalar};
+use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::linalg::{
     Scratch, cholesky_in_place_with, dot, exp_in_place, simd, solve_lower_in_place,
     solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
@@ -150,6 +152,31 @@ pub struct GpOptions {
     pub minimize: MinimizeOptions,
 }
 
+/// The most restarts and optimizer iterations a fit may ask for: far beyond any benefit (the
+/// defaults are 4 and 200), and small enough that a fit cannot run for minutes by mistake.
+pub const MAX_RESTARTS: usize = 1000;
+pub const MAX_ITER: usize = 100_000;
+
+impl GpOptions {
+    pub fn validate(&self) -> Result<()> {
+        if self.n_restarts > MAX_RESTARTS {
+            return Err(Error::InvalidParameter {
+                name: "n_restarts",
+                value: self.n_restarts.to_string(),
+                requirement: "must be at most 1000 (each restart is a full optimization)",
+            });
+        }
+        if self.minimize.max_iter == 0 || self.minimize.max_iter > MAX_ITER {
+            return Err(Error::InvalidParameter {
+                name: "max_iter",
+                value: self.minimize.max_iter.to_string(),
+                requirement: "must be between 1 and 100000",
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for GpOptions {
     fn default() -> Self {
         Self {
@@ -194,10 +221,30 @@ fn check_data(x: &DMatrixView<'_, f64>, y: &[f64]) -> Result<()> {
             value: v,
         });
     }
+    // The data-relative defaults are multiples of these: an overflow would surface later as a
+    // complaint about a hyperparameter the caller never passed.
+    let (ranges, var) = data_scales(x, y);
+    if let Some(d) = ranges.iter().position(|r| !r.is_finite()) {
+        return Err(Error::InvalidParameter {
+            name: "X",
+            value: format!("column {d} spanning {}", fmt_g(ranges[d])),
+            requirement: "its range overflows f64; rescale the inputs",
+        });
+    }
+    if !var.is_finite() {
+        let max = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        return Err(Error::InvalidParameter {
+            name: "y",
+            value: format!("values up to {}", fmt_g(max)),
+            requirement: "their variance overflows f64; rescale the outputs",
+        });
+    }
     Ok(())
 }
 
-fn data_scales(x: &DMatrixView<'_, f64>, y: &[f64]) -> (Vec<f64>, f64) {
+/// The scales of the data that data-relative hyperparameters and bounds are multiples of: the
+/// range of each input dimension and the variance of the outputs (each 1 where it is 0).
+pub(crate) fn data_scales(x: &DMatrixView<'_, f64>, y: &[f64]) -> (Vec<f64>, f64) {
     let ranges = x
         .row_iter()
         .map(|r| {
@@ -533,6 +580,20 @@ impl GaussianProcess {
         initial: Option<Hyperparameters>,
         options: &GpOptions,
     ) -> Result<Self> {
+        Self::fit_cancellable(x, y, initial, options, &AtomicBool::new(false))
+    }
+
+    /// [`Self::fit`] that gives up with [`Error::Cancelled`] once `cancel` is set: it is polled
+    /// before every restart of the optimization, so a caller on another thread (the Python
+    /// bindings, on Ctrl-C) can stop a long fit.
+    pub fn fit_cancellable(
+        x: &DMatrixView<'_, f64>,
+        y: &[f64],
+        initial: Option<Hyperparameters>,
+        options: &GpOptions,
+        cancel: &AtomicBool,
+    ) -> Result<Self> {
+        options.validate()?;
         check_data(x, y)?;
         let (n_dim, m) = x.shape();
         let initial = match initial {
@@ -559,7 +620,9 @@ impl GaussianProcess {
                 signal_var: (0.1 * var, 100.0 * var),
                 noise_var: (1e-6 * var, var),
             };
-            optimize_hyperparameters(&xv, n_dim, &r, &initial, &bounds, &plausible, options)?
+            optimize_hyperparameters(
+                &xv, n_dim, &r, &initial, &bounds, &plausible, options, cancel,
+            )?
         } else {
             initial
         };
@@ -772,6 +835,7 @@ impl Objective for NegativeLml<'_> {
 /// 1e-6-1 x var(y)) rather than over the whole box: the log marginal likelihood is often
 /// multimodal, and starts at extreme corners (length scales of 1e-3 x range, say) mostly fall into
 /// degenerate optima. In a dimension where that region misses the bounds, the bounds are used.
+#[allow(clippy::too_many_arguments)] // the data, the box and the options of one optimization
 fn optimize_hyperparameters(
     x: &[f64],
     n_dim: usize,
@@ -780,6 +844,7 @@ fn optimize_hyperparameters(
     bounds: &HyperBounds,
     plausible: &HyperBounds,
     options: &GpOptions,
+    cancel: &AtomicBool,
 ) -> Result<Hyperparameters> {
     let (lo, hi) = bounds.log_box();
     let (plo, phi) = plausible.log_box();
@@ -806,6 +871,9 @@ fn optimize_hyperparameters(
     // The starts are independent: run them in parallel, each with its own workspace, and pick
     // the best in start order, so the result does not depend on the number of threads.
     let run = |x0: &Vec<f64>| {
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
         let mut objective = NegativeLml {
             ws: Workspace::new(m, n_dim),
             x,
@@ -820,6 +888,11 @@ fn optimize_hyperparameters(
     } else {
         starts.iter().map(run).collect()
     };
+    if cancel.load(Ordering::Relaxed) {
+        return Err(Error::Cancelled {
+            context: "Gaussian process hyperparameter optimization",
+        });
+    }
     let mut best: Option<(f64, Vec<f64>)> = None;
     for min in minima.into_iter().flatten() {
         if best.as_ref().is_none_or(|(f, _)| min.f < *f) {

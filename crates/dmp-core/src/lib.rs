@@ -9,10 +9,11 @@
 
 pub mod basis;
 pub mod cartesian;
-pub mod design;
-pub mod diff;
+pub mod cartesian_generalize;
+pub mod design_matrix;
 pub mod dmp;
 pub mod error;
+pub mod finite_difference;
 pub mod generalize;
 pub mod gp;
 pub mod linalg;
@@ -25,6 +26,7 @@ pub use basis::Basis;
 pub use cartesian::{
     CartesianDemonstration, CartesianDmp, CartesianTrajectory, rollout_batch_cartesian,
 };
+pub use cartesian_generalize::CartesianGeneralizer;
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
 pub use generalize::{Generalizer, LwrGpOptions, Method};

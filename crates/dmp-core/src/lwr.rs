@@ -8,7 +8,7 @@
 //!
 //! `A_k`, `F_k` are the design matrix and targets of demo k (docs/method.md §2.3), each on its own
 //! `tau_k` and `g_k` through the common phase, so `A_k^T A_k` and `A_k^T F_k` are computed once
-//! (see [`crate::design::normal_equations`]) and a query costs one `N x N` solve.
+//! (see [`crate::design_matrix::normal_equations`]) and a query costs one `N x N` solve.
 //!
 //! Kernel weights: `kappa_k = K(d_k)` with `d_k = |D (q - q_k)| / b`, `D = diag(1 / range)` of
 //! the demo queries, the tricube `K(d) = (1 - |d|^3)^3` (`|d| < 1`, else 0) or the Gaussian
@@ -24,7 +24,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::design::{NormalEquations, solve_ridge};
+use crate::design_matrix::{NormalEquations, solve_ridge};
 use crate::error::{Error, Result, check_scalar};
 
 /// The kernel on the scaled query distance.

@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use crate::dmp::Dmp;
-use crate::error::{Error, Result, check_scalar};
+use crate::error::{Error, Result, check_scalar, fmt_g};
 
 /// Rollouts longer than this many values per array (samples x DOFs) are refused rather than
 /// exhausting memory on a mistyped `dt`.
@@ -75,9 +75,38 @@ pub(crate) fn n_steps(duration: f64, dt: f64) -> f64 {
     }
 }
 
+/// Euler sub-steps per sample beyond which a rollout is refused: that many mean a `dt` far too
+/// coarse for the DMP's stiffness, and the work would grow without bound.
+pub const MAX_SUBSTEPS: usize = 1000;
+/// Fraction of the explicit-Euler stability limit a (sub-)step may use: a quarter keeps
+/// `h |lambda| <= 0.5` on a critically damped spring, where Euler is not only stable but does
+/// not overshoot (the default dt = 1 ms with tau >= 0.1 s is far inside).
+const STABILITY_MARGIN: f64 = 0.25;
+
+/// The largest step `h = dt / tau` (in units of tau) for which explicit Euler on eqs. 1-3 decays
+/// instead of blowing up. The spring `(y, z)` has the eigenvalues `lambda` of
+/// `[[0, 1], [-alpha_z beta_z, -alpha_z]]` (times 1/tau) and Euler is stable iff
+/// `|1 + h lambda| < 1`, i.e. `h < -2 Re(lambda) / |lambda|^2`: `4 / (alpha_z + sqrt(alpha_z^2 -
+/// 4 alpha_z beta_z))` for real eigenvalues, `1 / beta_z` for complex ones. The phase eq. 3 stays
+/// positive iff `h < 1 / alpha_x`.
+pub fn stable_step(alpha_z: f64, beta_z: f64, alpha_x: f64) -> f64 {
+    let disc = alpha_z * alpha_z - 4.0 * alpha_z * beta_z;
+    let spring = if disc >= 0.0 {
+        4.0 / (alpha_z + disc.sqrt())
+    } else {
+        1.0 / beta_z
+    };
+    STABILITY_MARGIN * spring.min(1.0 / alpha_x)
+}
+
 impl Dmp {
     /// Integrates eqs. 1-3 with explicit Euler and returns positions, velocities `z / tau` and
     /// accelerations `dz/dt / tau` at `t_j = j dt`.
+    ///
+    /// When `dt` is beyond the stability limit of explicit Euler for this DMP ([`stable_step`]),
+    /// each sample interval is integrated in the fewest equal sub-steps that are stable; at most
+    /// [`MAX_SUBSTEPS`], beyond which the rollout is refused. Within the limit nothing changes.
+    /// A trajectory that still overflows (a goal of 1e308, say) is an error, never returned.
     pub fn rollout(&self, opts: &RolloutOptions) -> Result<Trajectory> {
         opts.validate()?;
         let duration = opts.duration.unwrap_or(self.tau());
@@ -93,9 +122,18 @@ impl Dmp {
         if values.is_nan() || values > MAX_VALUES as f64 {
             return Err(Error::InvalidParameter {
                 name: "dt",
-                value: opts.dt.to_string(),
+                value: fmt_g(opts.dt),
                 requirement: "is too small for the duration: the rollout would exceed 20 million values",
             });
+        }
+        let cfg = *self.config();
+        let substeps = self.substeps(opts.dt)?;
+        if values * substeps as f64 > (MAX_SUBSTEPS * MAX_VALUES) as f64 / 100.0 {
+            return Err(self.too_coarse(
+                opts.dt,
+                substeps as f64,
+                "the rollout would take too long",
+            ));
         }
         let capacity = (steps as usize + 1) * n_dof;
         let mut out = Trajectory {
@@ -106,8 +144,8 @@ impl Dmp {
             n_dof,
         };
 
-        let cfg = *self.config();
         let (dt, inv_tau) = (opts.dt, 1.0 / self.tau());
+        let h = dt / substeps as f64;
         let n = cfg.n_basis;
         let goal = self.goal().as_slice();
         // N x D column-major: the weights of DOF d are the contiguous slice w[d n .. (d+1) n].
@@ -115,26 +153,29 @@ impl Dmp {
         let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
         let mut y: Vec<f64> = self.y0().iter().copied().collect();
         let mut z = vec![0.0; n_dof];
+        let mut dz = vec![0.0; n_dof];
         let mut x = 1.0;
         let mut psi = vec![0.0; n];
-        let mut step = 0usize;
-        loop {
-            // The phase and its activations are shared by every DOF: once per step.
+        // dz/dt * tau at the current state; the phase's activations are shared by every DOF.
+        let mut derivative = |x: f64, y: &[f64], z: &[f64], dz: &mut [f64]| {
             let range = self.basis().normalized_activations(x, &mut psi);
             let psi = &psi[range.clone()];
-            out.t.push(step as f64 * dt);
-            let mut at_rest = x * max_w / (cfg.alpha_z * cfg.beta_z) <= opts.rest_tol;
             for d in 0..n_dof {
                 let wd = &w[d * n + range.start..d * n + range.end];
                 let f = x * wd.iter().zip(psi).map(|(w, p)| w * p).sum::<f64>();
-                let dz = (cfg.alpha_z * (cfg.beta_z * (goal[d] - y[d]) - z[d]) + f) * inv_tau;
-                let yd = z[d] * inv_tau;
+                dz[d] = (cfg.alpha_z * (cfg.beta_z * (goal[d] - y[d]) - z[d]) + f) * inv_tau;
+            }
+        };
+        let mut step = 0usize;
+        loop {
+            derivative(x, &y, &z, &mut dz);
+            out.t.push(step as f64 * dt);
+            let mut at_rest = x * max_w / (cfg.alpha_z * cfg.beta_z) <= opts.rest_tol;
+            for d in 0..n_dof {
                 out.y.push(y[d]);
-                out.yd.push(yd);
-                out.ydd.push(dz * inv_tau);
+                out.yd.push(z[d] * inv_tau);
+                out.ydd.push(dz[d] * inv_tau);
                 at_rest &= (goal[d] - y[d]).abs() <= opts.rest_tol && z[d].abs() <= opts.rest_tol;
-                y[d] += yd * dt;
-                z[d] += dz * dt;
             }
             let past_end = step as f64 >= steps;
             if past_end && (!opts.until_rest || at_rest) {
@@ -145,15 +186,79 @@ impl Dmp {
                     context: "DMP rollout",
                     detail: format!(
                         "not at rest within {REST_HORIZON_TAUS} tau past the duration (rest_tol = {})",
-                        opts.rest_tol
+                        fmt_g(opts.rest_tol)
                     ),
                 });
             }
-            x -= cfg.alpha_x * x * inv_tau * dt;
+            for sub in 0..substeps {
+                if sub > 0 {
+                    derivative(x, &y, &z, &mut dz);
+                }
+                for d in 0..n_dof {
+                    y[d] += z[d] * inv_tau * h;
+                    z[d] += dz[d] * h;
+                }
+                x -= cfg.alpha_x * x * inv_tau * h;
+            }
             step += 1;
         }
+        check_trajectory(&out)?;
         Ok(out)
     }
+
+    /// Euler sub-steps per sample that keep the integration stable (1 when `dt` already is).
+    fn substeps(&self, dt: f64) -> Result<usize> {
+        let cfg = self.config();
+        let limit = stable_step(cfg.alpha_z, cfg.beta_z, cfg.alpha_x) * self.tau();
+        if dt <= limit {
+            return Ok(1);
+        }
+        let k = (dt / limit).ceil();
+        if k.is_nan() || k > MAX_SUBSTEPS as f64 {
+            return Err(self.too_coarse(dt, k, "at most 1000 are taken"));
+        }
+        Ok(k as usize)
+    }
+
+    fn too_coarse(&self, dt: f64, substeps: f64, why: &str) -> Error {
+        let cfg = self.config();
+        Error::Numerical {
+            context: "DMP rollout",
+            detail: format!(
+                "dt = {} is too coarse for tau = {}, alpha_z = {}, beta_z = {} and alpha_x = {}: \
+                 explicit Euler is stable only for steps below {} s, which needs {} sub-steps per \
+                 sample ({why}); use a smaller dt, a larger tau or a smaller alpha_z",
+                fmt_g(dt),
+                fmt_g(self.tau()),
+                fmt_g(cfg.alpha_z),
+                fmt_g(cfg.beta_z),
+                fmt_g(cfg.alpha_x),
+                fmt_g(
+                    stable_step(cfg.alpha_z, cfg.beta_z, cfg.alpha_x) * self.tau()
+                        / STABILITY_MARGIN
+                ),
+                fmt_g(substeps),
+            ),
+        }
+    }
+}
+
+/// A rollout whose values overflowed (a huge goal or weights) is an error, not a result.
+fn check_trajectory(tr: &Trajectory) -> Result<()> {
+    for (name, v) in [("y", &tr.y), ("yd", &tr.yd), ("ydd", &tr.ydd)] {
+        if let Some(i) = v.iter().position(|v| !v.is_finite()) {
+            let (j, d) = (i / tr.n_dof, i % tr.n_dof);
+            return Err(Error::Numerical {
+                context: "DMP rollout",
+                detail: format!(
+                    "{name}[{j}, {d}] at t = {} is {}: the goal, start or weights are too large for f64",
+                    fmt_g(tr.t[j]),
+                    fmt_g(v[i])
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Rolls out many DMPs in parallel (rayon). Each rollout is independent, so the result is the

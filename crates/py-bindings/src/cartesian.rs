@@ -1,10 +1,10 @@
-//! `dmprs._core.CartesianDmp` and `rollout_batch_cartesian`: numpy in, numpy out.
-//! `dmprs.CartesianDMP` (Python) wraps these and documents them.
+//! `dmprs._core.CartesianDmp`, `rollout_batch_cartesian` and `CartesianGeneralizer`: numpy in,
+//! numpy out. `dmprs.CartesianDMP` and `dmprs.Generalizer` (Python) wrap these and document them.
 
 use dmp_core::cartesian::POSE_WIDTH;
 use dmp_core::{
-    CartesianDemonstration, CartesianDmp, CartesianTrajectory, DmpConfig, RolloutOptions,
-    rollout_batch_cartesian,
+    CartesianDemonstration, CartesianDmp, CartesianGeneralizer, CartesianTrajectory, DmpConfig,
+    RolloutOptions, rollout_batch_cartesian,
 };
 use nalgebra::{DMatrix, DMatrixView};
 use numpy::{
@@ -13,8 +13,9 @@ use numpy::{
 };
 use pyo3::prelude::*;
 
-use crate::dmp::time_major;
-use crate::errors::{IntoPyResult, raise};
+use crate::dmp::{contiguous, time_major};
+use crate::errors::{IntoPyResult, invalid_input};
+use crate::generalize::{parse_method, parse_queries, query, row_major};
 
 /// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
 type CartesianArrays<'py> = (
@@ -27,34 +28,38 @@ type CartesianArrays<'py> = (
     Bound<'py, PyArray2<f64>>,
 );
 
+/// `a`, read-only: numpy's `PyArray_CLEARFLAGS(a, NPY_ARRAY_WRITEABLE)`, in place of seven
+/// `setflags(write=False)` calls from Python on every rollout.
+fn read_only<D>(a: Bound<'_, numpy::PyArray<f64, D>>) -> Bound<'_, numpy::PyArray<f64, D>> {
+    // SAFETY: `a` is a live array object that this function owns a reference to; clearing a flag
+    // bit is what the C macro does.
+    unsafe { (*a.as_array_ptr()).fields.flags &= !numpy::npyffi::flags::NPY_ARRAY_WRITEABLE };
+    a
+}
+
 fn trajectory_arrays(py: Python<'_>, tr: CartesianTrajectory) -> PyResult<CartesianArrays<'_>> {
     let n = tr.t.len();
+    let block = |v: Vec<f64>, width: usize| -> PyResult<Bound<'_, PyArray2<f64>>> {
+        Ok(read_only(v.into_pyarray(py).reshape([n, width])?))
+    };
     Ok((
-        tr.t.into_pyarray(py),
-        tr.position.into_pyarray(py).reshape([n, 3])?,
-        tr.quaternion.into_pyarray(py).reshape([n, 4])?,
-        tr.velocity.into_pyarray(py).reshape([n, 3])?,
-        tr.angular_velocity.into_pyarray(py).reshape([n, 3])?,
-        tr.acceleration.into_pyarray(py).reshape([n, 3])?,
-        tr.angular_acceleration.into_pyarray(py).reshape([n, 3])?,
+        read_only(tr.t.into_pyarray(py)),
+        block(tr.position, 3)?,
+        block(tr.quaternion, 4)?,
+        block(tr.velocity, 3)?,
+        block(tr.angular_velocity, 3)?,
+        block(tr.acceleration, 3)?,
+        block(tr.angular_acceleration, 3)?,
     ))
 }
 
 fn pose(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<[f64; POSE_WIDTH]> {
-    let slice = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a contiguous array"),
-        )
-    })?;
+    let slice = contiguous(name, a)?;
     slice.try_into().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!(
-                "{name} has shape ({},), expected (7,): x, y, z, qw, qx, qy, qz",
-                slice.len()
-            ),
-        )
+        invalid_input(format!(
+            "{name} has shape ({},), expected (7,): x, y, z, qw, qx, qy, qz",
+            slice.len()
+        ))
     })
 }
 
@@ -125,9 +130,7 @@ impl PyCartesianDmp {
         alpha_x: f64,
         width_factor: f64,
     ) -> PyResult<Self> {
-        let t = t
-            .as_slice()
-            .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
+        let t = contiguous("t", &t)?;
         let demo = CartesianDemonstration {
             t,
             pose: time_major("pose", &pose)?,
@@ -261,4 +264,145 @@ pub fn py_rollout_batch_cartesian<'py>(
         .into_iter()
         .map(|tr| trajectory_arrays(py, tr))
         .collect()
+}
+
+/// `(t, pose, velocity, acceleration, angular_velocity, angular_acceleration)` of one demo.
+type PoseDemoArrays<'py> = (
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray2<'py, f64>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+    Option<PyReadonlyArray2<'py, f64>>,
+);
+
+#[pyclass(name = "CartesianGeneralizer", module = "dmprs._core", frozen)]
+pub struct PyCartesianGeneralizer {
+    inner: CartesianGeneralizer,
+}
+
+#[pymethods]
+impl PyCartesianGeneralizer {
+    /// `queries` `(M, n)`; `demos` a list of [`PoseDemoArrays`] with `pose` `(T, 7)`.
+    #[new]
+    #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
+                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        queries: PyReadonlyArray2<'_, f64>,
+        demos: Vec<PoseDemoArrays<'_>>,
+        method: &str,
+        n_basis: usize,
+        alpha_z: f64,
+        beta_z: f64,
+        alpha_x: f64,
+        width_factor: f64,
+        kernel: &str,
+        bandwidth: f64,
+        ridge: f64,
+        interpolate: bool,
+        gp_noise: f64,
+        gp_optimize: Option<bool>,
+        gp_restarts: usize,
+    ) -> PyResult<Self> {
+        let method = parse_method(
+            method,
+            kernel,
+            bandwidth,
+            ridge,
+            interpolate,
+            gp_noise,
+            gp_optimize,
+            gp_restarts,
+        )?;
+        let qs = parse_queries(&queries)?;
+        let mut views = Vec::with_capacity(demos.len());
+        for (t, pose, v, a, w, wd) in &demos {
+            let t = contiguous("t", t)?;
+            views.push(CartesianDemonstration {
+                t,
+                pose: time_major("pose", pose)?,
+                velocity: optional("velocity", v)?,
+                acceleration: optional("acceleration", a)?,
+                angular_velocity: optional("angular_velocity", w)?,
+                angular_acceleration: optional("angular_acceleration", wd)?,
+                normalize: false,
+            });
+        }
+        let config = DmpConfig {
+            n_basis,
+            alpha_z,
+            beta_z,
+            alpha_x,
+            width_factor,
+        };
+        let inner = py
+            .detach(|| CartesianGeneralizer::new(&qs, &views, config, method))
+            .py_err()?;
+        Ok(Self { inner })
+    }
+
+    fn predict(&self, q: PyReadonlyArray1<'_, f64>) -> PyResult<PyCartesianDmp> {
+        Ok(PyCartesianDmp {
+            inner: self.inner.predict(query(&q)?).py_err()?,
+        })
+    }
+
+    fn parameters<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let p = self.inner.parameters(query(&q)?).py_err()?;
+        Ok(p.as_slice().to_vec().into_pyarray(py))
+    }
+
+    /// `(n_parameters, n)`.
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: PyReadonlyArray1<'_, f64>,
+        rel_step: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
+        row_major(py, &jac)
+    }
+
+    #[getter]
+    fn demo_dmps(&self) -> Vec<PyCartesianDmp> {
+        self.inner
+            .demo_dmps()
+            .iter()
+            .map(|d| PyCartesianDmp { inner: d.clone() })
+            .collect()
+    }
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.method()
+    }
+    #[getter]
+    fn n_query(&self) -> usize {
+        self.inner.n_query()
+    }
+    #[getter]
+    fn n_dof(&self) -> usize {
+        6
+    }
+    #[getter]
+    fn n_demos(&self) -> usize {
+        self.inner.n_demos()
+    }
+    #[getter]
+    fn n_basis(&self) -> usize {
+        self.inner.config().n_basis
+    }
+    #[getter]
+    fn n_parameters(&self) -> usize {
+        self.inner.n_parameters()
+    }
+    #[getter]
+    fn tau_bounds(&self) -> (f64, f64) {
+        self.inner.tau_bounds()
+    }
 }

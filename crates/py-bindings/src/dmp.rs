@@ -9,7 +9,17 @@ use numpy::{
 };
 use pyo3::prelude::*;
 
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
+
+/// The data of a numpy array that must be contiguous (every array the Python layer passes is:
+/// it goes through `as_float_array`, so this only fails when the bindings are called directly).
+pub(crate) fn contiguous<'a, D: numpy::ndarray::Dimension>(
+    name: &str,
+    a: &'a numpy::PyReadonlyArray<'_, f64, D>,
+) -> PyResult<&'a [f64]> {
+    a.as_slice()
+        .map_err(|_| invalid_input(format!("{name} must be a C-contiguous array")))
+}
 
 /// A C-ordered `(T, D)` array viewed as the `D x T` matrix the core expects (no copy).
 pub(crate) fn time_major<'a>(
@@ -17,23 +27,44 @@ pub(crate) fn time_major<'a>(
     a: &'a PyReadonlyArray2<'_, f64>,
 ) -> PyResult<DMatrixView<'a, f64>> {
     let (t, d) = (a.shape()[0], a.shape()[1]);
-    let slice = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a C-contiguous array"),
-        )
-    })?;
-    Ok(DMatrixView::from_slice(slice, d, t))
+    Ok(DMatrixView::from_slice(contiguous(name, a)?, d, t))
 }
 
 pub(crate) fn vector(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<DVector<f64>> {
-    let slice = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a contiguous array"),
-        )
-    })?;
-    Ok(DVector::from_column_slice(slice))
+    Ok(DVector::from_column_slice(contiguous(name, a)?))
+}
+
+/// A sample-times array and its `(T, D)` positions and optional derivatives as a core
+/// demonstration (no copies).
+pub(crate) fn demonstration<'a>(
+    t: &'a PyReadonlyArray1<'_, f64>,
+    y: &'a PyReadonlyArray2<'_, f64>,
+    yd: Option<&'a PyReadonlyArray2<'_, f64>>,
+    ydd: Option<&'a PyReadonlyArray2<'_, f64>>,
+) -> PyResult<Demonstration<'a>> {
+    Ok(Demonstration {
+        t: contiguous("t", t)?,
+        y: time_major("y", y)?,
+        yd: yd.map(|a| time_major("yd", a)).transpose()?,
+        ydd: ydd.map(|a| time_major("ydd", a)).transpose()?,
+    })
+}
+
+/// The DMP constants as they arrive from Python (keywords of the same names), in one place.
+pub(crate) fn dmp_config(
+    n_basis: usize,
+    alpha_z: f64,
+    beta_z: f64,
+    alpha_x: f64,
+    width_factor: f64,
+) -> DmpConfig {
+    DmpConfig {
+        n_basis,
+        alpha_z,
+        beta_z,
+        alpha_x,
+        width_factor,
+    }
 }
 
 type TrajectoryArrays<'py> = (
@@ -76,13 +107,7 @@ impl PyDmp {
         // weights arrive (D, N) C-ordered, which is the N x D column-major matrix of the core.
         let n = weights.shape()[1];
         let w = time_major("weights", &weights)?;
-        let config = DmpConfig {
-            n_basis: n,
-            alpha_z,
-            beta_z,
-            alpha_x,
-            width_factor,
-        };
+        let config = dmp_config(n, alpha_z, beta_z, alpha_x, width_factor);
         let inner = Dmp::new(
             config,
             DMatrix::from(w),
@@ -109,22 +134,8 @@ impl PyDmp {
         alpha_x: f64,
         width_factor: f64,
     ) -> PyResult<Self> {
-        let t_slice = t
-            .as_slice()
-            .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
-        let demo = Demonstration {
-            t: t_slice,
-            y: time_major("y", &y)?,
-            yd: yd.as_ref().map(|a| time_major("yd", a)).transpose()?,
-            ydd: ydd.as_ref().map(|a| time_major("ydd", a)).transpose()?,
-        };
-        let config = DmpConfig {
-            n_basis,
-            alpha_z,
-            beta_z,
-            alpha_x,
-            width_factor,
-        };
+        let demo = demonstration(&t, &y, yd.as_ref(), ydd.as_ref())?;
+        let config = dmp_config(n_basis, alpha_z, beta_z, alpha_x, width_factor);
         Ok(Self {
             inner: Dmp::fit(&demo, config).py_err()?,
         })

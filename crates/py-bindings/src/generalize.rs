@@ -1,12 +1,12 @@
 //! `dmprs._core.Generalizer`: the generalizers of `dmp_core::generalize` over demonstrations
 //! passed as numpy arrays. `dmprs.Generalizer` (Python) builds it from a `dmprs.Database`.
 
-use dmp_core::{Demonstration, DmpConfig, Generalizer, Kernel, LwrGpOptions, LwrOptions, Method};
+use dmp_core::{Generalizer, Kernel, LwrGpOptions, LwrOptions, Method};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::dmp::{PyDmp, time_major};
-use crate::errors::{IntoPyResult, raise};
+use crate::dmp::{PyDmp, contiguous, demonstration, dmp_config, time_major};
+use crate::errors::{IntoPyResult, invalid_input};
 
 type DemoArrays<'py> = (
     PyReadonlyArray1<'py, f64>,
@@ -15,9 +15,72 @@ type DemoArrays<'py> = (
     Option<PyReadonlyArray2<'py, f64>>,
 );
 
-fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    q.as_slice()
-        .map_err(|_| raise("InvalidInputError", "q must be a contiguous array".into()))
+pub(crate) fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
+    contiguous("q", q)
+}
+
+/// The generalization method and its options, from the keyword arguments of the constructors.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn parse_method(
+    method: &str,
+    kernel: &str,
+    bandwidth: f64,
+    ridge: f64,
+    interpolate: bool,
+    gp_noise: f64,
+    gp_optimize: Option<bool>,
+    gp_restarts: usize,
+) -> PyResult<Method> {
+    let kernel = match kernel {
+        "tricube" => Kernel::Tricube,
+        "gaussian" => Kernel::Gaussian,
+        other => {
+            return Err(invalid_input(format!(
+                "kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"
+            )));
+        }
+    };
+    Ok(match method {
+        "linear" => Method::Linear,
+        "lwr-gp" => Method::LwrGp(LwrGpOptions {
+            lwr: LwrOptions {
+                kernel,
+                bandwidth,
+                ridge,
+                interpolate,
+            },
+            gp_noise,
+            gp_optimize,
+            gp_restarts,
+        }),
+        other => {
+            return Err(invalid_input(format!(
+                "method = {other:?} is invalid: use 'linear' or 'lwr-gp'"
+            )));
+        }
+    })
+}
+
+/// `(M, n)` queries as one `Vec` per demonstration.
+pub(crate) fn parse_queries(queries: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Vec<f64>>> {
+    let qv = time_major("queries", queries)?;
+    Ok(qv
+        .column_iter()
+        .map(|c| c.iter().copied().collect())
+        .collect())
+}
+
+/// A `p x n` matrix as a C-ordered `(p, n)` array.
+pub(crate) fn row_major<'py>(
+    py: Python<'py>,
+    m: &nalgebra::DMatrix<f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (p, n) = m.shape();
+    let data: Vec<f64> = (0..p)
+        .flat_map(|i| (0..n).map(move |j| (i, j)))
+        .map(|ij| m[ij])
+        .collect();
+    data.into_pyarray(py).reshape([p, n])
 }
 
 #[pyclass(name = "Generalizer", module = "dmprs._core", frozen)]
@@ -50,60 +113,22 @@ impl PyGeneralizer {
         gp_optimize: Option<bool>,
         gp_restarts: usize,
     ) -> PyResult<Self> {
-        let kernel = match kernel {
-            "tricube" => Kernel::Tricube,
-            "gaussian" => Kernel::Gaussian,
-            other => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!("kernel = {other:?} is invalid: use 'tricube' or 'gaussian'"),
-                ));
-            }
-        };
-        let method = match method {
-            "linear" => Method::Linear,
-            "lwr-gp" => Method::LwrGp(LwrGpOptions {
-                lwr: LwrOptions {
-                    kernel,
-                    bandwidth,
-                    ridge,
-                    interpolate,
-                },
-                gp_noise,
-                gp_optimize,
-                gp_restarts,
-            }),
-            other => {
-                return Err(raise(
-                    "InvalidInputError",
-                    format!("method = {other:?} is invalid: use 'linear' or 'lwr-gp'"),
-                ));
-            }
-        };
-        let qv = time_major("queries", &queries)?;
-        let qs: Vec<Vec<f64>> = qv
-            .column_iter()
-            .map(|c| c.iter().copied().collect())
-            .collect();
+        let method = parse_method(
+            method,
+            kernel,
+            bandwidth,
+            ridge,
+            interpolate,
+            gp_noise,
+            gp_optimize,
+            gp_restarts,
+        )?;
+        let qs = parse_queries(&queries)?;
         let mut views = Vec::with_capacity(demos.len());
         for (t, y, yd, ydd) in &demos {
-            let t = t
-                .as_slice()
-                .map_err(|_| raise("InvalidInputError", "t must be a contiguous array".into()))?;
-            views.push(Demonstration {
-                t,
-                y: time_major("y", y)?,
-                yd: yd.as_ref().map(|a| time_major("yd", a)).transpose()?,
-                ydd: ydd.as_ref().map(|a| time_major("ydd", a)).transpose()?,
-            });
+            views.push(demonstration(t, y, yd.as_ref(), ydd.as_ref())?);
         }
-        let config = DmpConfig {
-            n_basis,
-            alpha_z,
-            beta_z,
-            alpha_x,
-            width_factor,
-        };
+        let config = dmp_config(n_basis, alpha_z, beta_z, alpha_x, width_factor);
         let inner = py
             .detach(|| Generalizer::new(&qs, &views, config, method))
             .py_err()?;
@@ -138,12 +163,7 @@ impl PyGeneralizer {
         rel_step: f64,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
-        let (p, n) = jac.shape();
-        let row_major: Vec<f64> = (0..p)
-            .flat_map(|i| (0..n).map(move |j| (i, j)))
-            .map(|ij| jac[ij])
-            .collect();
-        row_major.into_pyarray(py).reshape([p, n])
+        row_major(py, &jac)
     }
 
     #[getter]

@@ -2,35 +2,62 @@
 //! and documents it; arrays arriving here are float64 and of the right rank.
 
 use dmp_core::gp::{GaussianProcess, GpOptions, resolve_bounds, resolve_hyperparameters};
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::dmp::time_major;
-use crate::errors::{IntoPyResult, raise};
-
-fn slice<'a>(name: &str, a: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a contiguous array"),
-        )
-    })
-}
+use crate::dmp::{contiguous, time_major};
+use crate::errors::{IntoPyResult, invalid_input};
 
 fn pairs(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
     if a.shape()[1] != 2 {
-        return Err(raise(
-            "InvalidInputError",
-            format!("{name} must have shape (n, 2); got {:?}", a.shape()),
-        ));
+        return Err(invalid_input(format!(
+            "{name} must have shape (n, 2); got {:?}",
+            a.shape()
+        )));
     }
-    let s = a.as_slice().map_err(|_| {
-        raise(
-            "InvalidInputError",
-            format!("{name} must be a C-contiguous array"),
-        )
-    })?;
-    Ok(s.chunks(2).map(|c| (c[0], c[1])).collect())
+    Ok(contiguous(name, a)?
+        .chunks(2)
+        .map(|c| (c[0], c[1]))
+        .collect())
+}
+
+/// Runs `work` on a scoped thread with the GIL released while this thread checks for signals
+/// every 50 ms; on Ctrl-C (or any signal handler raising) it sets the flag `work` polls, waits for
+/// it to stop and returns the handler's exception (KeyboardInterrupt).
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&AtomicBool) -> T + Send,
+) -> PyResult<T> {
+    let cancel = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let (done, mut finished) = std::sync::mpsc::channel();
+        let cancel = &cancel;
+        scope.spawn(move || done.send(work(cancel)));
+        let mut pending: Option<PyErr> = None;
+        loop {
+            // Returns as soon as the work is done: no latency added to short fits.
+            let (tick, receiver) = py.detach(move || {
+                let tick = finished.recv_timeout(std::time::Duration::from_millis(50));
+                (tick, finished)
+            });
+            finished = receiver;
+            match tick {
+                Ok(result) => return pending.map_or(Ok(result), Err),
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                    panic!("the Gaussian process fit stopped without a result")
+                }
+            }
+            if pending.is_none() {
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::Relaxed);
+                    pending = Some(e);
+                }
+            }
+        }
+    })
 }
 
 type MeanStd<'py> = (Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray1<f64>>>);
@@ -62,10 +89,10 @@ impl PyGaussianProcess {
         max_iter: usize,
     ) -> PyResult<Self> {
         let xv = time_major("X", &x)?;
-        let yv = slice("y", &y)?;
+        let yv = contiguous("y", &y)?;
         let ls = length_scale
             .as_ref()
-            .map(|a| slice("length_scale", a).map(<[f64]>::to_vec))
+            .map(|a| contiguous("length_scale", a).map(<[f64]>::to_vec))
             .transpose()?;
         let ls_bounds = length_scale_bounds
             .as_ref()
@@ -94,9 +121,10 @@ impl PyGaussianProcess {
             ..GpOptions::default()
         };
         options.minimize.max_iter = max_iter;
-        let inner = py
-            .detach(|| GaussianProcess::fit(&xv, yv, Some(start), &options))
-            .py_err()?;
+        let inner = interruptible(py, |cancel| {
+            GaussianProcess::fit_cancellable(&xv, yv, Some(start), &options, cancel)
+        })?
+        .py_err()?;
         Ok(Self { inner })
     }
 
@@ -120,7 +148,7 @@ impl PyGaussianProcess {
     ) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
         let (lml, grad) = self
             .inner
-            .log_marginal_likelihood_at(slice("theta", &theta)?)
+            .log_marginal_likelihood_at(contiguous("theta", &theta)?)
             .py_err()?;
         Ok((lml, grad.into_pyarray(py)))
     }

@@ -1,5 +1,5 @@
 //! PyO3 bindings: the module `dmprs._core`. Thin wrappers only; the algorithms live in
-//! `dmp-core` and `learner`, the user-facing classes and docs in `python/dmprs`.
+//! `dmp-core`, `learners` and `matchbox`, the user-facing classes and docs in `python/dmprs`.
 
 mod cartesian;
 mod dmp;
@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 #[pymodule]
 mod _core {
     #[pymodule_export]
-    use super::cartesian::{PyCartesianDmp, py_rollout_batch_cartesian};
+    use super::cartesian::{PyCartesianDmp, PyCartesianGeneralizer, py_rollout_batch_cartesian};
     #[pymodule_export]
     use super::dmp::PyDmp;
     #[pymodule_export]
@@ -24,7 +24,9 @@ mod _core {
     #[pymodule_export]
     use super::gp::PyGaussianProcess;
     #[pymodule_export]
-    use super::learners::PyLearner;
+    use super::learners::{
+        PyErrorLearning, PyGoldenSection, PyIllinoisRootFinder, PyPi2, PyPolicyGradient, PyPower,
+    };
     #[pymodule_export]
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,

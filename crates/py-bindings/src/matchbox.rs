@@ -1,12 +1,12 @@
 //! `dmprs._core.MatchboxConfig`, `matchbox_simulate`, `matchbox_simulate_batch`, `matchbox_check`:
-//! the Rapier matchbox simulation of `learner::matchbox`, numpy in and out, GIL released.
+//! the Rapier matchbox simulation of the `matchbox` crate, numpy in and out, GIL released.
 
-use learner::matchbox::{Episode, FingerPath, MatchboxConfig, simulate, simulate_batch};
+use matchbox::{Episode, FingerPath, MatchboxConfig, simulate, simulate_batch};
 use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::errors::{IntoPyResult, raise};
+use crate::errors::{IntoPyResult, invalid_input};
 
 #[pyclass(name = "MatchboxConfig", module = "dmprs._core", frozen)]
 #[derive(Clone)]
@@ -88,12 +88,8 @@ fn slices<'a>(
     z: &'a PyReadonlyArray1<'_, f64>,
 ) -> PyResult<FingerPath<'a>> {
     let get = |name: &str, a: &'a PyReadonlyArray1<'_, f64>| {
-        a.as_slice().map_err(|_| {
-            raise(
-                "InvalidInputError",
-                format!("{name} must be a contiguous array"),
-            )
-        })
+        a.as_slice()
+            .map_err(|_| invalid_input(format!("{name} must be a contiguous array")))
     };
     Ok(FingerPath {
         t: get("t", t)?,
@@ -163,10 +159,10 @@ pub fn matchbox_simulate_batch<'py>(
     for (i, p) in views.iter().enumerate() {
         let problems = p.problems(&cfg);
         if !problems.is_empty() {
-            return Err(raise(
-                "InvalidInputError",
-                format!("paths[{i}]: {}", problems.join("; ")),
-            ));
+            return Err(invalid_input(format!(
+                "paths[{i}]: {}",
+                problems.join("; ")
+            )));
         }
     }
     let episodes = py.detach(|| simulate_batch(&views, &cfg));

@@ -13,8 +13,9 @@ import time
 import traceback
 from types import TracebackType
 
+from dmprs._arrays import as_scalar
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import AdapterError
+from dmprs.errors import AdapterError, DmprsError, InvalidInputError
 from dmprs.trajectory import Trajectory
 
 
@@ -130,8 +131,12 @@ class BaseAdapter(Adapter):
             return Outcome(Status.REJECTED, message="; ".join(problems))
         if dry_run:
             return Outcome(Status.DRY_RUN, message="checked, not executed")
+        limit = None if timeout_s is None else as_scalar(timeout_s, "timeout_s")
+        if limit is not None and limit < 0:
+            raise InvalidInputError(f"timeout_s = {limit:g} is invalid: must be >= 0 (or None for no limit)")
         self._stop.clear()
-        self._deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        deadline = None if limit is None else time.monotonic() + limit
+        self._deadline = deadline
         try:
             outcome = self._execute(trajectory)
         except Exception as exc:  # noqa: BLE001 - any failure of one trial becomes its outcome
@@ -140,8 +145,16 @@ class BaseAdapter(Adapter):
             return Outcome(Status.ERROR, message=f"{self.spec.name} raised during the trial: {tb}")
         finally:
             self._deadline = None
-        if outcome.status is Status.OK and self._interrupted():
+        # Enforced here, not left to _execute: an adapter that never polls _interrupted() and
+        # overruns is a timeout whatever it returned (its signals were measured too late).
+        overran = deadline is not None and time.monotonic() > deadline
+        if self._stop.is_set() and outcome.status is Status.OK:
             return self._interrupted_outcome(outcome.executed)
+        if overran and outcome.status not in (Status.TIMEOUT, Status.ERROR, Status.STOPPED):
+            return Outcome(
+                Status.TIMEOUT, executed=outcome.executed,
+                message=f"the trial overran timeout_s = {limit:g} s (_execute returned {outcome.status.value})",
+            )
         return outcome
 
     @abc.abstractmethod

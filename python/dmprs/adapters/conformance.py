@@ -112,11 +112,10 @@ def check_adapter(
             adapter.reset(seed=0)
             o = adapter.execute(valid_trajectory)
             outcome_shape(o, {Status.OK})
+            assert isinstance(spec, AdapterSpec)
             names = {s.name for s in spec.signals}
-            missing = names - set(o.signals)
-            assert not missing, f"outcome lacks declared signals {sorted(missing)}"
-            extra = set(o.signals) - names
-            assert not extra, f"outcome has undeclared signals {sorted(extra)}"
+            problems = spec.signal_problems(o.signals)
+            assert not problems, "; ".join(problems)
             if deterministic:
                 adapter.reset(seed=0)
                 again = adapter.execute(valid_trajectory)

@@ -11,16 +11,27 @@ from typing import Any
 import numpy as np
 
 from dmprs.errors import InvalidInputError
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import UNIT_TOLERANCE, CartesianTrajectory, Trajectory
 
 
 @dataclass(frozen=True)
 class SignalSpec:
-    """One measured outcome signal: a name, its SI unit, and what it means."""
+    """One measured outcome signal: a name, its SI unit, and what it means.
+
+    ``kind`` is ``"real"`` (a finite number or array of them) or ``"label"`` (a string, e.g. a
+    regime name). ``nan_if_absent`` declares that NaN means "did not happen" for this signal
+    (e.g. the time a box never reached); otherwise a NaN or infinity is a broken measurement.
+    """
 
     name: str
     unit: str
     description: str = ""
+    kind: str = "real"
+    nan_if_absent: bool = False
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("real", "label"):
+            raise InvalidInputError(f"signal {self.name!r}: kind = {self.kind!r} is invalid: use 'real' or 'label'")
 
 
 @dataclass(frozen=True)
@@ -31,6 +42,14 @@ class AdapterSpec:
     trajectory must begin, within ``start_tolerance`` (units of the DOFs). A trajectory that
     breaks a limit is rejected, never clipped: clipping would execute a different movement than
     the one the learner chose.
+
+    ``pose=True`` declares an end-effector adapter that takes :class:`~dmprs.CartesianTrajectory`
+    commands: ``dof_names`` are then the three position coordinates (m), to which the position,
+    velocity and acceleration limits apply, and the orientation is a unit quaternion, checked
+    for unit norm (to 1e-6), for the norm of the angular velocity (``angular_velocity_max``,
+    rad/s) and of the angular acceleration (``angular_acceleration_max``, rad/s^2). Its
+    ``start_pose`` is a pose ``(x, y, z, qw, qx, qy, qz)``; ``start_tolerance`` is in m for the
+    position and rad for the orientation.
     """
 
     name: str
@@ -46,9 +65,22 @@ class AdapterSpec:
     start_tolerance: float = 1e-3
     max_duration: float | None = None
     min_samples: int = 2
+    pose: bool = False
+    angular_velocity_max: float | None = None
+    angular_acceleration_max: float | None = None
 
     def __post_init__(self) -> None:
         n = len(self.dof_names)
+        if self.pose and n != 3:
+            raise InvalidInputError(
+                f"{self.name}: a pose adapter has 3 position DOFs (x, y, z); got {n} dof_names"
+            )
+        if not self.pose and (self.angular_velocity_max is not None or self.angular_acceleration_max is not None):
+            raise InvalidInputError(f"{self.name}: angular limits need pose=True")
+        for name in ("angular_velocity_max", "angular_acceleration_max"):
+            value = getattr(self, name)
+            if value is not None and not (np.isfinite(value) and value > 0):
+                raise InvalidInputError(f"{self.name}: {name} = {value} must be > 0")
         if n == 0:
             raise InvalidInputError(f"{self.name}: an adapter needs at least one DOF")
         if len(self.dof_units) != n:
@@ -57,8 +89,9 @@ class AdapterSpec:
             raise InvalidInputError(f"{self.name}: control_period = {self.control_period} must be > 0")
         for name in ("position_min", "position_max", "velocity_max", "acceleration_max", "start_pose"):
             value = getattr(self, name)
-            if value is not None and len(value) != n:
-                raise InvalidInputError(f"{self.name}: {name} has {len(value)} entries for {n} DOFs")
+            want = 7 if (self.pose and name == "start_pose") else n
+            if value is not None and len(value) != want:
+                raise InvalidInputError(f"{self.name}: {name} has {len(value)} entries, expected {want}")
         names = [s.name for s in self.signals]
         if len(set(names)) != len(names):
             raise InvalidInputError(f"{self.name}: duplicate signal names in {names}")
@@ -73,6 +106,10 @@ class AdapterSpec:
         Pure: it only reads the trajectory. Position limits apply to y, velocity limits to yd and
         acceleration limits to ydd (derived by finite differences when the trajectory lacks them).
         """
+        if self.pose:
+            if not isinstance(trajectory, CartesianTrajectory):
+                return [f"{self.name} takes poses: expected a dmprs.CartesianTrajectory, got {type(trajectory).__name__}"]
+            return self._check_pose(trajectory)
         if not isinstance(trajectory, Trajectory):
             return [f"expected a dmprs.Trajectory, got {type(trajectory).__name__}"]
         problems: list[str] = []
@@ -108,6 +145,92 @@ class AdapterSpec:
                 )
         return problems
 
+    def signal_problems(self, signals: Any) -> list[str]:
+        """Every way measured ``signals`` break this spec (empty when they are fine): not a
+        mapping, a declared signal missing, an undeclared one, a value that is not a real number
+        or array of them (a string, None, a bool), or a NaN or infinity."""
+        if not isinstance(signals, Mapping):
+            return [f"signals is a {type(signals).__name__}, not a mapping of signal names to values"]
+        declared = [s.name for s in self.signals]
+        problems = [f"declared signal {name!r} is missing" for name in declared if name not in signals]
+        problems += [f"signal {name!r} is not declared in the spec" for name in signals if name not in declared]
+        for sig in self.signals:
+            if sig.name not in signals:
+                continue
+            value = signals[sig.name]
+            if sig.kind == "label":
+                if not isinstance(value, str):
+                    problems.append(f"signal {sig.name!r} is {type(value).__name__} {value!r:.60}, not a label (str)")
+                continue
+            try:
+                arr = np.asarray(value)
+            except Exception:  # noqa: BLE001 - ragged or exotic values are simply the wrong type
+                arr = np.asarray(None)
+            if isinstance(value, (bool, np.bool_)) or arr.dtype.kind not in "fiu":
+                problems.append(
+                    f"signal {sig.name!r} is {type(value).__name__} {value!r:.60}, not a real number or array")
+            elif np.isinf(arr).any() or (np.isnan(arr).any() and not sig.nan_if_absent):
+                problems.append(f"signal {sig.name!r} has non-finite values: {value!r:.60}")
+        return problems
+
+    def _check_pose(self, tr: CartesianTrajectory) -> list[str]:
+        problems: list[str] = []
+        t = tr.t
+        if len(t) < self.min_samples:
+            return [f"trajectory has {len(t)} samples; at least {self.min_samples} are needed"]
+        fields = ("position", "quaternion", "velocity", "angular_velocity", "acceleration", "angular_acceleration")
+        for name in fields:
+            arr = getattr(tr, name)
+            if arr is not None and not np.isfinite(arr).all():
+                j, d = np.argwhere(~np.isfinite(arr))[0]
+                problems.append(f"{name}[{j}, {d}] is not finite")
+        if problems:
+            return problems
+        norm_error = np.abs(np.linalg.norm(tr.quaternion, axis=1) - 1.0)
+        if norm_error.max() > UNIT_TOLERANCE:
+            j = int(np.argmax(norm_error))
+            problems.append(
+                f"quaternion at t = {t[j]:.4g} s has norm {1 + norm_error[j]:.9g}, not a unit quaternion "
+                f"(tolerance {UNIT_TOLERANCE:g})"
+            )
+        if self.max_duration is not None and tr.duration > self.max_duration + 1e-12:
+            problems.append(f"duration {tr.duration:.4g} s exceeds the limit {self.max_duration:.4g} s")
+        p = tr.position
+        v = tr.velocity if tr.velocity is not None else _derivative(t, p)
+        a = tr.acceleration if tr.acceleration is not None else _derivative(t, v)
+        self._check_bounds(problems, t, "position", p, self.position_min, self.position_max)
+        if self.velocity_max is not None:
+            self._check_bounds(problems, t, "velocity", np.abs(v), None, self.velocity_max)
+        if self.acceleration_max is not None:
+            self._check_bounds(problems, t, "acceleration", np.abs(a), None, self.acceleration_max)
+        w = tr.angular_velocity if tr.angular_velocity is not None else _angular_velocity(t, tr.quaternion)
+        for what, values, limit, unit in (
+            ("angular velocity", w, self.angular_velocity_max, "rad/s"),
+            ("angular acceleration", None, self.angular_acceleration_max, "rad/s^2"),
+        ):
+            if limit is None:
+                continue
+            if values is None:
+                values = tr.angular_acceleration if tr.angular_acceleration is not None else _derivative(t, w)
+            speed = np.linalg.norm(values, axis=1)
+            j = int(np.argmax(speed))
+            if speed[j] > limit:
+                problems.append(f"{what} is {speed[j]:.6g} {unit} at t = {t[j]:.4g} s, above the maximum {limit:.6g}")
+        if self.start_pose is not None:
+            start = np.asarray(self.start_pose, dtype=float)
+            off = np.abs(p[0] - start[:3])
+            for d in np.flatnonzero(off > self.start_tolerance):
+                problems.append(
+                    f"{self.dof_names[d]} starts at {p[0, d]:.6g} m, {off[d]:.3g} from the start pose "
+                    f"{start[d]:.6g} (tolerance {self.start_tolerance:.3g})"
+                )
+            turn = _rotation_angle(tr.quaternion[0], start[3:] / np.linalg.norm(start[3:]))
+            if turn > self.start_tolerance:
+                problems.append(
+                    f"the orientation starts {turn:.3g} rad from the start pose's (tolerance {self.start_tolerance:.3g})"
+                )
+        return problems
+
     def _check_bounds(self, problems, t, what, values, low, high) -> None:
         for bound, sign in ((low, -1.0), (high, 1.0)):
             if bound is None:
@@ -131,6 +254,30 @@ class AdapterSpec:
 
 def _derivative(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.gradient(y, t, axis=0, edge_order=2 if len(t) >= 3 else 1)
+
+
+def _rotation_angle(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle (rad) of the rotation between unit quaternions a and b, either sign."""
+    return float(2.0 * np.arccos(min(1.0, abs(float(np.dot(a, b))))))
+
+
+def _angular_velocity(t: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """World-frame angular velocity (T, 3) of sampled unit quaternions, by finite differences of
+    consecutive rotations: ``2 log(q_{j+1} conj(q_j)) / dt`` at the midpoints, interpolated."""
+    if len(t) < 2:
+        return np.zeros((len(t), 3))
+    w0, v0 = q[:-1, 0], -q[:-1, 1:]  # conj(q_j)
+    w1, v1 = q[1:, 0], q[1:, 1:]
+    # The vector part and scalar of q_{j+1} * conj(q_j), taken on the short side.
+    vec = w1[:, None] * v0 + w0[:, None] * v1 + np.cross(v1, v0)
+    sca = w1 * w0 - np.einsum("ij,ij->i", v1, v0)
+    sign = np.where(sca < 0, -1.0, 1.0)
+    s = np.linalg.norm(vec, axis=1)
+    half = np.arctan2(s, np.abs(sca))
+    k = np.divide(half, s, out=np.ones_like(s), where=s > 0) * sign
+    mid = 2.0 * k[:, None] * vec / np.diff(t)[:, None]
+    tm = 0.5 * (t[1:] + t[:-1])
+    return np.stack([np.interp(t, tm, mid[:, d]) for d in range(3)], axis=1)
 
 
 class Status(str, enum.Enum):

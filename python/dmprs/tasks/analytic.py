@@ -5,7 +5,8 @@ milliseconds, and so that learners can be compared on a map whose answer is know
 
 The "robot" executes a 1-DOF go-and-return movement; the outcome is a nonlinear function of its
 peak, ``y = peak + 0.3 sin(peak)`` (monotone: its slope is between 0.7 and 1.3), plus Gaussian
-noise of standard deviation ``noise`` drawn from the seed given to ``reset``. Demonstrations are
+noise of standard deviation ``noise`` drawn from the seed given to ``reset``; ``execution_noise``
+adds a tracking error (:class:`dmprs.tasks.noise.Noise`) to the executed movement. Demonstrations are
 minimum-jerk bumps labelled with their measured outcome, so the query is in outcome units
 (``s = +1``, eps = q0 - y) and K = I is the natural gain, as for the matchbox.
 """
@@ -18,6 +19,7 @@ from numpy.typing import NDArray
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
+from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
 DURATION = 1.0
@@ -40,7 +42,7 @@ def bump(amplitude: float, n: int = 501, duration: float = DURATION) -> Trajecto
 class AnalyticAdapter(BaseAdapter):
     """Executes a trajectory by reading its peak; measures ``outcome_map(peak) + noise``."""
 
-    def __init__(self, noise: float = 0.0) -> None:
+    def __init__(self, noise: float = 0.0, execution_noise: float = 0.0) -> None:
         super().__init__(AdapterSpec(
             name="analytic",
             dof_names=("x",),
@@ -57,12 +59,14 @@ class AnalyticAdapter(BaseAdapter):
             min_samples=3,
         ))
         self.noise = float(noise)
+        self.tracking = Noise(execution=execution_noise)
         self._rng = np.random.default_rng(0)
 
     def _reset(self, seed: int | None) -> None:
         self._rng = np.random.default_rng(seed)
 
     def _execute(self, trajectory: Trajectory) -> Outcome:
+        trajectory = self.tracking.track(trajectory, self._rng)
         peak = float(trajectory.y[:, 0].max())
         value = float(outcome_map(peak)) + (self.noise * float(self._rng.standard_normal()) if self.noise else 0.0)
         return Outcome(Status.OK, signals={"outcome": value, "peak": peak}, executed=trajectory)
@@ -78,8 +82,8 @@ class AnalyticTask(Task):
     query_units = ("m",)
     sign = 1.0
 
-    def __init__(self, noise: float = 0.0, tol: float = 0.01) -> None:
-        super().__init__(AnalyticAdapter(noise=noise))
+    def __init__(self, noise: float = 0.0, tol: float = 0.01, execution_noise: float = 0.0) -> None:
+        super().__init__(AnalyticAdapter(noise=noise, execution_noise=execution_noise))
         self.tol = float(tol)
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:

@@ -14,8 +14,9 @@ from dmprs.adapters import Adapter, Outcome
 from dmprs.errors import InvalidInputError
 
 if TYPE_CHECKING:
+    from dmprs.cartesian import CartesianDMP
     from dmprs.dmp import DMP
-    from dmprs.trajectory import Trajectory
+    from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 
 class Task(abc.ABC):
@@ -53,9 +54,9 @@ class Task(abc.ABC):
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
         return as_query(query, name, self.query_names)
 
-    def trajectory(self, dmp: DMP) -> Trajectory:
+    def trajectory(self, dmp: DMP | CartesianDMP) -> Trajectory | CartesianTrajectory:
         """The trajectory to execute for a generalized DMP: by default its rollout at the
-        adapter's control period, up to tau."""
+        adapter's control period, up to tau (a pose trajectory for a Cartesian DMP)."""
         return dmp.rollout(dt=self.adapter.spec.control_period)
 
     @abc.abstractmethod

@@ -1,5 +1,5 @@
 """Matchbox flip-up (the paper's first experiment, section 5, Fig. 3) in the Rust/Rapier 3-D
-simulation of ``crates/learner/src/matchbox``.
+simulation of ``crates/matchbox``.
 
 A fingertip strikes up under the overhanging edge of a matchbox lying on a table; depending on the
 strike the box flips back, stands upright on its 53 x 16 mm face, or flips over.
@@ -35,6 +35,7 @@ from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
 from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
+from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
 if TYPE_CHECKING:
@@ -55,7 +56,7 @@ DEMO_SETS = {
 
 
 def config(**overrides: Any) -> _core.MatchboxConfig:
-    """The simulation's parameters (see ``MatchboxConfig`` in crates/learner): defaults are a
+    """The simulation's parameters (see ``MatchboxConfig`` in crates/matchbox): defaults are a
     15 g, 53 x 36 x 16 mm box overhanging the table edge by 14 mm, friction 0.3, restitution
     0.3, 1 ms steps with 8 solver iterations, 2 s of settling after the strike."""
     return _core.MatchboxConfig(**overrides)
@@ -75,10 +76,15 @@ def strike(duration: float, cfg: _core.MatchboxConfig | None = None, dt: float =
 
 
 class MatchboxAdapter(BaseAdapter):
-    """The Rapier matchbox scene behind the adapter interface (deterministic: ``reset``'s seed
-    has nothing to vary)."""
+    """The Rapier matchbox scene behind the adapter interface. Deterministic unless ``noise``
+    (:class:`dmprs.tasks.noise.Noise`: fingertip tracking error in m, friction and restitution
+    perturbed by ``contact``, ``outcome_angle`` and ``eps18`` measured with ``measurement`` rad),
+    drawn from ``reset``'s seed."""
 
-    def __init__(self, **config_overrides: float) -> None:
+    def __init__(self, noise: Noise | None = None, **config_overrides: float) -> None:
+        self.noise = noise or Noise()
+        self._overrides = config_overrides
+        self._rng = Noise.rng(0)
         self.config = config(**config_overrides)
         c: dict[str, Any] = self.config.to_dict()
         (x0, z0), _ = self.config.default_strike()
@@ -91,11 +97,11 @@ class MatchboxAdapter(BaseAdapter):
                 SignalSpec("phi", "rad", "box tilt about the pivot edge, clipped to [0, pi]"),
                 SignalSpec("phi_t", "s", "times of phi"),
                 SignalSpec("phi_max", "rad", "largest tilt"),
-                SignalSpec("t0", "s", "first time phi >= pi/2 (NaN if never)"),
-                SignalSpec("phi_after", "rad", "phi(t0 + 0.05 s) (NaN if no t0)"),
+                SignalSpec("t0", "s", "first time phi >= pi/2 (NaN if never)", nan_if_absent=True),
+                SignalSpec("phi_after", "rad", "phi(t0 + 0.05 s) (NaN if no t0)", nan_if_absent=True),
                 SignalSpec("outcome_angle", "rad", "q_a: phi_max if flipped back, else phi_after"),
                 SignalSpec("eps18", "rad", "eq. 18 as printed: outcome_angle - pi/2"),
-                SignalSpec("regime", "", "flipped_back | upright | flipped_over | off_table"),
+                SignalSpec("regime", "", "flipped_back | upright | flipped_over | off_table", kind="label"),
             ),
             position_min=(c["workspace_x"][0], c["workspace_z"][0]),
             position_max=(c["workspace_x"][1], c["workspace_z"][1]),
@@ -114,10 +120,24 @@ class MatchboxAdapter(BaseAdapter):
         return list(_core.matchbox_check(trajectory.t, np.ascontiguousarray(trajectory.y[:, 0]),
                                          np.ascontiguousarray(trajectory.y[:, 1]), self.config))
 
+    def _reset(self, seed: int | None) -> None:
+        self._rng = Noise.rng(seed)
+
     def _execute(self, trajectory: Trajectory) -> Outcome:
+        cfg, noise = self.config, self.noise
+        if not noise.off:
+            trajectory = noise.track(trajectory, self._rng)
+            if noise.contact:
+                base: dict[str, Any] = cfg.to_dict()
+                cfg = config(**{**self._overrides, "friction": base["friction"] * noise.factor(self._rng),
+                                "restitution": base["restitution"] * noise.factor(self._rng)})
         ep = _core.matchbox_simulate(trajectory.t, np.ascontiguousarray(trajectory.y[:, 0]),
-                                     np.ascontiguousarray(trajectory.y[:, 1]), self.config)
-        return Outcome(Status.OK, signals=_signals(ep), executed=trajectory)
+                                     np.ascontiguousarray(trajectory.y[:, 1]), cfg)
+        signals = _signals(ep)
+        if noise.measurement:
+            signals["outcome_angle"] = noise.measure(signals["outcome_angle"], self._rng)
+            signals["eps18"] = signals["outcome_angle"] - math.pi / 2
+        return Outcome(Status.OK, signals=signals, executed=trajectory)
 
 
 def _signals(ep: dict) -> dict:
@@ -140,8 +160,8 @@ class MatchboxFlip(Task):
     query_units = ("rad",)
     sign = 1.0
 
-    def __init__(self, **config_overrides: float) -> None:
-        super().__init__(MatchboxAdapter(**config_overrides))
+    def __init__(self, noise: Noise | None = None, **config_overrides: float) -> None:
+        super().__init__(MatchboxAdapter(noise, **config_overrides))
 
     adapter: MatchboxAdapter
 
@@ -158,9 +178,13 @@ class MatchboxFlip(Task):
     def demonstration(self, duration: float) -> tuple[NDArray[np.float64], Trajectory]:
         """A scripted strike and its label, the outcome angle it measurably produced."""
         traj = strike(duration, self.adapter.config)
-        with self.adapter:
-            self.adapter.reset(seed=0)
-            outcome = self.adapter.execute(traj)
+        noise, self.adapter.noise = self.adapter.noise, Noise()  # a demonstration is measured exactly
+        try:
+            with self.adapter:
+                self.adapter.reset(seed=0)
+                outcome = self.adapter.execute(traj)
+        finally:
+            self.adapter.noise = noise
         if not outcome.ok:
             raise InvalidInputError(f"the demonstration strike of {duration} s was {outcome.status.value}: {outcome.message}")
         return self.measure(outcome), traj

@@ -11,6 +11,7 @@ import numpy as np
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
 from dmprs.sim import pouring_scene as scene
+from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
 #: litres per simulated disc (docs/method.md §9.3: 2 ml; 500 discs = 1.0 l)
@@ -73,10 +74,13 @@ class PouringAdapter(BaseAdapter):
     ``remaining_particles``, ``spilled_particles``, ``particles``), which add up exactly (the
     litres are the counts times 2 ml, so they add up to rounding); ``max_tilt`` (rad);
     ``poured_volume_curve`` (l) sampled at ``poured_volume_time`` (s, from the start) every 20 ms.
+
+    ``noise`` (:class:`dmprs.tasks.noise.Noise`, default off): tilt tracking error (rad) and the
+    ``poured_volume`` reading's error (l), drawn from ``reset``'s seed.
     """
 
     def __init__(self, bottle_volume: float = 0.5, *, liquid_seed: int = 0,
-                 reseed_liquid: bool = False, hold: float = scene.HOLD_TIME) -> None:
+                 reseed_liquid: bool = False, hold: float = scene.HOLD_TIME, noise: Noise | None = None) -> None:
         self.n_particles = n_particles(bottle_volume)
         self.bottle_volume = self.n_particles * PARTICLE_VOLUME
         if not (isinstance(liquid_seed, (int, np.integer)) and not isinstance(liquid_seed, bool)
@@ -119,10 +123,13 @@ class PouringAdapter(BaseAdapter):
         self.reseed_liquid = bool(reseed_liquid)
         self.hold = hold_s
         self._seed = self.liquid_seed
+        self.noise = noise or Noise()
+        self._rng = Noise.rng(0)
 
     def _reset(self, seed: int | None) -> None:
         if self.reseed_liquid:
             self._seed = self.liquid_seed if seed is None else int(seed)
+        self._rng = Noise.rng(seed)
 
     def _extra_checks(self, trajectory: Trajectory) -> list[str]:
         end = float(trajectory.y[-1, 0])
@@ -138,6 +145,7 @@ class PouringAdapter(BaseAdapter):
 
     def _execute(self, trajectory: Trajectory) -> Outcome:
         liquid = scene.settled_liquid(self.n_particles, self._seed)
+        trajectory = self.noise.track(trajectory, self._rng)
         result = scene.simulate_pour(trajectory.t, trajectory.y[:, 0], liquid, hold=self.hold,
                                      should_stop=self._interrupted)
         # What the bottle did, at the command's sample times (up to where the pour got).
@@ -150,7 +158,7 @@ class PouringAdapter(BaseAdapter):
             return self._interrupted_outcome(executed)
         n = result.n_particles
         signals = {
-            "poured_volume": result.n_glass * PARTICLE_VOLUME,
+            "poured_volume": self.noise.measure(result.n_glass * PARTICLE_VOLUME, self._rng),
             "remaining_volume": result.n_bottle * PARTICLE_VOLUME,
             "spilled_volume": result.n_spilled * PARTICLE_VOLUME,
             "initial_volume": n * PARTICLE_VOLUME,

@@ -4,17 +4,21 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dmprs._arrays import as_count
 from dmprs.adapters import Outcome
 from dmprs.errors import InvalidInputError
 from dmprs.tasks.base import Task
 from dmprs.tasks.pouring.adapter import TARGET_VOLUME, TOLERANCE, PouringAdapter, _check_volume
 from dmprs.tasks.pouring.demonstrator import demonstration
 from dmprs.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from dmprs.dmp import DMP
 
 
 class Pouring(Task):
@@ -24,6 +28,11 @@ class Pouring(Task):
     physical bottle always holds ``bottle_volume``. ``eps = V_poured - V*`` (``sign = -1``),
     success when ``|eps| < tol`` (10 ml). Adapter options (``liquid_seed``, ``reseed_liquid``,
     ``hold``) are passed to :class:`PouringAdapter`.
+
+    ``rollout_substeps`` k > 1 integrates the DMP at ``CONTROL_PERIOD / k`` and commands every
+    k-th sample: explicit Euler at the 5 ms control period is 12 mrad off the DMP's solution, so a
+    success stored in a growing database refits to a DMP that pours ~4 ml more (measured; k = 25:
+    0.4 mrad). Default 1, the plain rollout.
     """
 
     adapter: PouringAdapter
@@ -33,7 +42,7 @@ class Pouring(Task):
     sign = -1.0
 
     def __init__(self, bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME,
-                 tol: float = TOLERANCE, **adapter_options: Any) -> None:
+                 tol: float = TOLERANCE, *, rollout_substeps: int = 1, **adapter_options: Any) -> None:
         adapter = PouringAdapter(bottle_volume, **adapter_options)
         super().__init__(adapter)
         self.bottle_volume = adapter.bottle_volume
@@ -42,6 +51,15 @@ class Pouring(Task):
         if not (math.isfinite(tol_f) and tol_f > 0):
             raise InvalidInputError(f"tol = {tol!r} must be > 0 l")
         self.tol = tol_f
+        self.rollout_substeps = as_count(rollout_substeps, "rollout_substeps", 1)
+
+    def trajectory(self, dmp: DMP) -> Trajectory:
+        k = self.rollout_substeps
+        if k == 1:
+            return super().trajectory(dmp)
+        fine = dmp.rollout(dt=self.adapter.spec.control_period / k)
+        assert fine.yd is not None and fine.ydd is not None  # a rollout has its derivatives
+        return Trajectory(fine.t[::k], fine.y[::k], fine.yd[::k], fine.ydd[::k])
 
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
         q = super().validate_query(query, name)

@@ -1,0 +1,59 @@
+"""Gymnasium environments for dmprs's tasks (``pip install "dmprs[gym]"``).
+
+Importing this module registers them (importing ``dmprs`` does not import Gymnasium)::
+
+    import gymnasium as gym
+    import dmprs.envs                      # or gym.make("dmprs.envs:dmprs/Pouring-v0")
+    env = gym.make("dmprs/MatchboxFlip-v0")
+
+=============================== ====================================================
+id                              action
+=============================== ====================================================
+``dmprs/MatchboxFlip-v0``       the query: outcome angle (rad) for the generalizer
+``dmprs/MatchboxFlipWeights-v0`` the DMP weights (2 DOFs x 25 kernels), normalized
+``dmprs/Pouring-v0``            the query: assumed bottle volume (l)
+``dmprs/PouringWeights-v0``     the DMP weights (1 DOF x 40 kernels), normalized
+=============================== ====================================================
+
+Keyword arguments of ``gym.make`` go to the scenario (:func:`matchbox_scenario`,
+:func:`pouring_scenario`). See :mod:`dmprs.envs.env` and ``docs/envs.md``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+
+from dmprs.envs.env import TaskEnv
+from dmprs.envs.scenarios import Scenario, matchbox_scenario, pouring_scenario
+
+__all__ = ["ENV_IDS", "Scenario", "TaskEnv", "make_matchbox", "make_pouring", "matchbox_scenario",
+           "pouring_scenario", "register_envs"]
+
+ENV_IDS = ("dmprs/MatchboxFlip-v0", "dmprs/MatchboxFlipWeights-v0", "dmprs/Pouring-v0", "dmprs/PouringWeights-v0")
+
+
+def make_matchbox(action: str = "query", **options: Any) -> TaskEnv:
+    return TaskEnv(matchbox_scenario(**options), action=action)
+
+
+def make_pouring(action: str = "query", **options: Any) -> TaskEnv:
+    return TaskEnv(pouring_scenario(**options), action=action)
+
+
+def register_envs() -> None:
+    """Registers the environments of :data:`ENV_IDS` with Gymnasium (idempotent)."""
+    specs = {
+        "dmprs/MatchboxFlip-v0": ("dmprs.envs:make_matchbox", "query"),
+        "dmprs/MatchboxFlipWeights-v0": ("dmprs.envs:make_matchbox", "weights"),
+        "dmprs/Pouring-v0": ("dmprs.envs:make_pouring", "query"),
+        "dmprs/PouringWeights-v0": ("dmprs.envs:make_pouring", "weights"),
+    }
+    for env_id, (entry, action) in specs.items():
+        if env_id not in gym.registry:
+            # no max_episode_steps: a TimeLimit would mark the single step truncated as well as terminated
+            gym.register(env_id, entry_point=entry, kwargs={"action": action})
+
+
+register_envs()

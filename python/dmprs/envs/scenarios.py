@@ -1,0 +1,101 @@
+"""What a Gymnasium environment needs to know about a task: the generalizer of its demonstrations,
+the range of queries, the contexts an episode can start in, and how to build the task for one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dmprs.database import Database
+from dmprs.errors import InvalidInputError
+from dmprs.generalize import Generalizer
+from dmprs.tasks.base import Task
+
+__all__ = ["Scenario", "matchbox_scenario", "pouring_scenario"]
+
+
+@dataclass
+class Scenario:
+    """A task family as a contextual problem: ``reset`` draws a context (what the observation
+    shows), ``make_task(context)`` builds the task for it, ``desired_query(context)`` is the query
+    it asks for, and queries range over ``[query_low, query_high]`` (the demonstrations' span, where
+    the generalizer is valid). ``failure_reward`` is the reward of a trial without a measurement
+    (rejected trajectory, simulation error): below that of any measured trial."""
+
+    name: str
+    generalizer: Generalizer
+    query_low: NDArray[np.float64]
+    query_high: NDArray[np.float64]
+    context_low: NDArray[np.float64]
+    context_high: NDArray[np.float64]
+    context_names: tuple[str, ...]
+    make_task: Callable[[NDArray[np.float64]], Task]
+    desired_query: Callable[[NDArray[np.float64]], NDArray[np.float64]]
+    failure_reward: float
+
+    def sample_context(self, rng: np.random.Generator) -> NDArray[np.float64]:
+        return rng.uniform(self.context_low, self.context_high)
+
+
+def matchbox_scenario(demos: str = "default", **config: float) -> Scenario:
+    """Stand the matchbox upright (``dmprs.tasks.matchbox``): one context, the desired outcome
+    angle pi/2; the query is the outcome angle the generalizer is asked for, between the
+    demonstrations' labels. A measured trial scores ``-|eps|`` (rad) with eps = pi/2 - q_a, at
+    most pi/2 in size, so a trial without a measurement scores -pi."""
+    from dmprs.experiments import matchbox_setup
+
+    setup = matchbox_setup(demos, **config)
+    task = setup.task
+    desired = np.array([math.pi / 2])
+    return Scenario(
+        name="matchbox", generalizer=setup.generalizer,
+        query_low=np.array([setup.low]), query_high=np.array([setup.high]),
+        context_low=desired, context_high=desired.copy(), context_names=("desired_outcome_angle",),
+        make_task=lambda context: task, desired_query=lambda context: context.copy(),
+        failure_reward=-math.pi,
+    )
+
+
+def pouring_scenario(volume_range: Sequence[float] = (0.3, 1.0), demo_volumes: Sequence[float] = (0.3, 1.0),
+                     target_volume: float = 0.2, tol: float = 0.010, liquid_seed: int = 0,
+                     cache_dir: str | None = None, **adapter_options: Any) -> Scenario:
+    """Pour ``target_volume`` l from a bottle whose volume (the context) is drawn from
+    ``volume_range`` at each reset (``dmprs.tasks.pouring``). Demonstrations pour the target
+    from bottles of ``demo_volumes`` (calibrated in the simulation; cached on disk with
+    ``cache_dir`` or ``DMPRS_CACHE_DIR``), linear generalization with N = 40 kernels. The query is
+    the assumed bottle volume, between the demonstrations' volumes; a measured trial scores
+    ``-|V_poured - V*|`` (l), a trial without a measurement minus the largest volume."""
+    from dmprs.tasks.pouring import Pouring, demonstration
+
+    lo, hi = (float(v) for v in volume_range)
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
+        raise InvalidInputError(f"volume_range = {tuple(volume_range)!r} must be 0 < low <= high (l)")
+    db = Database(query_names=Pouring.query_names, query_units=Pouring.query_units)
+    for v in demo_volumes:
+        q, traj, _ = demonstration(v, target_volume, liquid_seed=liquid_seed, cache_dir=cache_dir)
+        db.add(q, traj)
+    gen = Generalizer(db, method="linear", n_basis=40)
+    tasks: dict[float, Pouring] = {}
+
+    def make_task(context: NDArray[np.float64]) -> Task:
+        v = float(context[0])
+        if v not in tasks:
+            if len(tasks) >= 32:  # contexts are continuous: keep the cache small
+                tasks.clear()
+            tasks[v] = Pouring(v, target_volume=target_volume, tol=tol, liquid_seed=liquid_seed,
+                               **adapter_options)
+        return tasks[v]
+
+    return Scenario(
+        name="pouring", generalizer=gen,
+        query_low=np.array([min(demo_volumes)]), query_high=np.array([max(demo_volumes)]),
+        context_low=np.array([lo]), context_high=np.array([hi]), context_names=("bottle_volume",),
+        make_task=make_task, desired_query=lambda context: context.copy(),
+        failure_reward=-max(hi, max(demo_volumes)),
+    )

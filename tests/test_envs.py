@@ -1,0 +1,111 @@
+"""The Gymnasium environments: Gymnasium's own checker, determinism, and each step against the
+task pipeline run by hand."""
+
+from __future__ import annotations
+
+import contextlib
+import subprocess
+import sys
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import dmprs.envs
+from dmprs.errors import InvalidInputError
+
+# Small bottles keep the demonstrations' calibration to a few seconds (the defaults are the paper's).
+SMALL_POURING = {"target_volume": 0.04, "demo_volumes": (0.08, 0.16), "volume_range": (0.08, 0.16)}
+KWARGS = {"dmprs/MatchboxFlip-v0": {}, "dmprs/MatchboxFlipWeights-v0": {},
+          "dmprs/Pouring-v0": SMALL_POURING, "dmprs/PouringWeights-v0": SMALL_POURING}
+
+
+@contextlib.contextmanager
+def quiet_checker():
+    """The matchbox has one context (the desired angle pi/2): its observation box is a point,
+    which Gymnasium's checkers note; query actions are in task units, not normalized, also noted."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*maximum and minimum values are equal")
+        warnings.filterwarnings("ignore", message=".*symmetric and normalized space")
+        yield
+
+
+@pytest.fixture(scope="module")
+def envs():
+    with quiet_checker():
+        made = {i: gym.make(i, **kw) for i, kw in KWARGS.items()}
+    yield made
+    for e in made.values():
+        e.close()
+
+
+@pytest.mark.parametrize("env_id", dmprs.envs.ENV_IDS)
+def test_gymnasium_check_env_passes(envs, env_id):
+    with quiet_checker():
+        check_env(envs[env_id].unwrapped)
+
+
+@pytest.mark.parametrize("env_id", dmprs.envs.ENV_IDS)
+def test_one_step_episodes_are_deterministic_under_seeded_reset(envs, env_id):
+    env = envs[env_id]
+    action = env.action_space.sample() * 0 + (env.action_space.low + env.action_space.high) / 2
+    runs = []
+    for _ in range(2):
+        obs, _ = env.reset(seed=7)
+        runs.append((obs, *env.step(action)))
+    (o1, s1, r1, term1, trunc1, i1), (o2, s2, r2, *_rest, i2) = runs
+    assert np.array_equal(o1, o2) and np.array_equal(s1, s2) and r1 == r2 and term1 and not trunc1
+    assert i1["status"] == i2["status"] and np.array_equal(i1["eps"], i2["eps"])
+    assert env.observation_space.contains(o1)
+
+
+def test_pouring_contexts_are_drawn_from_the_seed(envs):
+    env = envs["dmprs/Pouring-v0"]
+    volumes = [float(env.reset(seed=s)[0][0]) for s in range(4)]
+    assert len(set(volumes)) == 4 and all(0.08 <= v <= 0.16 for v in volumes)
+    assert float(env.reset(seed=2)[0][0]) == volumes[2]
+
+
+def test_steps_match_the_task_pipeline_by_hand(envs):
+    env = envs["dmprs/MatchboxFlip-v0"]
+    scenario = env.unwrapped.scenario
+    task, gen = scenario.make_task(np.array([np.pi / 2])), scenario.generalizer
+    for q in (1.2, 1.9, 2.6):
+        with task.adapter:
+            task.adapter.reset(seed=0)
+            outcome = task.adapter.execute(task.trajectory(gen.predict([q])))
+        want = -abs(float(task.error([np.pi / 2], outcome)[0]))
+        env.reset(seed=0)
+        _, reward, _, _, info = env.step(np.array([q]))
+        assert reward == want and info["regime"] == outcome.signals["regime"]
+    # weight action 0 is the generalizer's DMP at the desired query: the same strike
+    weights = envs["dmprs/MatchboxFlipWeights-v0"]
+    weights.reset(seed=0)
+    _, r_w, _, _, info_w = weights.step(np.zeros(weights.action_space.shape))
+    env.reset(seed=0)
+    _, r_q, _, _, info_q = env.step(np.array([np.pi / 2]))
+    assert r_w == r_q and info_w["outcome_angle"] == info_q["outcome_angle"]
+
+
+def test_bad_actions_and_order(envs):
+    env = envs["dmprs/MatchboxFlip-v0"].unwrapped
+    env.reset(seed=0)
+    with pytest.raises(InvalidInputError, match="not finite"):
+        env.step(np.array([np.nan]))
+    _, _, _, _, info = env.step(np.array([100.0]))  # clipped to the demonstrations' span
+    assert info["clipped"] and info["query"][0] == env.action_space.high[0]
+    fresh = dmprs.envs.make_matchbox()
+    with pytest.raises(InvalidInputError, match="before reset"):
+        fresh.step(np.array([1.5]))
+    with pytest.raises(InvalidInputError, match="action = 'torques'"):
+        dmprs.envs.make_matchbox(action="torques")
+
+
+def test_registration_is_explicit():
+    code = ("import gymnasium as gym, dmprs; assert 'dmprs/MatchboxFlip-v0' not in gym.registry; "
+            "env = gym.make('dmprs.envs:dmprs/MatchboxFlip-v0'); print(env.spec.id)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "dmprs/MatchboxFlip-v0"

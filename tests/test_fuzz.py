@@ -1,0 +1,40 @@
+"""Property-based fuzzing of the public API (the reliability issue): whatever a caller passes,
+only :class:`~dmprs.errors.DmprsError` subclasses escape, nothing non-finite is returned, and every
+call returns within its deadline. The inputs are drawn in ``tests/fuzz_targets.py``."""
+
+from __future__ import annotations
+
+from datetime import timedelta
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+
+from dmprs.errors import DmprsError
+from tests.fuzz_targets import TARGETS, non_finite
+
+# A derandomized run: the same examples in CI and on every machine, about a minute in all.
+FUZZ = settings(
+    max_examples=200,
+    deadline=timedelta(seconds=2),
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+
+
+@pytest.mark.parametrize("name", list(TARGETS))
+def test_only_dmprs_errors_and_finite_outputs(name: str) -> None:
+    strategy, run = TARGETS[name]
+
+    @FUZZ
+    @given(strategy)
+    def check(args: Any) -> None:
+        try:
+            out = run(args)
+        except DmprsError:
+            return
+        bad = non_finite(out)
+        assert bad is None, f"{name} returned {bad}"
+
+    check()

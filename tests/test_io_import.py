@@ -1,0 +1,163 @@
+"""``dmprs demos import`` and the readers behind it (bags, LeRobot, CSV, npz), and the export of a
+rolled-out trajectory to a ROS 2 bag and CSV."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import dmprs
+from dmprs.cli import main
+from dmprs.errors import InvalidInputError
+from dmprs.io.export import write_joint_trajectory_bag, write_trajectory_csv
+from dmprs.io.importer import build_database, load_demos
+from dmprs.io.tables import read_csv_trajectory, read_query_table
+from tests.lerobot_writer import episode_states, volume, write_v3
+from tests.test_io_rosbag import JOINTS, recording, write_joint_bag
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def test_import_a_bag_cut_at_rests_with_a_query_table(tmp_path):
+    t, y, _ = recording()
+    bag = write_joint_bag(tmp_path, "ros2-sqlite3", t, y)
+    table = tmp_path / "queries.csv"
+    table.write_text("demo,reach [m]\ndemo#0,0.8\ndemo#1,0.2\n")
+    out = tmp_path / "db"
+    res = run("demos", "import", bag, "--out", out, "--queries", table, "--joints", ",".join(JOINTS),
+              "--rest-speed", 0.02, "--rate", 100)
+    assert res.exit_code == 0, res.output
+    db = dmprs.Database.load(out)
+    assert len(db) == 2 and db.query_names == ("reach",) and db.query_units == ("m",)
+    assert [d.label for d in db] == ["demo#0", "demo#1"]
+    assert db[0].metadata["names"] == list(JOINTS)
+    np.testing.assert_allclose(db.queries[:, 0], [0.8, 0.2])
+    first = db[0].trajectory
+    np.testing.assert_allclose(np.diff(first.t), 0.01, rtol=1e-9)
+    # the first movement goes from the rest pose to the far one
+    np.testing.assert_allclose(first.y[0], y[0], atol=1e-3)
+    np.testing.assert_allclose(first.y[-1], y[np.searchsorted(t, 2.0)], atol=1e-3)
+    # the database generalizes: the two demos' own queries give back their movements
+    dmp = dmprs.Generalizer(db).predict([0.8])
+    np.testing.assert_allclose(dmp.goal, first.y[-1], atol=1e-9)
+
+
+def test_import_lerobot_with_queries_from_a_field_and_json_table(tmp_path):
+    root = write_v3(tmp_path / "ds", n_episodes=3)
+    out = tmp_path / "db"
+    res = run("demos", "import", root, "--out", out, "--query-field", "bottle_volume", "--units", "l",
+              "--dims", "shoulder,elbow")
+    assert res.exit_code == 0, res.output
+    db = dmprs.Database.load(out)
+    np.testing.assert_allclose(db.queries[:, 0], [volume(k) for k in range(3)])
+    assert db.n_dof == 2 and db.query_units == ("l",)
+    np.testing.assert_array_equal(db[1].trajectory.y, episode_states(1)[:, :2].astype(np.float64))
+    assert db[2].metadata["labels"]["task"] == "pour into the glass"
+    table = tmp_path / "q.json"
+    table.write_text(json.dumps({"units": {"v": "l"}, "demos": [{"demo": str(k), "v": 1.0 + k} for k in range(3)]}))
+    res = run("demos", "import", root, "--out", tmp_path / "db2", "--queries", table)
+    assert res.exit_code == 0, res.output
+    assert dmprs.Database.load(tmp_path / "db2").query_units == ("l",)
+
+
+def test_import_csv_and_npz(tmp_path):
+    t = np.linspace(0, 1, 51)
+    for k, amp in enumerate((0.5, 1.0)):
+        lines = ["t,a,b"] + [f"{v!r},{amp * v**2!r},{-amp * v!r}" for v in map(float, t)]
+        (tmp_path / f"run{k}.csv").write_text("\n".join(lines) + "\n")
+        np.savez(tmp_path / f"take{k}.npz", t=t, y=np.stack([amp * t**2, -amp * t], 1), amplitude=amp)
+    demos = load_demos(sorted(tmp_path.glob("run*.csv")))
+    assert [d.name for d in demos] == ["run0", "run1"]
+    np.testing.assert_array_equal(demos[1].trajectory.y[:, 0], 1.0 * t**2)
+    db = build_database(load_demos(sorted(tmp_path.glob("take*.npz"))), query_fields=["amplitude"])
+    np.testing.assert_array_equal(db.queries[:, 0], [0.5, 1.0])
+
+
+def test_clear_errors_name_what_exists(tmp_path):
+    t, y, _ = recording()
+    bag = write_joint_bag(tmp_path, "ros1", t, y)
+    res = run("demos", "import", bag, "--out", tmp_path / "db", "--query-field", "x", "--topic", "/js")
+    assert res.exit_code != 0 and "no topic '/js'" in res.output and "/joint_states" in res.output
+    table = tmp_path / "q.csv"
+    table.write_text("demo,v\nother,1\n")
+    res = run("demos", "import", bag, "--out", tmp_path / "db", "--queries", table)
+    assert res.exit_code != 0 and "no row for 'demo'" in res.output and "'other'" in res.output
+    res = run("demos", "import", bag, "--out", tmp_path / "db", "--query-field", "volume")
+    assert res.exit_code != 0 and "has no field 'volume'" in res.output
+    (tmp_path / "x.csv").write_text("time,a\n0,1\n1,2\n2,3\n")
+    with pytest.raises(InvalidInputError, match=r"no time column 't'; the columns are time, a"):
+        read_csv_trajectory(tmp_path / "x.csv")
+    with pytest.raises(InvalidInputError, match=r"no column 'b'; the columns are time, a"):
+        read_csv_trajectory(tmp_path / "x.csv", "time", ["b"])
+    (tmp_path / "bad.csv").write_text("q,v\n1,2\n")
+    with pytest.raises(InvalidInputError, match="no 'demo' column"):
+        read_query_table(tmp_path / "bad.csv")
+    # the old form still records a task's scripted demonstrations
+    assert run("demos", "analytic", "--out", tmp_path / "scripted").exit_code == 0
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_export_joint_trajectory_bag_reads_back_with_rosbags(tmp_path, storage):
+    from rosbags.highlevel import AnyReader
+
+    dmp = dmprs.DMP.fit(np.linspace(0, 1, 101), np.stack([np.linspace(0, 1, 101) ** 2] * 2, 1), 15)
+    traj = dmp.rollout(dt=0.01)
+    path = write_joint_trajectory_bag(tmp_path / "out", traj, ["j1", "j2"], storage=storage,
+                                      stamp_ns=1_700_000_000_123_456_789)
+    with AnyReader([path]) as reader:
+        (conn,) = reader.connections
+        assert conn.topic == "/joint_trajectory" and conn.msgtype == "trajectory_msgs/msg/JointTrajectory"
+        ((_, ts, raw),) = list(reader.messages())
+        msg = reader.deserialize(raw, conn.msgtype)
+    assert ts == 1_700_000_000_123_456_789 and list(msg.joint_names) == ["j1", "j2"]
+    assert msg.header.stamp.sec == 1_700_000_000 and msg.header.stamp.nanosec == 123_456_789
+    pos = np.array([p.positions for p in msg.points])
+    tfs = np.array([p.time_from_start.sec + 1e-9 * p.time_from_start.nanosec for p in msg.points])
+    np.testing.assert_array_equal(pos, traj.y)
+    np.testing.assert_array_equal(np.array([p.velocities for p in msg.points]), traj.yd)
+    np.testing.assert_allclose(tfs, traj.t, atol=1e-9)
+    csv_path = write_trajectory_csv(tmp_path / "out.csv", traj, ["j1", "j2"])
+    back, names = read_csv_trajectory(csv_path, "time", ["j1", "j2"])
+    assert names == ("j1", "j2")
+    np.testing.assert_array_equal(back.y, traj.y)
+    np.testing.assert_array_equal(back.t, traj.t)
+    with pytest.raises(InvalidInputError, match="2 distinct names"):
+        write_trajectory_csv(tmp_path / "o.csv", traj, ["j1"])
+
+
+def test_import_poses_from_tf_into_a_database_of_pose_demonstrations(tmp_path):
+    from scipy.spatial.transform import Rotation
+
+    from tests.bag_writers import BagWriter, bag_path
+    from tests.conftest import min_jerk
+    from tests.test_io_rosbag import T0
+
+    t = np.arange(0.0, 5.0, 0.02)
+    a, b = min_jerk(np.clip((t - 0.5) / 1.5, 0, 1)), min_jerk(np.clip((t - 3.0) / 1.5, 0, 1))
+    s = a - b  # reach out, rest, come back
+    rot = Rotation.from_rotvec(np.outer(s, [0.0, 0.0, 0.8])).as_quat(scalar_first=True)
+    poses = np.hstack([np.stack([0.3 * s, 0.1 * s, 0 * s], axis=1), rot])
+    bag = bag_path(tmp_path, "ros1", "pour")
+    with BagWriter(bag, "ros1") as w:
+        for tk, pk in zip(t, poses):
+            ns = T0 + round(tk * 1e9)
+            w.write("/tf", w.tf_message(ns, [("world", "tool", pk)]), ns)
+    table = tmp_path / "q.csv"
+    table.write_text("demo,reach [m]\npour#0,0.3\npour#1,0.0\n")
+    out = tmp_path / "db"
+    res = run("demos", "import", bag, "--tf", "world:tool", "--rest-speed", 0.01, "--rate", 50,
+              "--queries", table, "--out", out)
+    assert res.exit_code == 0, res.output
+    db = dmprs.Database.load(out)
+    assert db.is_cartesian and len(db) == 2 and db[0].metadata["tf"] == ["world", "tool"]
+    np.testing.assert_allclose(db[0].trajectory.pose[-1], poses[np.searchsorted(t, 2.5)], atol=1e-3)
+    dmp = dmprs.Generalizer(db).predict([0.3])  # a demo's own query gives back its movement
+    assert isinstance(dmp, dmprs.CartesianDMP)
+    np.testing.assert_allclose(dmp.goal, db[0].trajectory.pose[-1], atol=1e-9)
+    res = run("demos", "import", bag, "--tf", "world", "--queries", table, "--out", tmp_path / "x")
+    assert res.exit_code != 0 and "FRAME:CHILD" in res.output
