@@ -134,16 +134,22 @@ def noise_floor(bottle_volume: float = 0.6, offsets: tuple[float, ...] = (-0.01,
     """Poured volume of the generalized movement at queries ``bottle_volume + offset`` (l), for
     each liquid seed: the granular outcome's response to a small change of the query, whose
     scatter about a straight line is the noise floor the success tolerance must exceed."""
+    from dmprs.errors import NumericalError
+    from dmprs.tasks.arm_pouring import ArmPouring
+
     rows = []
     for seed in liquid_seeds:
         setup = arm_pouring_setup(bottle_volume, liquid_seed=seed, reseed_liquid=False)
-        with setup.task.adapter as adapter:
+        task = setup.task
+        assert isinstance(task, ArmPouring)
+        with task.adapter as adapter:
             for off in offsets:
                 q = setup.desired_query + off
                 adapter.reset(seed=seed)
-                out = adapter.execute(setup.task.trajectory(setup.generalizer.predict(q)))
+                out = adapter.execute(task.trajectory(setup.generalizer.predict(q)))
                 if not out.ok:
-                    raise RuntimeError(f"noise-floor trial at q = {q[0]:.4f} l was {out.status.value}: {out.message}")
+                    raise NumericalError(
+                        f"noise-floor trial at q = {q[0]:.4f} l was {out.status.value}: {out.message}")
                 rows.append({"liquid_seed": seed, "query": float(q[0]),
                              "poured_volume": float(out.signals["poured_volume"])})
     return rows
