@@ -23,6 +23,10 @@ fn pairs(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<(f64, f64)>>
         .collect())
 }
 
+/// Restarts x iterations x m^3 beyond which a fit may run long enough to want Ctrl-C (about a
+/// second of Cholesky factorizations).
+const LONG_FIT_FLOPS: f64 = 1e9;
+
 /// Runs `work` on a scoped thread with the GIL released while this thread checks for signals
 /// every 50 ms; on Ctrl-C (or any signal handler raising) it sets the flag `work` polls, waits for
 /// it to stop and returns the handler's exception (KeyboardInterrupt).
@@ -121,9 +125,20 @@ impl PyGaussianProcess {
             ..GpOptions::default()
         };
         options.minimize.max_iter = max_iter;
-        let inner = interruptible(py, |cancel| {
-            GaussianProcess::fit_cancellable(&xv, yv, Some(start), &options, cancel)
-        })?
+        // Only a fit that can take long is worth a watcher thread (its spawn costs ~0.1 ms).
+        let m = yv.len() as f64;
+        let work = if optimize {
+            (n_restarts + 1) as f64 * max_iter as f64 * m * m * m
+        } else {
+            0.0
+        };
+        let inner = if work > LONG_FIT_FLOPS {
+            interruptible(py, |cancel| {
+                GaussianProcess::fit_cancellable(&xv, yv, Some(start), &options, cancel)
+            })?
+        } else {
+            py.detach(|| GaussianProcess::fit(&xv, yv, Some(start), &options))
+        }
         .py_err()?;
         Ok(Self { inner })
     }
