@@ -24,10 +24,10 @@ from dmprs.tasks.analytic import AnalyticAdapter, bump
 
 
 def spec(**kw) -> AdapterSpec:
-    base = dict(name="toy", dof_names=("a", "b"), dof_units=("rad", "m"), control_period=0.01,
-                signals=(SignalSpec("s", "m"),), position_min=(-1.0, -1.0),
-                position_max=(1.0, 1.0), velocity_max=(2.0, 2.0), acceleration_max=(50.0, 50.0),
-                start_pose=(0.0, 0.0), start_tolerance=0.01, max_duration=5.0)
+    base = {"name": "toy", "dof_names": ("a", "b"), "dof_units": ("rad", "m"), "control_period": 0.01,
+                "signals": (SignalSpec("s", "m"),), "position_min": (-1.0, -1.0),
+                "position_max": (1.0, 1.0), "velocity_max": (2.0, 2.0), "acceleration_max": (50.0, 50.0),
+                "start_pose": (0.0, 0.0), "start_tolerance": 0.01, "max_duration": 5.0}
     base.update(kw)
     return AdapterSpec(**base)
 

@@ -149,9 +149,9 @@ def test_a_foreign_or_malformed_demo_file_is_named(db, tmp_path, payload, messag
 def test_pickles_are_never_loaded(db, tmp_path):
     db.save(tmp_path / "db")
     buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w") as z:  # an object array: np.load would need allow_pickle=True
-        with z.open("y.npy", "w") as fh:
-            np.lib.format.write_array(fh, np.array([{"a": 1}] * 3, dtype=object), allow_pickle=True)
+    # an object array: np.load would need allow_pickle=True
+    with zipfile.ZipFile(buf, "w") as z, z.open("y.npy", "w") as fh:
+        np.lib.format.write_array(fh, np.array([{"a": 1}] * 3, dtype=object), allow_pickle=True)
     f = rewrite_demo(tmp_path / "db", 0, buf.getvalue())
     with pytest.raises(DatabaseError, match=f.name):
         dmprs.Database.load(tmp_path / "db")
@@ -165,8 +165,8 @@ def test_pickles_are_never_loaded(db, tmp_path):
         ('[1, 2, 3]', "not a dmprs database manifest"),
         ('{"format": "dmprs.Database", "schema_version": 1}', "malformed manifest"),
         ('{"format": "dmprs.Database", "schema_version": "1"}', "invalid schema_version"),
-        ('{"format": "dmprs.Database", "schema_version": 1, "query_names": ["q"], "query_units": [""], '
-         '"demos": [{"file": "../../etc/passwd", "sha256": "00"}]}', "not a demo file"),
+        (('{"format": "dmprs.Database", "schema_version": 1, "query_names": ["q"], "query_units": [""], '
+         '"demos": [{"file": "../../etc/passwd", "sha256": "00"}]}'), "not a demo file"),
     ],
 )
 def test_a_bad_manifest_is_named(tmp_path, text, message):

@@ -3,16 +3,16 @@ implementation): same kernel, same data, same hyperparameters -> same prediction
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-import dmprs
-from dmprs.errors import DmprsError, InvalidInputError
 
 # scikit-learn is in the "test" extra: a missing install must fail, not skip, these checks.
 import sklearn.gaussian_process as sk_gp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from sklearn.gaussian_process.kernels import RBF, WhiteKernel
 from sklearn.gaussian_process.kernels import ConstantKernel as C
+
+import dmprs
+from dmprs.errors import DmprsError, InvalidInputError
 
 
 def problem(seed: int, m: int = 30, n: int = 2):

@@ -100,7 +100,7 @@ def test_noisy_measurements():
     for seed in range(5):
         rng = np.random.default_rng(seed)
 
-        def noisy(q):
+        def noisy(q, rng=rng):
             return 1.0 - (q[0] + 0.3 * np.sin(q[0])) + 0.003 * rng.standard_normal()
 
         for learner in (L.GoldenSection(1.0, low=0.3, high=1.8, mode="robust", tol=0.01), L.IllinoisRootFinder(1.0, low=0.3, high=1.8, tol=0.01), L.ErrorLearning(1.0, tol=0.01)):
@@ -196,7 +196,7 @@ def test_power_and_pi2_reduce_a_quadratic_cost_and_are_deterministic():
 def test_pi2_terminal_only_without_projection_is_pi_bb():
     p = L.PI2(np.zeros(8), 0.3, seed=2, projection=False, n_rollouts=6, n_reuse=2, h=10.0)
     target = np.linspace(-1, 1, 8)
-    cost = lambda th: np.sum((th - target) ** 2)  # noqa: E731
+    cost = lambda th: np.sum((th - target) ** 2)
     theta = p.ask()
     p.tell(theta, cost(theta))
     samples = []

@@ -86,7 +86,8 @@ def write_atomic(path: Path, data: bytes) -> None:
 def write_npz_atomic(path: Path, arrays: Mapping[str, Any]) -> bytes:
     """Saves arrays as an uncompressed .npz atomically; returns the bytes written (for hashing)."""
     buf = io.BytesIO()
-    np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
+    savez: Any = np.savez  # numpy's stub types the keyword arrays as its own options
+    savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
     data = buf.getvalue()
     write_atomic(path, data)
     return data
@@ -139,7 +140,7 @@ def read_jsonl(path: Path) -> tuple[list[dict[str, Any]], str | None]:
         try:
             value = json.loads(line)
             if not isinstance(value, dict):
-                raise ValueError("not a JSON object")
+                raise ValueError("not a JSON object")  # noqa: TRY004 - a bad line, handled below as one
         except ValueError as exc:
             if last:
                 cut = f"line {i + 1} of {path} was cut mid-write ({len(line)} bytes) and is ignored"

@@ -44,7 +44,10 @@ def main() -> None:
 
 @main.command("learn")
 @click.argument("task")
-@click.option("--learner", default=None, help="error, weighted, secant, golden, golden-robust, root, pg; pouring also fixed (default: the paper's choice for the task)")
+@click.option("--learner", default=None,
+              help="error, weighted, secant, golden, golden-robust, root, pg, cma; pouring also fixed; "
+                   "arm-throwing secant, error, finite-difference, weighted, cma (default: the paper's "
+                   "choice for the task)")
 @click.option("--desired", type=float, default=None, help="desired query (task units)")
 @click.option("--max-trials", type=click.IntRange(min=1, max=10**6), default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")
@@ -52,16 +55,21 @@ def main() -> None:
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("--noise", type=click.FloatRange(min=0.0, max=1e6), default=None,
               help="measurement noise (analytic task)")
-@click.option("--volume", type=float, default=None, help="bottle volume in litres (pouring)")
+@click.option("--volume", type=float, default=None, help="bottle volume in litres (pouring, arm-pouring)")
 @click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
+@click.option("--target", type=float, nargs=2, default=None, help="basket position X Y in m (arm-throwing)")
+@click.option("--generalizer", default=None, help="linear | lwr-gp (arm-throwing)")
 def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
               tol: float | None, log_dir: Path | None, seed: int, noise: float | None,
-              volume: float | None, demos: str | None) -> None:
-    """Learn TASK (analytic, matchbox, pouring) from its demonstrations, one trial at a time."""
+              volume: float | None, demos: str | None, target: tuple[float, float] | None,
+              generalizer: str | None) -> None:
+    """Learn TASK (analytic, matchbox, pouring, arm-pouring, arm-throwing) from its
+    demonstrations, one trial at a time."""
     from dmprs import experiments
 
-    options: dict[str, Any] = {k: v for k, v in {"desired": desired, "noise": noise, "bottle_volume": volume,
-                                 "demos": demos}.items() if v is not None}
+    options: dict[str, Any] = {k: v for k, v in {
+        "desired": desired, "noise": noise, "bottle_volume": volume, "demos": demos,
+        "target": target, "generalizer": generalizer}.items() if v is not None}
     console = _console()
     try:
         result = experiments.run(task, learner=learner, max_trials=max_trials, tol=tol,
@@ -252,9 +260,15 @@ def plot_cmd(run: Path, out: Path | None) -> None:
 @click.option("--workers", type=int, default=None, help="parallel workers (default: all cores)")
 def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None) -> None:
     """Run the paper's experiments in simulation and the baselines; write the report."""
+    import os
+
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from dmprs.reproduce import reproduce
+
+    # MuJoCo's offscreen renderer (the arm's frame strip) needs a GL backend chosen before MuJoCo
+    # is imported; EGL is headless. Without one the report says so in one line and carries on.
+    os.environ.setdefault("MUJOCO_GL", "egl")
 
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                   TimeElapsedColumn(), transient=False) as bar:

@@ -41,7 +41,7 @@ from dmprs._io import LOCK_FILE, directory_lock, write_atomic
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
-__all__ = ["Database", "Demo", "SCHEMA_VERSION"]
+__all__ = ["SCHEMA_VERSION", "Database", "Demo"]
 
 #: The newest schema this version reads and writes. Schema 2 adds pose demonstrations; a
 #: database of joint-space demonstrations is still written as schema 1, so older dmprs read it.
@@ -346,7 +346,8 @@ def _npz_bytes(demo: Demo) -> bytes:
         if name != "query" and getattr(tr, name) is not None:
             arrays[name] = getattr(tr, name)
     buf = io.BytesIO()
-    np.savez(buf, **arrays)
+    savez: Any = np.savez  # numpy's stub types the keyword arrays as its own options
+    savez(buf, **arrays)
     return buf.getvalue()
 
 

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs._arrays import as_count, as_flag, as_float_array, as_scalar, short
+from dmprs._core import Dmp as _CoreDmp
 from dmprs.errors import InvalidInputError
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -98,7 +99,7 @@ class DMP:
         object.__setattr__(self, "_core", core)
 
     @classmethod
-    def _wrap(cls, core: _core.Dmp) -> DMP:
+    def _wrap(cls, core: _CoreDmp) -> DMP:
         self = object.__new__(cls)
         object.__setattr__(self, "_core", core)
         return self
@@ -140,7 +141,7 @@ class DMP:
         tt = as_float_array(t, "t", 1)
         yy = as_float_array(y, "y", (1, 2))
         yy = yy.reshape(-1, 1) if yy.ndim == 1 else yy
-        derivs = []
+        derivs: list[NDArray[np.float64] | None] = []
         for name, value in (("yd", yd), ("ydd", ydd)):
             if value is None:
                 derivs.append(None)

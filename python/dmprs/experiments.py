@@ -198,10 +198,30 @@ def matchbox_setup(demos: str = "default", noise: Any = None, **config: float) -
     )
 
 
+# --- the 7-DOF arm in MuJoCo (the robot extra) -------------------------------------------------
+
+def arm_pouring_setup(**options: Any) -> ExperimentSetup:
+    """The paper's pouring on the 7-DOF arm (docs/arm.md): see
+    :func:`dmprs.tasks.arm_pouring.experiment.arm_pouring_setup`."""
+    from dmprs.tasks.arm_pouring.experiment import arm_pouring_setup as setup  # it builds on this module
+
+    return setup(**options)
+
+
+def arm_throwing_setup(**options: Any) -> ExperimentSetup:
+    """Throwing into a basket with the 7-DOF arm, a 2-D query (docs/throwing.md): see
+    :func:`dmprs.tasks.arm_throwing.experiment.arm_throwing_setup`."""
+    from dmprs.tasks.arm_throwing.experiment import arm_throwing_setup as setup  # it builds on this module
+
+    return setup(**options)
+
+
 SETUPS: dict[str, Callable[..., ExperimentSetup]] = {
     "analytic": analytic_setup,
     "matchbox": matchbox_setup,
     "pouring": pouring_setup,
+    "arm-pouring": arm_pouring_setup,
+    "arm-throwing": arm_throwing_setup,
 }
 
 
@@ -244,3 +264,20 @@ def pouring(bottle_volume: float = 0.5, learner: str = "golden", max_trials: int
     setup_options.setdefault("liquid_seed", seed)
     return run("pouring", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
                bottle_volume=bottle_volume, **setup_options)
+
+
+def arm_pouring(bottle_volume: float = 0.5, learner: str = "golden", max_trials: int = 6,
+                log_dir: str | Path | None = None, seed: int = 0, **setup_options: Any) -> LearningResult:
+    """The paper's pouring on the 7-DOF arm end to end (docs/arm.md): learn the assumed bottle
+    volume whose generalized Cartesian movement pours 0.2 l from a bottle holding
+    ``bottle_volume`` l. ``learner``: ``"golden"`` (the paper's) or ``"root"``, ..."""
+    return run("arm-pouring", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
+               bottle_volume=bottle_volume, **setup_options)
+
+
+def arm_throwing(target: tuple[float, float] = (1.0, 0.0), learner: str | None = None, max_trials: int = 15,
+                 log_dir: str | Path | None = None, seed: int = 0, **setup_options: Any) -> LearningResult:
+    """Throw the ball into a basket at ``target`` (x, y in m) with the 7-DOF arm
+    (docs/throwing.md), learned in the 2-D query space."""
+    return run("arm-throwing", learner=learner, max_trials=max_trials, log_dir=log_dir, seed=seed,
+               target=tuple(float(v) for v in target), **setup_options)

@@ -61,8 +61,15 @@ class GaussianProcess:
     """
 
     __slots__ = (
-        "_core", "_length_scale", "_signal_var", "_noise_var", "_n_restarts",
-        "_length_scale_bounds", "_signal_var_bounds", "_noise_var_bounds", "_max_iter",
+        "_core",
+        "_length_scale",
+        "_length_scale_bounds",
+        "_max_iter",
+        "_n_restarts",
+        "_noise_var",
+        "_noise_var_bounds",
+        "_signal_var",
+        "_signal_var_bounds",
     )
 
     def __init__(
@@ -132,7 +139,10 @@ class GaussianProcess:
         if x.ndim == 1:
             x = x.reshape(1, -1)
         mean, std = core.predict(x, bool(return_std))
-        return (mean, std) if return_std else mean
+        if not return_std:
+            return mean
+        assert std is not None  # the core computes it when asked
+        return mean, std
 
     def log_marginal_likelihood(
         self, theta: ArrayLike | None = None, eval_gradient: bool = False

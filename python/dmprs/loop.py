@@ -23,8 +23,8 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs._arrays import as_query
 from dmprs._core import __version__
 from dmprs.adapters.spec import Status
-from dmprs.database import DUPLICATE_POLICIES
 from dmprs.cartesian import CartesianDMP
+from dmprs.database import DUPLICATE_POLICIES
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError, RunLogError
 from dmprs.runlog import RunLog, TrialRecord

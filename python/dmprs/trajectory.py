@@ -49,11 +49,11 @@ class Trajectory:
                 raise InvalidInputError(f"{name} has shape {arr.shape}, expected {y.shape} like y")
             check_finite(arr, name)
             fields[name] = arr
-        for name, arr in fields.items():
-            if arr is not None:
-                arr = arr.copy()  # never alias the caller's array
-                arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
+        for name, value in fields.items():
+            frozen = None if value is None else value.copy()  # never alias the caller's array
+            if frozen is not None:
+                frozen.setflags(write=False)
+            object.__setattr__(self, name, frozen)
 
     @classmethod
     def _trusted(cls, t: Any, y: Any, yd: Any, ydd: Any) -> Trajectory:
@@ -249,3 +249,7 @@ class CartesianTrajectory:
             f"CartesianTrajectory(n_samples={self.n_samples}, duration={self.duration:.6g} s, "
             f"fields={'+'.join(['t', *parts])})"
         )
+
+
+#: What an adapter executes: joint-space samples, or poses of a Cartesian DMP's rollout.
+AnyTrajectory = Trajectory | CartesianTrajectory

@@ -26,7 +26,7 @@ from dmprs.tasks.base import Task
 if TYPE_CHECKING:
     from dmprs.cartesian import CartesianDMP
     from dmprs.dmp import DMP
-    from dmprs.trajectory import Trajectory
+    from dmprs.trajectory import AnyTrajectory
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,7 @@ class TrialResult:
     """A finished trial: its log record, what was commanded and what the adapter returned."""
 
     record: TrialRecord
-    command: Trajectory | None
+    command: AnyTrajectory | None
     outcome: Outcome
 
     @property
@@ -60,7 +60,7 @@ def run_trial(
     ``make_dmp()`` builds the DMP to execute from it. The adapter is reset with ``seed + index``.
     The trial succeeds when ``|eps| < tol`` if ``tol`` is given, else by ``task.success``.
     """
-    command: Trajectory | None = None
+    command: AnyTrajectory | None = None
     try:
         command = task.trajectory(make_dmp())
     except DmprsError as exc:
@@ -82,7 +82,7 @@ def run_trial(
     return TrialResult(record, command, outcome)
 
 
-def _execute(task: Task, command: Trajectory, seed: int, timeout_s: float | None) -> Outcome:
+def _execute(task: Task, command: AnyTrajectory, seed: int, timeout_s: float | None) -> Outcome:
     """The adapter's outcome, or an ``error`` outcome if it raised or returned something else."""
     adapter = task.adapter
     adapter.reset(seed=seed)

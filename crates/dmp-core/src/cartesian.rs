@@ -36,9 +36,9 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use rayon::prelude::*;
 
-use crate::finite_difference as diff;
 use crate::dmp::{Demonstration, Dmp, DmpConfig};
 use crate::error::{Error, Result, check_finite_matrix, check_increasing};
+use crate::finite_difference as diff;
 use crate::quaternion::{self, Quaternion};
 use crate::rollout::{MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, n_steps};
 

@@ -12,14 +12,18 @@ import threading
 import time
 import traceback
 from types import TracebackType
+from typing import Generic, Self, TypeVar
 
 from dmprs._arrays import as_scalar
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import AdapterError, DmprsError, InvalidInputError
-from dmprs.trajectory import Trajectory
+from dmprs.errors import AdapterError, InvalidInputError
+from dmprs.trajectory import AnyTrajectory
+
+#: The trajectories an adapter executes: joint-space samples, poses, or either.
+TrajectoryT = TypeVar("TrajectoryT", bound=AnyTrajectory)
 
 
-class Adapter(abc.ABC):
+class Adapter(abc.ABC, Generic[TrajectoryT]):
     """The protocol every adapter follows.
 
     ``spec`` describes the DOFs, limits and outcome signals. ``connect``/``disconnect`` (or a
@@ -41,17 +45,17 @@ class Adapter(abc.ABC):
     def reset(self, seed: int | None = None) -> None: ...
 
     @abc.abstractmethod
-    def check(self, trajectory: Trajectory) -> list[str]: ...
+    def check(self, trajectory: TrajectoryT) -> list[str]: ...
 
     @abc.abstractmethod
     def execute(
-        self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
+        self, trajectory: TrajectoryT, dry_run: bool = False, timeout_s: float | None = None
     ) -> Outcome: ...
 
     @abc.abstractmethod
     def stop(self) -> None: ...
 
-    def __enter__(self) -> Adapter:
+    def __enter__(self) -> Self:
         self.connect()
         return self
 
@@ -67,7 +71,7 @@ class Adapter(abc.ABC):
             self.disconnect()
 
 
-class BaseAdapter(Adapter):
+class BaseAdapter(Adapter[TrajectoryT]):
     """Shared behaviour; subclasses implement :meth:`_execute` (and usually :meth:`_reset`).
 
     ``execute`` checks the trajectory against the spec (rejecting, never clipping), honours
@@ -101,10 +105,10 @@ class BaseAdapter(Adapter):
     def _reset(self, seed: int | None) -> None:
         """Hook: restore the initial state. Simulations re-seed here."""
 
-    def check(self, trajectory: Trajectory) -> list[str]:
+    def check(self, trajectory: TrajectoryT) -> list[str]:
         return self.spec.check(trajectory) + self._extra_checks(trajectory)
 
-    def _extra_checks(self, trajectory: Trajectory) -> list[str]:
+    def _extra_checks(self, trajectory: TrajectoryT) -> list[str]:
         """Hook: adapter-specific checks (workspace, collisions) on an in-limits trajectory."""
         return []
 
@@ -116,13 +120,13 @@ class BaseAdapter(Adapter):
             self._deadline is not None and time.monotonic() > self._deadline
         )
 
-    def _interrupted_outcome(self, executed: Trajectory | None = None) -> Outcome:
+    def _interrupted_outcome(self, executed: AnyTrajectory | None = None) -> Outcome:
         if self._stop.is_set():
             return Outcome(Status.STOPPED, executed=executed, message="stop() was called")
         return Outcome(Status.TIMEOUT, executed=executed, message="the trial exceeded timeout_s")
 
     def execute(
-        self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
+        self, trajectory: TrajectoryT, dry_run: bool = False, timeout_s: float | None = None
     ) -> Outcome:
         if not self._connected:
             raise AdapterError(f"{self.spec.name}: execute() before connect()")
@@ -158,5 +162,5 @@ class BaseAdapter(Adapter):
         return outcome
 
     @abc.abstractmethod
-    def _execute(self, trajectory: Trajectory) -> Outcome:
+    def _execute(self, trajectory: TrajectoryT) -> Outcome:
         """Runs a checked trajectory and measures the outcome signals."""

@@ -11,14 +11,16 @@ from dmprs._io import append_jsonl, read_jsonl, write_npz_atomic
 from dmprs.adapters.base import Adapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
 from dmprs.errors import AdapterError, InvalidInputError
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import AnyTrajectory, CartesianTrajectory, Trajectory
 
 _INDEX = "recording.jsonl"
 
 
-def _trajectory_arrays(prefix: str, tr: Trajectory | None) -> dict[str, np.ndarray]:
+def _trajectory_arrays(prefix: str, tr: AnyTrajectory | None) -> dict[str, np.ndarray]:
     if tr is None:
         return {}
+    if isinstance(tr, CartesianTrajectory):
+        return {f"{prefix}t": tr.t, f"{prefix}pose": tr.pose}
     out = {f"{prefix}t": tr.t, f"{prefix}y": tr.y}
     for name in ("yd", "ydd"):
         value = getattr(tr, name)
@@ -27,9 +29,16 @@ def _trajectory_arrays(prefix: str, tr: Trajectory | None) -> dict[str, np.ndarr
     return out
 
 
-def _trajectory_from(arrays: Any, prefix: str) -> Trajectory | None:
+def _samples(tr: AnyTrajectory) -> np.ndarray:
+    """The positions of a joint trajectory, the poses of a Cartesian one."""
+    return tr.pose if isinstance(tr, CartesianTrajectory) else tr.y
+
+
+def _trajectory_from(arrays: Any, prefix: str) -> AnyTrajectory | None:
     if f"{prefix}t" not in arrays:
         return None
+    if f"{prefix}pose" in arrays:
+        return CartesianTrajectory.from_pose(arrays[f"{prefix}t"], arrays[f"{prefix}pose"])
     return Trajectory(arrays[f"{prefix}t"], arrays[f"{prefix}y"], arrays.get(f"{prefix}yd"),
                       arrays.get(f"{prefix}ydd"))
 
@@ -146,8 +155,9 @@ class ReplayAdapter(Adapter):
             signals = {k[4:]: (arrays[k].item() if arrays[k].ndim == 0 else arrays[k])
                        for k in arrays.files if k.startswith("sig_")}
         if self.strict and command is not None:
-            same = command.y.shape == trajectory.y.shape and np.allclose(
-                command.y, trajectory.y, rtol=0, atol=self.atol) and np.allclose(
+            recorded, asked = _samples(command), _samples(trajectory)
+            same = recorded.shape == asked.shape and np.allclose(
+                recorded, asked, rtol=0, atol=self.atol) and np.allclose(
                 command.t, trajectory.t, rtol=0, atol=self.atol)
             if not same:
                 return Outcome(Status.ERROR, message=(

@@ -26,6 +26,7 @@ BUILTIN: dict[str, str] = {
     "arm-pouring": "dmprs.tasks.arm_pouring:ArmPouringAdapter",
     "matchbox": "dmprs.tasks.matchbox:MatchboxAdapter",
     "pouring": "dmprs.tasks.pouring:PouringAdapter",
+    "arm-throwing": "dmprs.tasks.arm_throwing:ArmThrowingAdapter",
 }
 
 

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from dmprs.errors import InvalidInputError
-from dmprs.trajectory import UNIT_TOLERANCE, CartesianTrajectory, Trajectory
+from dmprs.trajectory import UNIT_TOLERANCE, AnyTrajectory, CartesianTrajectory, Trajectory
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,7 @@ class AdapterSpec:
     def n_dof(self) -> int:
         return len(self.dof_names)
 
-    def check(self, trajectory: Trajectory) -> list[str]:
+    def check(self, trajectory: AnyTrajectory) -> list[str]:
         """Every way ``trajectory`` breaks this spec, as readable sentences; empty if none.
 
         Pure: it only reads the trajectory. Position limits apply to y, velocity limits to yd and
@@ -304,7 +304,7 @@ class Outcome:
 
     status: Status
     signals: Mapping[str, Any] = field(default_factory=dict)
-    executed: Trajectory | None = None
+    executed: AnyTrajectory | None = None
     message: str = ""
 
     @property

@@ -55,12 +55,12 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
     try:
         _prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]))
         results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result)
+        report = summarize(results)
+        report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1))
+        (out / "report.json").write_text(json.dumps({"summary": report, "runs": results}, indent=1, default=str))
+        figures = write_figures(results, out)  # the arm's frame strip reads the cached calibration
     finally:
         if saved is None:
             del os.environ["DMPRS_CACHE_DIR"]
-    report = summarize(results)
-    report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1))
-    (out / "report.json").write_text(json.dumps({"summary": report, "runs": results}, indent=1, default=str))
-    figures = write_figures(results, out)
     (out / "report.md").write_text(markdown(report, figures))
     return report

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from dmprs.reproduce.parts import PARTS
+
 
 def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
     """Figs. 4, 7, 9 in the paper's style and a baseline comparison (needs matplotlib)."""
@@ -42,23 +44,33 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
         paths.append(out / fname)
         fig.savefig(paths[-1], dpi=110)
         plt.close(fig)
-    runs = [r for r in results if r["kind"] == "learn" and r["part"] == "pouring" and r["learner"] == "golden"]
-    if runs:
+    for part, tol_ml, title, fname in (
+            ("pouring", 10, "Pouring, golden section (Fig. 9)", "fig9_pouring.png"),
+            ("arm_pouring", 20, "Pouring with the 7-DOF arm (MuJoCo), golden section", "fig9_arm_pouring.png")):
+        runs = [r for r in results if r["kind"] == "learn" and r["part"] == part and r["learner"] == "golden"]
+        if not runs:
+            continue
         fig, ax = plt.subplots(2, 1, figsize=(6.5, 5.5), sharex=True)
         for r in runs:
             n = np.arange(1, len(r["trials"]) + 1)
             err = [1000 * t["signals"].get("poured_volume", np.nan) - 200 for t in r["trials"]]
             line, = ax[0].plot(n, err, "o-", label=f"bottle {r['setup']['bottle_volume']} l")
             ax[1].plot(n, [t["query"][0] for t in r["trials"]], "o-", color=line.get_color())
-        ax[0].axhspan(-10, 10, color="green", alpha=0.1)
-        ax[0].set(ylabel="poured - 200 ml (ml)", title="Pouring, golden section (Fig. 9)")
+        ax[0].axhspan(-tol_ml, tol_ml, color="green", alpha=0.1)
+        ax[0].set(ylabel="poured - 200 ml (ml)", title=title)
         ax[1].set(ylabel="learned query (l)", xlabel="trial")
         ax[1].xaxis.get_major_locator().set_params(integer=True)
         ax[0].legend(fontsize=7)
         fig.tight_layout()
-        paths.append(out / "fig9_pouring.png")
+        paths.append(out / fname)
         fig.savefig(paths[-1], dpi=110)
         plt.close(fig)
+    if any(r["kind"] == "learn" and r["part"] == "arm_pouring" for r in results):
+        from dmprs.tasks.arm_pouring.experiment import frame_strip
+
+        strip = frame_strip(out)  # None, with a one-line note, where no OpenGL backend is available
+        if strip is not None:
+            paths.append(Path(strip))
     base = [r for r in results if r["kind"] == "baseline"]
     if base:
         fig, ax = plt.subplots(figsize=(7, 3.8))
@@ -81,4 +93,9 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
         paths.append(out / "baselines.png")
         fig.savefig(paths[-1], dpi=110)
         plt.close(fig)
+    for extra in PARTS:
+        if any(r.get("kind") == extra.kind for r in results):
+            path = extra.figure(results, out)
+            if path is not None:
+                paths.append(Path(path))
     return paths

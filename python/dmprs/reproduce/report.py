@@ -6,10 +6,14 @@ import statistics
 from pathlib import Path
 from typing import Any
 
+from dmprs.baselines import METHODS
+from dmprs.reproduce.parts import PARTS
+
 PAPER = {
     "matchbox": "Fig. 4: 4 trials in simulation (eq. 16, K = I); 5 on the real robot",
     "matchbox_both_flipped_back": "Fig. 7: succeeds; trial count not given",
     "pouring": "Fig. 9: converges for several volumes at similar rates; no count given",
+    "arm_pouring": "Fig. 9 on the KUKA LWR arm: converges for several volumes; no count given",
     "baselines": "not reported in the paper",
 }
 
@@ -38,12 +42,16 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
         if r["kind"] == "baseline":
             groups.setdefault((r["setup"].get("demos"), r["method"], r["sigma_frac"]), []).append(r)
     for (demos, method, sf), runs in groups.items():
-        name = {"power": "PoWER", "pi2": "PI²"}[method]
+        name = METHODS[method].name
         rows.append({"part": "baselines", "experiment": f"matchbox (demos {demos})",
                      "learner": f"{name}, sigma {sf} x max abs(w), {len(runs)} seeds",
                      **_stats([r["trials_to_success"] for r in runs], runs[0]["budget"]),
                      "paper": PAPER["baselines"]})
-    return {"rows": rows}
+    sections = [{"kind": part.kind, "title": part.title, "markdown": part.markdown(results)}
+                for part in PARTS if any(r.get("kind") == part.kind for r in results)]
+    skipped = [f"{part.title}: not run, it needs `{part.needs}` (pip install 'dmprs[robot]')"
+               for part in PARTS if not part.available()]
+    return {"rows": rows, "sections": sections, "skipped": skipped}
 
 
 def _cell(row: dict[str, Any]) -> str:
@@ -67,5 +75,8 @@ def markdown(report: dict[str, Any], figures: list[Path]) -> str:
              "| experiment | learner | trials to success | paper |", "|---|---|---|---|"]
     for row in report["rows"]:
         lines.append(f"| {row['experiment']} | {row['learner']} | {_cell(row)} | {row['paper']} |")
+    for section in report.get("sections", []):
+        lines += ["", f"## {section['title']}", "", section["markdown"].rstrip()]
+    lines += [f"\n{note}" for note in report.get("skipped", [])]
     lines += ["", "Figures:", ""] + [f"![{p.stem}]({p.name})" for p in figures]
     return "\n".join(lines) + "\n"

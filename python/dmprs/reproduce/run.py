@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from dmprs.baselines import BaselineSpec, run_baseline
+from dmprs.reproduce.parts import BY_KIND
 from dmprs.reproduce.plan import LearnSpec
 
 
@@ -34,15 +35,26 @@ def _baseline(spec: BaselineSpec) -> dict[str, Any]:
     return out
 
 
-def dispatch(spec: LearnSpec | BaselineSpec) -> dict[str, Any]:
-    return run_learning(spec) if isinstance(spec, LearnSpec) else _baseline(spec)
+def dispatch(spec: Any) -> dict[str, Any]:
+    """Runs one spec of the plan: a paper experiment, a baseline, or a run of another part."""
+    if isinstance(spec, LearnSpec):
+        return run_learning(spec)
+    if isinstance(spec, BaselineSpec):
+        return _baseline(spec)
+    result = BY_KIND[spec.kind].run(spec)
+    result.update(kind=spec.kind, part=spec.kind)
+    return result
 
 
 def _prepare_pouring(specs: list[Any], cache_dir: Path) -> None:
     """Calibrates the pouring demonstrations once, before workers start, into the disk cache."""
-    if not any(getattr(s, "experiment", "") == "pouring" for s in specs):
-        return
-    from dmprs.tasks.pouring import DEMO_VOLUMES, demonstration
+    experiments = {getattr(s, "experiment", "") for s in specs}
+    if "pouring" in experiments:
+        from dmprs.tasks.pouring import DEMO_VOLUMES, demonstration
 
-    for v in DEMO_VOLUMES:
-        demonstration(v, cache_dir=str(cache_dir))
+        for v in DEMO_VOLUMES:
+            demonstration(v, cache_dir=str(cache_dir))
+    if "arm-pouring" in experiments:
+        from dmprs.tasks.arm_pouring.experiment import demonstrations
+
+        demonstrations(cache_dir=str(cache_dir))

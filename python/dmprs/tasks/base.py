@@ -16,7 +16,7 @@ from dmprs.errors import InvalidInputError
 if TYPE_CHECKING:
     from dmprs.cartesian import CartesianDMP
     from dmprs.dmp import DMP
-    from dmprs.trajectory import CartesianTrajectory, Trajectory
+    from dmprs.trajectory import AnyTrajectory
 
 
 class Task(abc.ABC):
@@ -54,7 +54,7 @@ class Task(abc.ABC):
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
         return as_query(query, name, self.query_names)
 
-    def trajectory(self, dmp: DMP | CartesianDMP) -> Trajectory | CartesianTrajectory:
+    def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
         """The trajectory to execute for a generalized DMP: by default its rollout at the
         adapter's control period, up to tau (a pose trajectory for a Cartesian DMP)."""
         return dmp.rollout(dt=self.adapter.spec.control_period)

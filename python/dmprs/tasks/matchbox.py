@@ -39,7 +39,9 @@ from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
 if TYPE_CHECKING:
+    from dmprs.cartesian import CartesianDMP
     from dmprs.dmp import DMP
+    from dmprs.trajectory import AnyTrajectory
 
 CONTROL_PERIOD = 0.001
 #: strike durations (s) of the scripted demonstrations: docs/method.md §8.1 (one flips back, one
@@ -165,7 +167,7 @@ class MatchboxFlip(Task):
 
     adapter: MatchboxAdapter
 
-    def trajectory(self, dmp: DMP) -> Trajectory:
+    def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
         """The DMP's rollout at 1 ms up to tau; the fingertip then holds still."""
         return dmp.rollout(dt=CONTROL_PERIOD)
 

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_count
 from dmprs.adapters import Outcome
+from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError
 from dmprs.tasks.base import Task
 from dmprs.tasks.pouring.adapter import TARGET_VOLUME, TOLERANCE, PouringAdapter, _check_volume
@@ -18,7 +19,8 @@ from dmprs.tasks.pouring.demonstrator import demonstration
 from dmprs.trajectory import Trajectory
 
 if TYPE_CHECKING:
-    from dmprs.dmp import DMP
+    from dmprs.cartesian import CartesianDMP
+    from dmprs.trajectory import AnyTrajectory
 
 
 class Pouring(Task):
@@ -53,9 +55,9 @@ class Pouring(Task):
         self.tol = tol_f
         self.rollout_substeps = as_count(rollout_substeps, "rollout_substeps", 1)
 
-    def trajectory(self, dmp: DMP) -> Trajectory:
+    def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
         k = self.rollout_substeps
-        if k == 1:
+        if k == 1 or not isinstance(dmp, DMP):
             return super().trajectory(dmp)
         fine = dmp.rollout(dt=self.adapter.spec.control_period / k)
         assert fine.yd is not None and fine.ydd is not None  # a rollout has its derivatives
