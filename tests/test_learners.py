@@ -383,3 +383,15 @@ def test_pi2_refuses_sizes_that_cannot_be_meant():
     for n_steps in (2**40, 10**9):
         with pytest.raises(InvalidInputError, match="n_steps x n_basis"):
             L.PI2(np.zeros(5), 0.1, n_steps=n_steps)
+
+
+def test_pi2_says_which_rollout_is_its_evaluation():
+    # independent truth: the evaluation rollout is the noiseless current theta, the others are not
+    learner = L.PI2(np.zeros(6), 0.2, seed=1, n_steps=20, n_updates=4)
+    flags = []
+    while not learner.done:
+        theta = learner.ask()
+        flags.append(learner.asked_evaluation)
+        assert learner.asked_evaluation == bool(np.array_equal(theta, learner.theta))
+        learner.tell(theta, float(np.sum(theta**2)))
+    assert flags[0] and sum(flags) == 4 and not all(flags)

@@ -95,8 +95,8 @@ METHODS = {
         "PI²", _pi2,
         feedback=lambda eps, scale: WORST_COST if eps is None else (eps / scale) ** 2,
         theta0_first=False,
-        # PI2 asks its mean theta (noiseless) for the evaluation rollout of each update
-        evaluation=lambda learner, theta: bool(np.array_equal(theta, learner.theta))),  # type: ignore[attr-defined]
+        # the core knows which rollout of an update is its noiseless evaluation
+        evaluation=lambda learner, theta: bool(learner.asked_evaluation)),  # type: ignore[attr-defined]
     "cma": _Method(
         "CMA-ES", _cma,
         feedback=lambda eps, scale: WORST_COST if eps is None else (eps / scale) ** 2,

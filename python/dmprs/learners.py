@@ -569,3 +569,9 @@ class PI2(_Learner):
     def n_updates_done(self) -> int:
         """PI² updates completed."""
         return self._core.n_updates_done
+
+    @property
+    def asked_evaluation(self) -> bool:
+        """Whether the query :meth:`ask` returned last is an update's noiseless evaluation
+        rollout of the current theta (success is judged on those), not an exploration one."""
+        return self._core.asked_evaluation

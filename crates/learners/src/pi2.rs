@@ -205,6 +205,12 @@ impl Pi2 {
         self.update
     }
 
+    /// Whether the query `ask` returned last is an update's noiseless evaluation rollout (of the
+    /// current theta) rather than an exploration rollout.
+    pub fn asked_evaluation(&self) -> bool {
+        self.pending_is_eval
+    }
+
     fn noise_mult(&self) -> f64 {
         let u = self.cfg.n_updates as f64;
         ((u - self.update as f64) / u).max(MIN_NOISE_MULT)

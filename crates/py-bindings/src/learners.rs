@@ -444,4 +444,10 @@ ask_tell_class!("PI2", PyPi2, Pi2, {
     fn n_updates_done(&self) -> usize {
         self.inner.n_updates_done()
     }
+
+    /// Whether the last asked query is an evaluation rollout (noiseless, of the current theta).
+    #[getter]
+    fn asked_evaluation(&self) -> bool {
+        self.inner.asked_evaluation()
+    }
 });
