@@ -394,4 +394,4 @@ def test_pi2_says_which_rollout_is_its_evaluation():
         flags.append(learner.asked_evaluation)
         assert learner.asked_evaluation == bool(np.array_equal(theta, learner.theta))
         learner.tell(theta, float(np.sum(theta**2)))
-    assert flags[0] and sum(flags) == 4 and not all(flags)
+    assert flags[0] and 1 < sum(flags) < len(flags)
