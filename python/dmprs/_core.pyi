@@ -200,6 +200,8 @@ class ErrorLearning:
         tol: float | None = None,
         max_trials: int | None = None,
         pin_limit: int | None = None,
+        broyden: bool | None = None,
+        trust_radius: float | None = None,
     ) -> ErrorLearning: ...
     @property
     def jacobian(self) -> NDArray[np.float64]: ...

@@ -57,6 +57,10 @@ def query_learners(low: float | None, high: float | None, scale: float = 1.0,
         "error": lambda q0, **kw: L.ErrorLearning(q0, max_trials=max_trials, **kw),
         "weighted": lambda q0, **kw: L.ErrorLearning(q0, weighted=True, scale=scale, max_trials=max_trials, **kw),
         "secant": lambda q0, **kw: L.ErrorLearning(q0, jacobian="secant", max_trials=max_trials, **kw),
+        # the n-D learner of docs/method.md §5.4 (J from probes, Broyden, a trust region of
+        # one task scale), here on scalar queries beside the scalar learners
+        "broyden": lambda q0, **kw: L.ErrorLearning(q0, jacobian="finite-difference", broyden=True, trust_radius=1.0,
+                                                    scale=scale, max_trials=max_trials, **kw),
         "golden": lambda q0, **kw: L.GoldenSection(q0, **bracket(), mode="paper", max_trials=max_trials, **kw),
         "golden-robust": lambda q0, **kw: L.GoldenSection(q0, **bracket(), mode="robust", max_trials=max_trials, **kw),
         "root": lambda q0, **kw: L.IllinoisRootFinder(q0, **bracket(), max_trials=max_trials, **kw),

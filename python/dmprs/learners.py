@@ -239,6 +239,12 @@ class ErrorLearning(_Learner):
       (n extra trials, docs/method.md §5.2 item 4).
     * an ``(n, n)`` array (a scalar for n = 1) — a fixed J.
 
+    With ``broyden=True`` any starting J (a fixed one, or the finite differences) is refined by
+    Broyden's update from every later trial (``"secant"`` always is). ``trust_radius`` (in
+    units of ``scale``) holds every step inside a trust region that doubles after a trial that
+    reduced ||eps|| (up to 10x its start) and halves after one that did not, the next step then
+    starting from the best trial: the step control for maps far from linear (docs/method.md §5.4).
+
     Estimated J's must have a positive symmetric part and singular values in [0.1, 10], else I
     is used (the §5.2 safeguard). ``low``/``high`` (scalars or ``(n,)``) clip the queries; after
     ``pin_limit`` trials pinned at a limit with eps pointing past it the learner stops with
@@ -263,6 +269,8 @@ class ErrorLearning(_Learner):
         tol: float | None = None,
         max_trials: int | None = None,
         pin_limit: int | None = None,
+        broyden: bool | None = None,
+        trust_radius: float | None = None,
     ) -> None:
         q = _vector(q0, "q0")
         n = q.shape[0]
@@ -278,6 +286,8 @@ class ErrorLearning(_Learner):
             tol=_real(tol, "tol"),
             max_trials=_count(max_trials, "max_trials"),
             pin_limit=_count(pin_limit, "pin_limit"),
+            broyden=_flag(broyden, "broyden"),
+            trust_radius=_real(trust_radius, "trust_radius"),
         )
 
     @property

@@ -12,6 +12,12 @@
 //! finite-difference estimate at q0 bought with n extra trials. Every estimate passes the §5.2
 //! safeguard (slope in [0.1, 10] and positive) or is replaced by I.
 //!
+//! For n-D queries (docs/method.md §5.4) any starting J (a fixed one, or the finite differences)
+//! can be refined by Broyden's update from every later trial (`broyden`), and the step can be
+//! held inside a trust region (`trust_radius`, in units of `scale`): a trial that reduces ||eps||
+//! doubles the radius (up to 10x its start), one that does not halves it and the next step starts
+//! again from the best trial, so a map that is far from linear cannot throw the iterate away.
+//!
 //! Sign convention (docs/method.md §5.3): eps > 0 means the query must increase. With q_a increasing
 //! in q and eps = q0 - q_a this holds; a task whose outcome decreases with q must flip the sign
 //! of its error. A wrong sign makes the iterates walk away from the root: with `low`/`high` the
@@ -105,6 +111,11 @@ pub struct ErrorLearningConfig {
     pub max_trials: usize,
     /// Consecutive trials pinned at a limit before `HitBound`.
     pub pin_limit: usize,
+    /// Refine J by Broyden's update after every trial, whatever J started from (always on for
+    /// `Jacobian::Secant`).
+    pub broyden: bool,
+    /// The trust region's starting radius in units of `scale` (None: no trust region).
+    pub trust_radius: Option<f64>,
 }
 
 /// Eq. 16 with K = I, no limits.
@@ -120,6 +131,8 @@ impl Default for ErrorLearningConfig {
             tol: 1e-3,
             max_trials: 50,
             pin_limit: 3,
+            broyden: false,
+            trust_radius: None,
         }
     }
 }
@@ -131,6 +144,10 @@ const MAX_SLOPE: f64 = 10.0;
 const GROWTH_TRIALS: usize = 4;
 /// ... to more than this multiple of the first |eps|.
 const GROWTH_FACTOR: f64 = 2.0;
+/// With a trust region: stop as diverged when the best ||eps|| improved by less than this
+/// fraction over the last `STALL_TRIALS` trials (a map without a root, or one out of reach).
+const STALL_FRACTION: f64 = 0.01;
+const STALL_TRIALS: usize = 6;
 
 #[derive(Debug, Clone)]
 pub struct ErrorLearning {
@@ -150,6 +167,11 @@ pub struct ErrorLearning {
     /// eps at q0, kept while the finite-difference probes run.
     eps_at_q0: Option<DVector<f64>>,
     growth: usize,
+    broyden: bool,
+    /// (current radius, starting radius) of the trust region, in query units.
+    trust: Option<(f64, f64)>,
+    /// The trial with the smallest ||eps|| so far: (q, eps).
+    best: Option<(DVector<f64>, DVector<f64>)>,
     rec: Record,
 }
 
@@ -186,6 +208,11 @@ impl ErrorLearning {
         if let Some(b) = &bounds {
             b.check_inside("q0", q0)?;
         }
+        if let Some(r) = cfg.trust_radius {
+            check_scalar("trust_radius", r, true)?;
+        }
+        let trust = cfg.trust_radius.map(|r| (r * cfg.scale, r * cfg.scale));
+        let broyden = cfg.broyden || cfg.jacobian == Jacobian::Secant;
         let q0 = DVector::from_column_slice(q0);
         Ok(Self {
             n,
@@ -201,6 +228,9 @@ impl ErrorLearning {
             prev: None,
             eps_at_q0: None,
             growth: 0,
+            broyden,
+            trust,
+            best: None,
             rec: Record::new(cfg.max_trials)?,
         })
     }
@@ -224,7 +254,11 @@ impl ErrorLearning {
             .lu()
             .solve(eps)
             .unwrap_or_else(|| eps.clone());
-        w * (&self.gain * newton)
+        let step = w * (&self.gain * newton);
+        match self.trust {
+            Some((radius, _)) if step.norm() > radius => step.scale(radius / step.norm()),
+            _ => step,
+        }
     }
 
     fn clipped(&self, mut q: DVector<f64>) -> DVector<f64> {
@@ -318,7 +352,7 @@ impl AskTell for ErrorLearning {
                 }
             }
         } else {
-            if self.mode == Jacobian::Secant
+            if self.broyden
                 && let Some((qp, ep)) = &self.prev
             {
                 let dq = &qv - qp;
@@ -333,12 +367,28 @@ impl AskTell for ErrorLearning {
                     self.jac = DMatrix::identity(self.n, self.n);
                 }
             }
-            let step = self.step(&ev);
-            self.next = self.clipped(&qv + &step);
+            // Trust region: grow after progress, shrink and restart from the best trial otherwise.
+            let (from, e_from) = match (&mut self.trust, &self.best) {
+                (Some((radius, start)), Some((qb, eb))) => {
+                    if ev.norm() < eb.norm() {
+                        *radius = (2.0 * *radius).min(10.0 * *start);
+                        (qv.clone(), ev.clone())
+                    } else {
+                        *radius *= 0.5;
+                        (qb.clone(), eb.clone())
+                    }
+                }
+                _ => (qv.clone(), ev.clone()),
+            };
+            let step = self.step(&e_from);
+            self.next = self.clipped(&from + &step);
             // Pinned: q sits on a limit and the step (not eps: K and J may rotate it) points past it.
             if let Some(b) = &mut self.bounds {
                 stop = b.observe(q, step.as_slice());
             }
+        }
+        if self.best.as_ref().is_none_or(|(_, eb)| ev.norm() < eb.norm()) {
+            self.best = Some((qv.clone(), ev.clone()));
         }
         self.prev = Some((qv, ev));
 
@@ -351,6 +401,15 @@ impl AskTell for ErrorLearning {
         }
         if stop.is_none() && self.growth >= GROWTH_TRIALS && score > GROWTH_FACTOR * h[0].score {
             stop = Some(Status::Diverged);
+        }
+        if stop.is_none() && self.trust.is_some() && h.len() > STALL_TRIALS {
+            let best = |trials: &[_]| -> f64 {
+                trials.iter().map(|t: &crate::ask_tell::Trial| t.score).fold(f64::INFINITY, f64::min)
+            };
+            let before = best(&h[..h.len() - STALL_TRIALS]);
+            if best(h) > (1.0 - STALL_FRACTION) * before {
+                stop = Some(Status::Diverged);
+            }
         }
         self.rec
             .finish_tell(stop.or_else(|| diverged_unless_finite(self.next.as_slice())));

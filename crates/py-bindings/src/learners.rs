@@ -168,7 +168,8 @@ macro_rules! ask_tell_class {
 ask_tell_class!("ErrorLearning", PyErrorLearning, ErrorLearning, {
     #[new]
     #[pyo3(signature = (q0, *, low=None, high=None, gain=None, weighted=None, scale=None,
-        jacobian=None, delta=None, tol=None, max_trials=None, pin_limit=None))]
+        jacobian=None, delta=None, tol=None, max_trials=None, pin_limit=None, broyden=None,
+        trust_radius=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         q0: PyReadonlyArray1<'_, f64>,
@@ -182,6 +183,8 @@ ask_tell_class!("ErrorLearning", PyErrorLearning, ErrorLearning, {
         tol: Option<f64>,
         max_trials: Option<usize>,
         pin_limit: Option<usize>,
+        broyden: Option<bool>,
+        trust_radius: Option<f64>,
     ) -> PyResult<Self> {
         let d = ErrorLearningConfig::default();
         let cfg = ErrorLearningConfig {
@@ -200,6 +203,8 @@ ask_tell_class!("ErrorLearning", PyErrorLearning, ErrorLearning, {
             tol: tol.unwrap_or(d.tol),
             max_trials: max_trials.unwrap_or(d.max_trials),
             pin_limit: pin_limit.unwrap_or(d.pin_limit),
+            broyden: broyden.unwrap_or(d.broyden),
+            trust_radius: trust_radius.or(d.trust_radius),
         };
         Ok(Self {
             inner: ErrorLearning::new(slice("q0", &q0)?, cfg).py_err()?,

@@ -30,12 +30,12 @@ def plan(quick: bool = False) -> list[Any]:
     """The runs of the job; ``quick`` runs every part at small scale. The parts of
     :data:`dmprs.reproduce.parts.PARTS` whose extra is installed follow the paper's experiments."""
     specs: list[Any] = []
-    query_learners = ["error"] if quick else ["error", "weighted", "secant", "golden-robust", "root", "pg"]
+    query_learners = ["error"] if quick else ["error", "weighted", "secant", "broyden", "golden-robust", "root", "pg"]
     for part, demos in (("matchbox", "default"), ("matchbox_both_flipped_back", "both_flipped_back")):
         for learner in (["weighted"] if quick and demos != "default" else query_learners):
             specs.append(LearnSpec(part, "matchbox", learner, 30, (("demos", demos),)))
     volumes = [0.5] if quick else [0.4, 0.5, 0.7, 0.25]
-    pour_learners = ["golden"] if quick else ["golden", "golden-robust", "fixed", "root"]
+    pour_learners = ["golden"] if quick else ["golden", "golden-robust", "fixed", "root", "broyden"]
     for v in volumes:
         for learner in pour_learners:
             specs.append(LearnSpec("pouring", "pouring", learner, 7 if quick else 15, (("bottle_volume", v),)))

@@ -88,7 +88,7 @@ def plan_throwing(quick: bool = False) -> list[ThrowingSpec]:
     specs += [ThrowingSpec(b[region][0], region, "linear", lrn, seed) for lrn in ("secant", "error")
               for region in ("inside", "outside") for seed in range(10)]
     # a 2 cm basket, which the pure generalization mostly misses: the learners at work
-    specs += [ThrowingSpec(t, region, "linear", lrn, tol=0.02) for lrn in ("secant", "error", "finite-difference")
+    specs += [ThrowingSpec(t, region, "linear", lrn, tol=0.02) for lrn in ("secant", "error", "finite-difference", "broyden")
               for region in ("inside", "outside") for t in b[region]]
     return specs
 

@@ -77,6 +77,10 @@ def throwing_learners(max_trials: int = 50) -> dict[str, Callable[..., Any]]:
         "error": lambda q0, **kw: L.ErrorLearning(q0, max_trials=max_trials, **kw),
         "finite-difference": lambda q0, **kw: L.ErrorLearning(
             q0, jacobian="finite-difference", delta=kw.pop("delta", PROBE), max_trials=max_trials, **kw),
+        # docs/method.md §5.4: J from probes, refined by Broyden, steps in a trust region
+        "broyden": lambda q0, **kw: L.ErrorLearning(
+            q0, jacobian="finite-difference", delta=kw.pop("delta", PROBE), broyden=True,
+            trust_radius=kw.pop("trust_radius", 0.5), max_trials=max_trials, **kw),
         "weighted": lambda q0, **kw: L.ErrorLearning(
             q0, jacobian="secant", weighted=True, scale=kw.pop("scale", WEIGHT_SCALE), max_trials=max_trials, **kw),
         "cma": cma,
