@@ -387,7 +387,11 @@ impl AskTell for ErrorLearning {
                 stop = b.observe(q, step.as_slice());
             }
         }
-        if self.best.as_ref().is_none_or(|(_, eb)| ev.norm() < eb.norm()) {
+        if self
+            .best
+            .as_ref()
+            .is_none_or(|(_, eb)| ev.norm() < eb.norm())
+        {
             self.best = Some((qv.clone(), ev.clone()));
         }
         self.prev = Some((qv, ev));
@@ -404,7 +408,10 @@ impl AskTell for ErrorLearning {
         }
         if stop.is_none() && self.trust.is_some() && h.len() > STALL_TRIALS {
             let best = |trials: &[_]| -> f64 {
-                trials.iter().map(|t: &crate::ask_tell::Trial| t.score).fold(f64::INFINITY, f64::min)
+                trials
+                    .iter()
+                    .map(|t: &crate::ask_tell::Trial| t.score)
+                    .fold(f64::INFINITY, f64::min)
             };
             let before = best(&h[..h.len() - STALL_TRIALS]);
             if best(h) > (1.0 - STALL_FRACTION) * before {
