@@ -19,7 +19,8 @@ from dmprs.errors import InvalidInputError
 # Small bottles keep the demonstrations' calibration to a few seconds (the defaults are the paper's).
 SMALL_POURING = {"target_volume": 0.04, "demo_volumes": (0.08, 0.16), "volume_range": (0.08, 0.16)}
 KWARGS = {"dmprs/MatchboxFlip-v0": {}, "dmprs/MatchboxFlipWeights-v0": {},
-          "dmprs/Pouring-v0": SMALL_POURING, "dmprs/PouringWeights-v0": SMALL_POURING}
+          "dmprs/Pouring-v0": SMALL_POURING, "dmprs/PouringWeights-v0": SMALL_POURING,
+          "dmprs/ArmThrowing-v0": {}, "dmprs/ArmThrowingWeights-v0": {}}
 
 
 @contextlib.contextmanager

@@ -13,10 +13,13 @@ id                              action
 ``dmprs/MatchboxFlipWeights-v0`` the DMP weights (2 DOFs x 25 kernels), normalized
 ``dmprs/Pouring-v0``            the query: assumed bottle volume (l)
 ``dmprs/PouringWeights-v0``     the DMP weights (1 DOF x 40 kernels), normalized
+``dmprs/ArmThrowing-v0``        the query: landing point (x, y in m), robot extra
+``dmprs/ArmThrowingWeights-v0`` the DMP weights (7 DOFs x 30 kernels), normalized
 =============================== ====================================================
 
 Keyword arguments of ``gym.make`` go to the scenario (:func:`matchbox_scenario`,
-:func:`pouring_scenario`). See :mod:`dmprs.envs.env` and ``docs/envs.md``.
+:func:`pouring_scenario`, :func:`throwing_scenario`). The arm's pouring has no environment: one
+step costs seconds of MuJoCo and its calibration a minute and a half, too slow for an RL loop. See :mod:`dmprs.envs.env` and ``docs/envs.md``.
 """
 
 from __future__ import annotations
@@ -26,12 +29,13 @@ from typing import Any
 import gymnasium as gym
 
 from dmprs.envs.env import TaskEnv
-from dmprs.envs.scenarios import Scenario, matchbox_scenario, pouring_scenario
+from dmprs.envs.scenarios import Scenario, matchbox_scenario, pouring_scenario, throwing_scenario
 
-__all__ = ["ENV_IDS", "Scenario", "TaskEnv", "make_matchbox", "make_pouring", "matchbox_scenario",
-           "pouring_scenario", "register_envs"]
+__all__ = ["ENV_IDS", "Scenario", "TaskEnv", "make_matchbox", "make_pouring", "make_throwing", "matchbox_scenario",
+           "pouring_scenario", "register_envs", "throwing_scenario"]
 
-ENV_IDS = ("dmprs/MatchboxFlip-v0", "dmprs/MatchboxFlipWeights-v0", "dmprs/Pouring-v0", "dmprs/PouringWeights-v0")
+ENV_IDS = ("dmprs/MatchboxFlip-v0", "dmprs/MatchboxFlipWeights-v0", "dmprs/Pouring-v0", "dmprs/PouringWeights-v0",
+           "dmprs/ArmThrowing-v0", "dmprs/ArmThrowingWeights-v0")
 
 
 def make_matchbox(action: str = "query", **options: Any) -> TaskEnv:
@@ -42,6 +46,10 @@ def make_pouring(action: str = "query", **options: Any) -> TaskEnv:
     return TaskEnv(pouring_scenario(**options), action=action)
 
 
+def make_throwing(action: str = "query", **options: Any) -> TaskEnv:
+    return TaskEnv(throwing_scenario(**options), action=action)
+
+
 def register_envs() -> None:
     """Registers the environments of :data:`ENV_IDS` with Gymnasium (idempotent)."""
     specs = {
@@ -49,6 +57,8 @@ def register_envs() -> None:
         "dmprs/MatchboxFlipWeights-v0": ("dmprs.envs:make_matchbox", "weights"),
         "dmprs/Pouring-v0": ("dmprs.envs:make_pouring", "query"),
         "dmprs/PouringWeights-v0": ("dmprs.envs:make_pouring", "weights"),
+        "dmprs/ArmThrowing-v0": ("dmprs.envs:make_throwing", "query"),
+        "dmprs/ArmThrowingWeights-v0": ("dmprs.envs:make_throwing", "weights"),
     }
     for env_id, (entry, action) in specs.items():
         if env_id not in gym.registry:

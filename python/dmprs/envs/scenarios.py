@@ -17,7 +17,7 @@ from dmprs.errors import InvalidInputError
 from dmprs.generalize import Generalizer
 from dmprs.tasks.base import Task
 
-__all__ = ["Scenario", "matchbox_scenario", "pouring_scenario"]
+__all__ = ["Scenario", "matchbox_scenario", "pouring_scenario", "throwing_scenario"]
 
 
 @dataclass
@@ -98,4 +98,23 @@ def pouring_scenario(volume_range: Sequence[float] = (0.3, 1.0), demo_volumes: S
         context_low=np.array([lo]), context_high=np.array([hi]), context_names=("bottle_volume",),
         make_task=make_task, desired_query=lambda context: context.copy(),
         failure_reward=-max(hi, max(demo_volumes)),
+    )
+
+
+def throwing_scenario(generalizer: str = "linear", tol: float | None = None) -> Scenario:
+    """Throw the ball into a basket with the 7-DOF arm (``dmprs.tasks.arm_throwing``, needs the
+    ``robot`` extra): the context is the basket's position (x, y in m), drawn at each reset from
+    the box the demonstrations landed in; the query is the landing point the generalizer is asked
+    for, within that box. A measured trial scores ``-|eps|`` (m), a trial without a landing minus
+    the box's diagonal."""
+    from dmprs.tasks.arm_throwing.experiment import arm_throwing_setup, demonstrations
+
+    labels = np.array([label for label, _ in demonstrations()])
+    lo, hi = labels.min(axis=0), labels.max(axis=0)
+    setup = arm_throwing_setup(tuple((lo + hi) / 2), generalizer, tol=tol)
+    return Scenario(
+        name="throwing", generalizer=setup.generalizer, query_low=lo, query_high=hi,
+        context_low=lo.copy(), context_high=hi.copy(), context_names=("basket_x", "basket_y"),
+        make_task=lambda context: setup.task, desired_query=lambda context: context.copy(),
+        failure_reward=-float(np.linalg.norm(hi - lo)),
     )
