@@ -316,7 +316,7 @@ mod tests {
     }
 
     #[test]
-    /// To the GP noise (1e-4 x the outputs' std, method.md §3.2).
+    /// To the GP noise (1e-4 x the outputs' std, docs/method.md §3.2).
     fn lwr_gp_reproduces_each_demo() {
         let qs = [0.0, 0.4, 1.0, 1.5];
         let g = build(&qs, Method::LwrGp(LwrGpOptions::default()));

@@ -4,7 +4,7 @@ The observation is the task's context (e.g. the bottle's volume); the episode en
 step. Two action spaces:
 
 * ``action="query"``: the task query fed to the generalizer (the paper's learning in the query
-  space, method.md §5), within the demonstrations' span;
+  space, docs/method.md §5), within the demonstrations' span;
 * ``action="weights"``: the DMP's shape weights, as fancy_gym's black-box wrappers expose a
   movement primitive's parameters. The action ``a`` in [-1, 1]^(D N) is normalized:
   ``w = w_ref + a * h``, with ``w_ref`` the weights the generalizer gives for the context's

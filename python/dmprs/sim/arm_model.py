@@ -94,7 +94,7 @@ GLASS_CENTER = (0.75, -0.22)
 FLOOR_Z = -0.75
 
 # --- the liquid -----------------------------------------------------------------------------------
-#: litres per sphere: 2 ml, as in the 2-D scene (method.md §9.3)
+#: litres per sphere: 2 ml, as in the 2-D scene (docs/method.md §9.3)
 PARTICLE_VOLUME = 0.002
 #: the radius of a 2 ml sphere (m): (3 V / 4 pi)^(1/3) = 7.82 mm
 PARTICLE_RADIUS = (3 * PARTICLE_VOLUME * 1e-3 / (4 * math.pi)) ** (1 / 3)

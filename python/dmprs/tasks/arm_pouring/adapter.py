@@ -21,7 +21,6 @@ PARTICLE_VOLUME = 0.002
 #: the most the simulated bottle holds (l): 500 spheres
 CAPACITY = 1.0
 TARGET_VOLUME = 0.2  #: l, the paper's task
-DEMO_VOLUMES = (0.3, 1.0)  #: l, the demonstrations' bottles (method.md §9.1)
 #: s: command sample period of a trajectory (the servo interpolates it to 1 kHz)
 CONTROL_PERIOD = 0.002
 MAX_DURATION = 8.0  #: s

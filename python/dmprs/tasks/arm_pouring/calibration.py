@@ -80,7 +80,7 @@ def _calibrate(bottle_volume: float, target_volume: float, liquid_seed: int, tol
         except (OSError, ValueError, TypeError):
             pass  # absent or damaged: computed and (re)written
     # The root finder searches q with eps > 0 meaning "increase q": more tilt pours more, so
-    # eps = target - poured (method.md §5.3).
+    # eps = target - poured (docs/method.md §5.3).
     finder = IllinoisRootFinder(0.5 * (lo + hi), low=lo, high=hi, tol=tol, max_trials=max_evaluations)
     evals: list[tuple[float, float]] = []
     while len(evals) < max_evaluations and not (finder.converged or finder.done):

@@ -6,23 +6,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError
+from dmprs.profiles import min_jerk
 from dmprs.tasks.arm_pouring.adapter import CONTROL_PERIOD
 from dmprs.tasks.arm_pouring.poses import PoseTrajectory, pose_to_tangent
 from dmprs.trajectory import Trajectory
 
-DEMO_VOLUMES = (0.3, 1.0)  #: l, the demonstrations' bottles (method.md §9.1)
-#: the scripted demonstration (s): reach over the glass, tilt up, hold, tilt back (method.md §9.3)
+DEMO_VOLUMES = (0.3, 1.0)  #: l, the demonstrations' bottles (docs/method.md §9.1)
+#: the scripted demonstration (s): reach over the glass, tilt up, hold, tilt back (docs/method.md §9.3)
 DEMO_TIMING = (0.5, 1.5, 0.7, 1.5)
 #: the mouth's pose while pouring: over the glass's near edge, upright (see docs/arm.md)
 POUR_POSITION = (0.75, -0.175, 0.34)
-
-
-def _min_jerk(s: NDArray[np.float64]) -> NDArray[np.float64]:
-    s = np.clip(s, 0.0, 1.0)
-    return 10 * s**3 - 15 * s**4 + 6 * s**5
 
 
 def pour_poses(peak_tilt: float, timing: tuple[float, float, float, float] = DEMO_TIMING,
@@ -42,8 +37,8 @@ def pour_poses(peak_tilt: float, timing: tuple[float, float, float, float] = DEM
     total = reach + up + hold + down
     t = np.linspace(0.0, total, round(total / dt) + 1)
     start, goal = np.asarray(HOME_POSE[:3]), np.asarray(POUR_POSITION)
-    position = start + _min_jerk(t / reach)[:, None] * (goal - start)
-    angle = peak * (_min_jerk((t - reach) / up) - _min_jerk((t - reach - up - hold) / down))
+    position = start + min_jerk(t / reach)[0][:, None] * (goal - start)
+    angle = peak * (min_jerk((t - reach) / up)[0] - min_jerk((t - reach - up - hold) / down)[0])
     quat = np.stack([np.cos(angle / 2), np.sin(angle / 2), np.zeros_like(t), np.zeros_like(t)], axis=1)
     return PoseTrajectory(t, np.hstack([position, quat]))
 
