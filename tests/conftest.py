@@ -24,3 +24,10 @@ def crash_after(run_dir, n_trials: int) -> None:
     for npz in run_dir.glob("trial_*.npz"):
         if int(npz.stem[6:]) > n_trials:
             npz.unlink()
+
+
+@pytest.fixture(scope="session")
+def calibration_cache(tmp_path_factory):
+    """One disk cache of the simulated demonstrations' calibrations for the whole session (the
+    arm's takes about 90 s of MuJoCo): the tests that pour share it instead of each calibrating."""
+    return str(tmp_path_factory.mktemp("calibration-cache"))

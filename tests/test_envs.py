@@ -20,7 +20,7 @@ from dmprs.errors import InvalidInputError
 SMALL_POURING = {"target_volume": 0.04, "demo_volumes": (0.08, 0.16), "volume_range": (0.08, 0.16)}
 KWARGS = {"dmprs/MatchboxFlip-v0": {}, "dmprs/MatchboxFlipWeights-v0": {},
           "dmprs/Pouring-v0": SMALL_POURING, "dmprs/PouringWeights-v0": SMALL_POURING,
-          "dmprs/ArmThrowing-v0": {}, "dmprs/ArmThrowingWeights-v0": {}}
+          "dmprs/ArmThrowing-v0": {}, "dmprs/ArmThrowingWeights-v0": {}, "dmprs/ArmPouring-v0": {}}
 
 
 @contextlib.contextmanager
@@ -34,9 +34,10 @@ def quiet_checker():
 
 
 @pytest.fixture(scope="module")
-def envs():
+def envs(calibration_cache):
     with quiet_checker():
-        made = {i: gym.make(i, **kw) for i, kw in KWARGS.items()}
+        made = {i: gym.make(i, **({"cache_dir": calibration_cache} if i == "dmprs/ArmPouring-v0" else {}), **kw)
+                for i, kw in KWARGS.items()}
     yield made
     for e in made.values():
         e.close()

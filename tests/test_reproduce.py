@@ -7,7 +7,8 @@ from click.testing import CliRunner
 from dmprs.cli import main
 
 
-def test_quick_reproduction(tmp_path):
+def test_quick_reproduction(tmp_path, calibration_cache, monkeypatch):
+    monkeypatch.setenv("DMPRS_CACHE_DIR", calibration_cache)  # the arm's calibration, computed once
     out = tmp_path / "out"
     result = CliRunner().invoke(main, ["reproduce", "--quick", "--out", str(out), "--backend", "serial"],
                                 catch_exceptions=False)

@@ -13,13 +13,15 @@ id                              action
 ``dmprs/MatchboxFlipWeights-v0`` the DMP weights (2 DOFs x 25 kernels), normalized
 ``dmprs/Pouring-v0``            the query: assumed bottle volume (l)
 ``dmprs/PouringWeights-v0``     the DMP weights (1 DOF x 40 kernels), normalized
+``dmprs/ArmPouring-v0``         the query: assumed bottle volume (l), robot extra
 ``dmprs/ArmThrowing-v0``        the query: landing point (x, y in m), robot extra
 ``dmprs/ArmThrowingWeights-v0`` the DMP weights (7 DOFs x 30 kernels), normalized
 =============================== ====================================================
 
 Keyword arguments of ``gym.make`` go to the scenario (:func:`matchbox_scenario`,
-:func:`pouring_scenario`, :func:`throwing_scenario`). The arm's pouring has no environment: one
-step costs seconds of MuJoCo and its calibration a minute and a half, too slow for an RL loop. See :mod:`dmprs.envs.env` and ``docs/envs.md``.
+:func:`pouring_scenario`, :func:`throwing_scenario`, :func:`arm_pouring_scenario`). The arm's
+pouring has no weight-space variant (its Cartesian DMP's 6 x 40 weights), and one of its steps
+costs seconds of MuJoCo. See :mod:`dmprs.envs.env` and ``docs/envs.md``.
 """
 
 from __future__ import annotations
@@ -29,13 +31,20 @@ from typing import Any
 import gymnasium as gym
 
 from dmprs.envs.env import TaskEnv
-from dmprs.envs.scenarios import Scenario, matchbox_scenario, pouring_scenario, throwing_scenario
+from dmprs.envs.scenarios import (
+    Scenario,
+    arm_pouring_scenario,
+    matchbox_scenario,
+    pouring_scenario,
+    throwing_scenario,
+)
 
-__all__ = ["ENV_IDS", "Scenario", "TaskEnv", "make_matchbox", "make_pouring", "make_throwing", "matchbox_scenario",
-           "pouring_scenario", "register_envs", "throwing_scenario"]
+__all__ = ["ENV_IDS", "Scenario", "TaskEnv", "arm_pouring_scenario", "make_arm_pouring", "make_matchbox",
+           "make_pouring", "make_throwing", "matchbox_scenario", "pouring_scenario", "register_envs",
+           "throwing_scenario"]
 
 ENV_IDS = ("dmprs/MatchboxFlip-v0", "dmprs/MatchboxFlipWeights-v0", "dmprs/Pouring-v0", "dmprs/PouringWeights-v0",
-           "dmprs/ArmThrowing-v0", "dmprs/ArmThrowingWeights-v0")
+           "dmprs/ArmPouring-v0", "dmprs/ArmThrowing-v0", "dmprs/ArmThrowingWeights-v0")
 
 
 def make_matchbox(action: str = "query", **options: Any) -> TaskEnv:
@@ -44,6 +53,10 @@ def make_matchbox(action: str = "query", **options: Any) -> TaskEnv:
 
 def make_pouring(action: str = "query", **options: Any) -> TaskEnv:
     return TaskEnv(pouring_scenario(**options), action=action)
+
+
+def make_arm_pouring(action: str = "query", **options: Any) -> TaskEnv:
+    return TaskEnv(arm_pouring_scenario(**options), action=action)
 
 
 def make_throwing(action: str = "query", **options: Any) -> TaskEnv:
@@ -57,6 +70,7 @@ def register_envs() -> None:
         "dmprs/MatchboxFlipWeights-v0": ("dmprs.envs:make_matchbox", "weights"),
         "dmprs/Pouring-v0": ("dmprs.envs:make_pouring", "query"),
         "dmprs/PouringWeights-v0": ("dmprs.envs:make_pouring", "weights"),
+        "dmprs/ArmPouring-v0": ("dmprs.envs:make_arm_pouring", "query"),
         "dmprs/ArmThrowing-v0": ("dmprs.envs:make_throwing", "query"),
         "dmprs/ArmThrowingWeights-v0": ("dmprs.envs:make_throwing", "weights"),
     }
