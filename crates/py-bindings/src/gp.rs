@@ -8,7 +8,7 @@ use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntyped
 use pyo3::prelude::*;
 
 use crate::dmp::{contiguous, time_major};
-use crate::errors::{IntoPyResult, invalid_input};
+use crate::errors::{IntoPyResult, PyErrorClass, invalid_input};
 
 fn pairs(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<(f64, f64)>> {
     if a.shape()[1] != 2 {
@@ -38,7 +38,12 @@ fn interruptible<T: Send>(
     std::thread::scope(|scope| {
         let (done, mut finished) = std::sync::mpsc::channel();
         let cancel = &cancel;
-        scope.spawn(move || done.send(work(cancel)));
+        // A panic of the worker (a bug) is caught there and becomes an error, never a panic in Python.
+        scope.spawn(move || {
+            done.send(std::panic::catch_unwind(std::panic::AssertUnwindSafe(
+                || work(cancel),
+            )))
+        });
         let mut pending: Option<PyErr> = None;
         loop {
             // Returns as soon as the work is done: no latency added to short fits.
@@ -48,11 +53,13 @@ fn interruptible<T: Send>(
             });
             finished = receiver;
             match tick {
-                Ok(result) => return pending.map_or(Ok(result), Err),
-                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
-                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
-                    panic!("the Gaussian process fit stopped without a result")
+                Ok(Ok(result)) => return pending.map_or(Ok(result), Err),
+                Ok(Err(_)) | Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(PyErrorClass::Numerical.err(
+                        "the Gaussian process fit stopped without a result (an internal error)",
+                    ));
                 }
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
             }
             if pending.is_none() {
                 if let Err(e) = py.check_signals() {
