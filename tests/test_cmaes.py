@@ -124,3 +124,7 @@ def test_weight_space_baseline_logs_every_rollout_and_resumes_identically(tmp_pa
     run_baseline(spec, log_dir=cut)
     crash_after(cut, 4)
     assert run_baseline(spec, log_dir=cut, resume=True) == reference
+
+
+def test_cma_options_pass_through():
+    assert CMAES([0.0, 0.0], 1.0, options={"popsize": 9}).popsize == 9

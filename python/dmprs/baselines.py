@@ -79,11 +79,17 @@ def _pi2(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
                alpha_x=dmp0.alpha_x, width_factor=dmp0.width_factor)
 
 
+#: cma stops by itself after one generation of equal costs (all rollouts rejected, or every box
+#: flipped over alike); as a baseline it spends its budget like PoWER and PI² instead
+CMA_BUDGET_OPTIONS = {"tolflatfitness": 10**9, "tolfun": 0, "tolfunhist": 0}
+
+
 def _cma(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
     from dmprs.cmaes import CMAES
 
     # sigma per weight as PoWER's exploration; the cost of PI²; theta0 executed first, as PoWER
-    return CMAES(dmp0.weights.ravel(), sigma, seed=spec.seed, max_trials=spec.budget, feedback="cost")
+    return CMAES(dmp0.weights.ravel(), sigma, seed=spec.seed, max_trials=spec.budget, feedback="cost",
+                 options=CMA_BUDGET_OPTIONS)
 
 
 METHODS = {

@@ -38,11 +38,14 @@ class CMAES:
     coordinate), population ``popsize`` (default cma's ``4 + 3 ln n``), at most ``max_trials``
     told trials, optional box ``lower``/``upper``. With ``first_x0=True`` the first trial is
     ``x0`` itself (the generalized query, as for the paper's learners), recorded but not part of
-    a population."""
+    a population. ``options`` are passed to ``cma.CMAEvolutionStrategy`` (e.g.
+    ``{"tolflatfitness": 5}``: by default cma stops after one generation of equal costs, which a
+    saturated outcome such as an over-flipped matchbox gives)."""
 
     def __init__(self, x0: ArrayLike, sigma0: ArrayLike, *, seed: int = 0, popsize: int | None = None,
                  max_trials: int = 200, lower: ArrayLike | None = None, upper: ArrayLike | None = None,
-                 feedback: str = "error", tol: float | None = None, first_x0: bool = False) -> None:
+                 feedback: str = "error", tol: float | None = None, first_x0: bool = False,
+                 options: dict[str, Any] | None = None) -> None:
         import cma
 
         x = np.atleast_1d(as_float_array(x0, "x0", (0, 1))).copy()
@@ -59,6 +62,7 @@ class CMAES:
         opts: dict[str, Any] = {"seed": int(seed) + 1, "verbose": -9, "CMA_stds": sig / sig.max()}
         if popsize is not None:
             opts["popsize"] = as_count(popsize, "popsize", 2)
+        opts.update(options or {})
         if lower is not None or upper is not None:
             opts["bounds"] = [None if lower is None else np.broadcast_to(as_float_array(lower, "lower", (0, 1)), x.shape).tolist(),
                               None if upper is None else np.broadcast_to(as_float_array(upper, "upper", (0, 1)), x.shape).tolist()]
