@@ -15,6 +15,12 @@ Deterministic: ``cma`` draws from numpy's global random state, so :class:`CMAES`
 copy of that state (seeded with ``seed``) and swaps it in only while ``cma`` samples; the same
 seed gives the same candidates, whatever else uses numpy's global state in between, which is
 what resuming a logged run needs.
+
+Measured on the matchbox (5 seeds, from the same first trial G(q0)): in the weight space (sigma =
+0.05 x max|w| per DOF, budget 200) it stands the box up in 2-5 trials with the default demos and
+in none of 5 seeds when both demos flip back (PoWER and PI²: 2 of 5 each, in 51-114 trials); in
+the query space (learner "cma") in 2-8 trials with the default demos, and in none within 30 when
+both flip back: every candidate flips the box over alike, a plateau of equal costs.
 """
 
 from __future__ import annotations
