@@ -395,3 +395,13 @@ def test_pi2_says_which_rollout_is_its_evaluation():
         assert learner.asked_evaluation == bool(np.array_equal(theta, learner.theta))
         learner.tell(theta, float(np.sum(theta**2)))
     assert flags[0] and 1 < sum(flags) < len(flags)
+
+
+def test_golden_sections_noise_guard_options_are_validated():
+    with pytest.raises(InvalidInputError, match="noise"):
+        L.GoldenSection(0.5, low=0.0, high=1.0, noise=-0.1)
+    with pytest.raises(InvalidInputError, match="max_repeats"):
+        L.GoldenSection(0.5, low=0.0, high=1.0, noise=0.1, max_repeats=0)
+    g = L.GoldenSection(0.5, low=0.0, high=1.0, noise=0.1)
+    g.tell(g.ask(), [0.05])  # doubtful: asked again, the bracket unmoved
+    assert g.ask()[0] == 0.5 and g.bracket == (0.0, 1.0) and g.reopened == 0

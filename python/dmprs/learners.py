@@ -314,6 +314,13 @@ class GoldenSection(_Learner):
     than ``q_tol`` (default 1e-4 (high - low)), e.g. when eps jumps across zero (paper
     Fig. 2c). Both modes stop with ``"hit-bound"`` once the bracket has collapsed onto a limit no
     trial confirmed (wrong sign convention, or a root outside the limits).
+
+    ``noise`` (the standard deviation of a reading of eps, in eps units; off by default, either
+    mode) guards the bracket against a noisy sign (docs/method.md §6.5): a reading with
+    ``|eps| < 2 noise`` is repeated at the same q (up to ``max_repeats`` readings, default 3) and
+    the sign of their mean moves the limit; and after 3 readings of one sign in a row the limit
+    they point to is tried again, and re-opened to the one it replaced if the new reading
+    contradicts it (``reopened`` counts these). One wrong sign then costs trials, not the run.
     """
 
     __slots__ = ()
@@ -330,6 +337,8 @@ class GoldenSection(_Learner):
         q_tol: float | None = None,
         max_trials: int | None = None,
         max_expansions: int | None = None,
+        noise: float | None = None,
+        max_repeats: int | None = None,
     ) -> None:
         self._core = _native.GoldenSection(
             _vector(q0, "q0"),
@@ -340,12 +349,19 @@ class GoldenSection(_Learner):
             q_tol=_real(q_tol, "q_tol"),
             max_trials=_count(max_trials, "max_trials"),
             max_expansions=_count(max_expansions, "max_expansions"),
+            noise=_real(noise, "noise"),
+            max_repeats=_count(max_repeats, "max_repeats"),
         )
 
     @property
     def bracket(self) -> tuple[float, float]:
         """The current search limits (q_l, q_h)."""
         return self._core.bracket
+
+    @property
+    def reopened(self) -> int:
+        """How many limits the noise guard re-opened (0 without ``noise``)."""
+        return self._core.reopened
 
 
 class IllinoisRootFinder(_Learner):

@@ -21,11 +21,30 @@
 //!   expansion on a side instead adds 1.618^k W0, the geometric growth of classical bracket
 //!   search (Numerical Recipes' `mnbrak`): k expansions reach up to 1.618 + ... + 1.618^k W0.
 //!
+//! Under measurement noise a single reading of the wrong sign would move a limit past the root,
+//! and the box never looks at a limit again: the root is outside the bracket for good. With
+//! `noise = Some(sigma)` (the standard deviation of eps; either mode, off by default) two
+//! guards keep one noisy sign from corrupting the bracket (docs/method.md §6.5):
+//!
+//! 1. *Doubtful signs are repeated.* A reading of the wrong sign needs noise larger than the
+//!    true |eps|, so one with |eps| >= 2 sigma is wrong in at most 2.3 % of trials, and one
+//!    nearer 0 far more often. Such a reading does not move a limit: the same q is asked again
+//!    and the sign taken is that of the mean of its readings, once |mean| >= 2 sigma / sqrt(n)
+//!    or after `max_repeats` readings.
+//! 2. *A limit is re-checked before the search settles next to it.* A wrong sign shows itself
+//!    only through where it sends the search: every later trial lies on the root's side of the
+//!    wrong limit, so their signs all point towards it. After 3 consecutive readings of the same
+//!    sign the limit they point to, if a trial set it and no re-check has confirmed it, is asked
+//!    again. A reading at a limit that contradicts it re-opens the limit: it goes back to the
+//!    one it replaced (every limit remembers it), and the reading enters the box as any other.
+//!    One wrong sign of any size therefore costs about 4 trials, not the run; a correct bracket
+//!    costs a re-check only when the root is near one of its limits.
+//!
 //! eps > 0 means the query must increase (docs/method.md §5.3).
 
 use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::bracket::check_bracket;
-use crate::error::Result;
+use crate::error::{Result, check_scalar, invalid};
 
 /// The paper's constants: the next point sits at 0.618 (eps > 0) or 0.382 (eps <= 0) of the
 /// new bracket.
@@ -37,6 +56,10 @@ const EXPAND_WINDOW: f64 = 0.05;
 const EXPAND_FACTOR: f64 = 1.618;
 /// Paper mode: a bracket narrower than this fraction of the first one has collapsed.
 const COLLAPSE: f64 = 1e-9;
+/// Noise guard 1: a mean of n readings with |mean| < DOUBT_SIGMAS sigma / sqrt(n) has a doubtful sign.
+const DOUBT_SIGMAS: f64 = 2.0;
+/// Noise guard 2: consecutive readings of one sign after which the limit they point to is re-checked.
+const RECHECK_STREAK: usize = 3;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GoldenMode {
@@ -55,6 +78,10 @@ pub struct GoldenConfig {
     pub max_trials: usize,
     /// Robust mode: expansions allowed per side before `HitBound`.
     pub max_expansions: usize,
+    /// The standard deviation of a reading of eps; `Some` turns on the noise guards (module doc).
+    pub noise: Option<f64>,
+    /// Noise guard 1: readings at one q before its sign is taken from their mean regardless.
+    pub max_repeats: usize,
 }
 
 impl Default for GoldenConfig {
@@ -65,6 +92,8 @@ impl Default for GoldenConfig {
             q_tol: None,
             max_trials: 50,
             max_expansions: 4,
+            noise: None,
+            max_repeats: 3,
         }
     }
 }
@@ -84,12 +113,30 @@ pub struct GoldenSection {
     first_width: f64,
     expansions: [usize; 2],
     max_expansions: usize,
+    noise: Option<f64>,
+    max_repeats: usize,
+    /// Noise guard 1: the readings so far at the q being repeated (q, sum of eps, count).
+    readings: Option<(f64, f64, usize)>,
+    /// Noise guard 2: per side (low, high), the (limit, confirmed) pairs each trial replaced.
+    replaced: [Vec<(f64, bool)>; 2],
+    /// Noise guard 2: per side, whether a re-check has confirmed the current limit.
+    verified: [bool; 2],
+    /// Noise guard 2: the sign of the latest readings (eps > 0) and how many in a row.
+    streak: (bool, usize),
+    /// Noise guard 2: how many limits were re-opened.
+    reopened: usize,
     rec: Record,
 }
 
 impl GoldenSection {
     pub fn new(q0: f64, low: f64, high: f64, cfg: GoldenConfig) -> Result<Self> {
         let q_tol = check_bracket(q0, low, high, cfg.tol, cfg.q_tol)?;
+        if let Some(sigma) = cfg.noise {
+            check_scalar("noise", sigma, true)?;
+        }
+        if cfg.max_repeats == 0 {
+            return Err(invalid("max_repeats", 0, "must be >= 1 (1: never repeat)"));
+        }
         let (ql, qh) = match cfg.mode {
             GoldenMode::Paper => (low, high),
             GoldenMode::Robust => (low.min(q0), high.max(q0)), // §6.3 (a)
@@ -106,6 +153,13 @@ impl GoldenSection {
             first_width: qh - ql,
             expansions: [0, 0],
             max_expansions: cfg.max_expansions,
+            noise: cfg.noise,
+            max_repeats: cfg.max_repeats,
+            readings: None,
+            replaced: [Vec::new(), Vec::new()],
+            verified: [false, false],
+            streak: (false, 0),
+            reopened: 0,
             rec: Record::new(cfg.max_trials)?,
         })
     }
@@ -113,6 +167,72 @@ impl GoldenSection {
     /// The current search limits (q_l, q_h).
     pub fn bracket(&self) -> (f64, f64) {
         (self.ql, self.qh)
+    }
+
+    /// How many limits the noise guard re-opened (module doc, guard 2).
+    pub fn reopened(&self) -> usize {
+        self.reopened
+    }
+
+    /// Noise guard 1: the sign-bearing eps for this reading, or None to ask q again.
+    fn reading(&mut self, q: f64, e: f64, sigma: f64) -> Option<f64> {
+        let (sum, n) = match self.readings {
+            Some((q_r, sum, n)) if q_r == q => (sum + e, n + 1),
+            _ => (e, 1),
+        };
+        let mean = sum / n as f64;
+        if mean.abs() < DOUBT_SIGMAS * sigma / (n as f64).sqrt() && n < self.max_repeats {
+            self.readings = Some((q, sum, n));
+            return None;
+        }
+        self.readings = None;
+        Some(mean)
+    }
+
+    /// Noise guard 2, before the box: a reading at a limit a trial set either confirms it
+    /// (`up`, eps > 0, agrees with the low limit) or re-opens it to the limit it replaced.
+    fn recheck_reading(&mut self, q: f64, up: bool) {
+        for side in [0, 1] {
+            let (limit, confirmed) = if side == 0 {
+                (self.ql, self.low_confirmed)
+            } else {
+                (self.qh, self.high_confirmed)
+            };
+            if q != limit || !confirmed {
+                continue;
+            }
+            if up == (side == 0) {
+                self.verified[side] = true;
+            } else if let Some((previous, was_confirmed)) = self.replaced[side].pop() {
+                if side == 0 {
+                    (self.ql, self.low_confirmed) = (previous, was_confirmed);
+                } else {
+                    (self.qh, self.high_confirmed) = (previous, was_confirmed);
+                }
+                self.verified[side] = false;
+                self.reopened += 1;
+            }
+        }
+    }
+
+    /// Noise guard 2, after the box: the limit to re-check after a streak of one sign, if any.
+    fn recheck_due(&mut self, up: bool) -> Option<f64> {
+        self.streak = if self.streak.0 == up && self.streak.1 > 0 {
+            (up, self.streak.1 + 1)
+        } else {
+            (up, 1)
+        };
+        // eps > 0 readings raise q_l and point towards q_h.
+        let (side, limit, confirmed) = if up {
+            (1, self.qh, self.high_confirmed)
+        } else {
+            (0, self.ql, self.low_confirmed)
+        };
+        if self.streak.1 < RECHECK_STREAK || !confirmed || self.verified[side] {
+            return None;
+        }
+        self.streak.1 = 0;
+        Some(limit)
     }
 
     /// `HitBound` at an unconfirmed limit, else `Bracketed` (used when the bracket is spent).
@@ -185,19 +305,47 @@ impl AskTell for GoldenSection {
             self.rec.finish_tell(Some(Status::Converged));
             return Ok(());
         }
+        let e = match self.noise {
+            None => e,
+            Some(sigma) => match self.reading(q, e, sigma) {
+                Some(mean) => {
+                    self.recheck_reading(q, mean > 0.0);
+                    mean
+                }
+                None => {
+                    // Guard 1: ask the same q again; the bracket does not move.
+                    self.next = q;
+                    self.rec.finish_tell(None);
+                    return Ok(());
+                }
+            },
+        };
         let mut stop = None;
         if self.mode == GoldenMode::Robust {
             stop = self.expand(q, e > 0.0);
         }
         // The algorithm box.
         if e > 0.0 {
+            if q != self.ql {
+                self.replaced[0].push((self.ql, self.low_confirmed));
+                self.verified[0] = false;
+            }
             self.ql = q;
             self.low_confirmed = true;
             self.next = self.ql + (self.qh - self.ql) * GOLDEN_HIGH;
         } else {
+            if q != self.qh {
+                self.replaced[1].push((self.qh, self.high_confirmed));
+                self.verified[1] = false;
+            }
             self.qh = q;
             self.high_confirmed = true;
             self.next = self.ql + (self.qh - self.ql) * GOLDEN_LOW;
+        }
+        if self.noise.is_some()
+            && let Some(limit) = self.recheck_due(e > 0.0)
+        {
+            self.next = limit;
         }
         let width = (self.qh - self.ql).abs();
         if stop.is_none() {

@@ -61,7 +61,7 @@ proptest! {
             prop_assert!(a <= r && r <= b);
         }
         // Golden section (robust, no expansion needed) from the same start also stops within the bound.
-        let gcfg = GoldenConfig { mode: GoldenMode::Robust, tol, q_tol: Some(q_tol), max_trials: 1000, max_expansions: 0 };
+        let gcfg = GoldenConfig { mode: GoldenMode::Robust, tol, q_tol: Some(q_tol), max_trials: 1000, max_expansions: 0, ..GoldenConfig::default() };
         let mut g = GoldenSection::new(q0, lo, hi, gcfg).unwrap();
         let ng = common::run(&mut g, |q| vec![eps(q[0])]);
         prop_assert!(ng <= bound, "golden {} > its own worst case {}", ng, bound);
@@ -72,7 +72,7 @@ proptest! {
         r in 0.1..0.9f64, q0 in 0.0..1.0f64, s1 in 0.05..5.0f64, s3 in 0.0..5.0f64,
     ) {
         let eps = make_eps(r, s1, s3, 0.0);
-        let cfg = GoldenConfig { mode: GoldenMode::Paper, tol: 1e-6, q_tol: Some(1e-9), max_trials: 40, max_expansions: 0 };
+        let cfg = GoldenConfig { mode: GoldenMode::Paper, tol: 1e-6, q_tol: Some(1e-9), max_trials: 40, max_expansions: 0, ..GoldenConfig::default() };
         let mut g = GoldenSection::new(q0, 0.0, 1.0, cfg).unwrap();
         let mut prev = None;
         while g.status() == Status::Running {
@@ -86,5 +86,34 @@ proptest! {
             }
             prev = Some(b - a);
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn one_wrong_sign_does_not_corrupt_golden_sections_bracket_with_the_noise_guard(
+        r in 0.1..0.9f64, q0 in 0.05..0.95f64, s1 in 0.2..5.0f64, s3 in 0.0..5.0f64,
+        flip in 0usize..6, robust in any::<bool>(),
+    ) {
+        // eps exact except the reading of trial `flip`, whose sign is wrong (at full size, so
+        // guard 1 does not see it unless it is small): guard 2 must re-open the wrong limit.
+        let eps = make_eps(r, s1, s3, 0.0);
+        let cfg = GoldenConfig {
+            mode: if robust { GoldenMode::Robust } else { GoldenMode::Paper },
+            tol: 1e-4, q_tol: Some(1e-9), max_trials: 80, max_expansions: 0,
+            noise: Some(1e-6), ..GoldenConfig::default()
+        };
+        let mut g = GoldenSection::new(q0, 0.0, 1.0, cfg).unwrap();
+        let mut k = 0;
+        while g.status() == Status::Running {
+            let q = g.ask().unwrap();
+            let e = eps(q[0]);
+            g.tell(&q, &[if k == flip { -e } else { e }]).unwrap();
+            k += 1;
+        }
+        prop_assert_eq!(g.status(), Status::Converged, "after {} trials, bracket {:?}", k, g.bracket());
+        prop_assert!((g.best().unwrap().q[0] - r).abs() < 1e-4 / s1);
     }
 }

@@ -31,6 +31,7 @@ fn golden(q0: f64, lo: f64, hi: f64, mode: GoldenMode) -> GoldenSection {
             q_tol: Some(1e-4),
             max_trials: 60,
             max_expansions: 3,
+            ..GoldenConfig::default()
         },
     )
     .unwrap()
@@ -235,6 +236,104 @@ fn golden_section_finds_the_root_of_q_plus_0_3_sin_q() {
     }
 }
 
+/// Runs golden section on eps = 0.7 - q over [0, 1] from 0.5, the reading of the second trial
+/// (at q = 0.809, eps = -0.109) told with the wrong sign; returns it and the trials it took.
+fn golden_with_one_wrong_sign(noise: Option<f64>) -> (GoldenSection, usize) {
+    let cfg = GoldenConfig {
+        mode: GoldenMode::Robust,
+        tol: 1e-3,
+        max_trials: 40,
+        noise,
+        ..GoldenConfig::default()
+    };
+    let mut g = GoldenSection::new(0.5, 0.0, 1.0, cfg).unwrap();
+    let mut k = 0;
+    while g.status() == Status::Running {
+        let q = g.ask().unwrap();
+        let e = 0.7 - q[0];
+        g.tell(&q, &[if k == 1 { -e } else { e }]).unwrap();
+        k += 1;
+    }
+    (g, k)
+}
+
+#[test]
+fn one_wrong_sign_puts_the_root_outside_the_bracket_for_good_without_the_noise_guard() {
+    let (g, _) = golden_with_one_wrong_sign(None);
+    assert!(!g.converged(), "{:?}", g.status());
+    let (lo, hi) = g.bracket();
+    // told eps > 0 at 0.809, the box raised q_l past the root
+    assert!(lo > 0.7, "root 0.7 outside [{lo}, {hi}]");
+}
+
+#[test]
+fn the_noise_guard_reopens_the_limit_a_wrong_sign_set_and_converges() {
+    let (g, k) = golden_with_one_wrong_sign(Some(1e-4));
+    assert!(g.converged(), "{:?} after {k} trials", g.status());
+    assert!(g.reopened() >= 1);
+    assert!((g.best().unwrap().q[0] - 0.7).abs() < 1e-3);
+    // the guard costs trials, not the run: noise-free golden needs 12 here
+    let (clean, k_clean) = {
+        let cfg = GoldenConfig {
+            mode: GoldenMode::Robust,
+            tol: 1e-3,
+            max_trials: 40,
+            noise: Some(1e-4),
+            ..GoldenConfig::default()
+        };
+        let mut g = GoldenSection::new(0.5, 0.0, 1.0, cfg).unwrap();
+        let k = run(&mut g, |q| vec![0.7 - q[0]]);
+        (g, k)
+    };
+    assert!(clean.converged() && clean.reopened() == 0);
+    assert!(k <= k_clean + 8, "{k} trials against {k_clean}");
+}
+
+#[test]
+fn the_noise_guard_repeats_a_doubtful_reading_and_takes_the_sign_of_the_mean() {
+    let cfg = GoldenConfig {
+        mode: GoldenMode::Robust,
+        tol: 1e-3,
+        noise: Some(0.01),
+        max_repeats: 3,
+        ..GoldenConfig::default()
+    };
+    let mut g = GoldenSection::new(0.5, 0.0, 1.0, cfg).unwrap();
+    let q = g.ask().unwrap();
+    g.tell(&q, &[-0.015]).unwrap(); // |eps| < 2 sigma: doubtful, asked again
+    assert_eq!(g.ask().unwrap(), q);
+    assert_eq!(g.bracket(), (0.0, 1.0));
+    g.tell(&q, &[0.005]).unwrap(); // mean -0.005 < 2 sigma / sqrt 2: doubtful still
+    assert_eq!(g.ask().unwrap(), q);
+    g.tell(&q, &[0.031]).unwrap(); // third reading: the mean +0.007 decides, eps > 0 raises q_l
+    assert_eq!(g.bracket(), (0.5, 1.0));
+    assert!((g.ask().unwrap()[0] - (0.5 + 0.5 * 0.618)).abs() < 1e-12);
+    // a clear reading moves the bracket at once
+    let q = g.ask().unwrap();
+    g.tell(&q, &[-0.05]).unwrap();
+    assert_eq!(g.bracket(), (0.5, q[0]));
+}
+
+#[test]
+fn the_noise_guard_refuses_a_bad_noise_or_repeat_count() {
+    for (noise, repeats) in [
+        (Some(-1.0), 3),
+        (Some(f64::NAN), 3),
+        (Some(0.0), 3),
+        (Some(0.1), 0),
+    ] {
+        let cfg = GoldenConfig {
+            noise,
+            max_repeats: repeats,
+            ..GoldenConfig::default()
+        };
+        assert!(
+            GoldenSection::new(0.5, 0.0, 1.0, cfg).is_err(),
+            "{noise:?} {repeats}"
+        );
+    }
+}
+
 #[test]
 fn golden_section_terminates_on_abs_eps_not_signed_eps() {
     // The first eps is large and negative: the paper's literal "until eps < precision" would stop.
@@ -368,6 +467,7 @@ fn noisy_measurements_still_converge_near_the_root() {
                 q_tol: Some(1e-3),
                 max_trials: 40,
                 max_expansions: 3,
+                ..GoldenConfig::default()
             },
         )
         .unwrap();
@@ -506,6 +606,7 @@ fn bad_input_is_a_clear_error() {
         q_tol: Some(1e-4),
         max_trials: 10,
         max_expansions: 3,
+        ..GoldenConfig::default()
     };
     let e = GoldenSection::new(0.5, 1.0, 1.0, cfg.clone()).unwrap_err();
     assert!(

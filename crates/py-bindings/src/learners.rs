@@ -223,7 +223,7 @@ ask_tell_class!("ErrorLearning", PyErrorLearning, ErrorLearning, {
 ask_tell_class!("GoldenSection", PyGoldenSection, GoldenSection, {
     #[new]
     #[pyo3(signature = (q0, *, low=None, high=None, mode=None, tol=None, q_tol=None,
-        max_trials=None, max_expansions=None))]
+        max_trials=None, max_expansions=None, noise=None, max_repeats=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         q0: PyReadonlyArray1<'_, f64>,
@@ -234,6 +234,8 @@ ask_tell_class!("GoldenSection", PyGoldenSection, GoldenSection, {
         q_tol: Option<f64>,
         max_trials: Option<usize>,
         max_expansions: Option<usize>,
+        noise: Option<f64>,
+        max_repeats: Option<usize>,
     ) -> PyResult<Self> {
         let d = GoldenConfig::default();
         let mode = match mode {
@@ -252,6 +254,8 @@ ask_tell_class!("GoldenSection", PyGoldenSection, GoldenSection, {
             q_tol: q_tol.or(d.q_tol),
             max_trials: max_trials.unwrap_or(d.max_trials),
             max_expansions: max_expansions.unwrap_or(d.max_expansions),
+            noise: noise.or(d.noise),
+            max_repeats: max_repeats.unwrap_or(d.max_repeats),
         };
         let q0 = scalar_entry("q0", slice("q0", &q0)?).py_err()?;
         let (low, high) = (
@@ -267,6 +271,12 @@ ask_tell_class!("GoldenSection", PyGoldenSection, GoldenSection, {
     #[getter]
     fn bracket(&self) -> (f64, f64) {
         self.inner.bracket()
+    }
+
+    /// How many limits the noise guard re-opened.
+    #[getter]
+    fn reopened(&self) -> usize {
+        self.inner.reopened()
     }
 });
 
