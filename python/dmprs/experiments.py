@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,6 +18,9 @@ from numpy.typing import NDArray
 from dmprs.errors import InvalidInputError
 from dmprs.loop import LearningResult, learn
 from dmprs.tasks.base import Task
+
+if TYPE_CHECKING:
+    from dmprs.tasks.noise import Noise
 
 
 @dataclass
@@ -83,7 +86,7 @@ def _cma(q0: NDArray[np.float64], low: float | None, high: float | None, scale: 
 
 # --- the analytic task ------------------------------------------------------------------------
 
-def analytic_setup(noise: float = 0.0, tol: float = 0.01, desired: float = 1.5,
+def analytic_setup(noise: float | Noise = 0.0, tol: float = 0.01, desired: float = 1.5,
                    amplitudes: tuple[float, float] = (0.5, 2.5), execution_noise: float = 0.0) -> ExperimentSetup:
     """Two demonstrations (bumps of the given amplitudes, labelled with their outcomes), linear
     generalization, desired outcome ``desired``."""

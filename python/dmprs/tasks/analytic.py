@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
+from dmprs.errors import InvalidInputError
 from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
 from dmprs.tasks.noise import Noise
@@ -40,9 +41,12 @@ def bump(amplitude: float, n: int = 501, duration: float = DURATION) -> Trajecto
 
 
 class AnalyticAdapter(BaseAdapter):
-    """Executes a trajectory by reading its peak; measures ``outcome_map(peak) + noise``."""
+    """Executes a trajectory by reading its peak; measures ``outcome_map(peak) + noise``.
 
-    def __init__(self, noise: float = 0.0, execution_noise: float = 0.0) -> None:
+    ``noise``: the measurement noise's standard deviation, or a whole
+    :class:`~dmprs.tasks.noise.Noise` (then ``execution_noise`` must be 0)."""
+
+    def __init__(self, noise: float | Noise = 0.0, execution_noise: float = 0.0) -> None:
         super().__init__(AdapterSpec(
             name="analytic",
             dof_names=("x",),
@@ -58,8 +62,13 @@ class AnalyticAdapter(BaseAdapter):
             max_duration=10.0,
             min_samples=3,
         ))
-        self.noise = float(noise)
-        self.tracking = Noise(execution=execution_noise)
+        if isinstance(noise, Noise):
+            if execution_noise:
+                raise InvalidInputError("give the execution noise inside noise=Noise(...), not beside it")
+            self.tracking = noise
+        else:
+            self.tracking = Noise(execution=execution_noise, measurement=float(noise))
+        self.noise = self.tracking.measurement
         self._rng = np.random.default_rng(0)
 
     def _reset(self, seed: int | None) -> None:
@@ -68,7 +77,7 @@ class AnalyticAdapter(BaseAdapter):
     def _execute(self, trajectory: Trajectory) -> Outcome:
         trajectory = self.tracking.track(trajectory, self._rng)
         peak = float(trajectory.y[:, 0].max())
-        value = float(outcome_map(peak)) + (self.noise * float(self._rng.standard_normal()) if self.noise else 0.0)
+        value = self.tracking.measure(float(outcome_map(peak)), self._rng)
         return Outcome(Status.OK, signals={"outcome": value, "peak": peak}, executed=trajectory)
 
 
@@ -82,7 +91,7 @@ class AnalyticTask(Task):
     query_units = ("m",)
     sign = 1.0
 
-    def __init__(self, noise: float = 0.0, tol: float = 0.01, execution_noise: float = 0.0) -> None:
+    def __init__(self, noise: float | Noise = 0.0, tol: float = 0.01, execution_noise: float = 0.0) -> None:
         super().__init__(AnalyticAdapter(noise=noise, execution_noise=execution_noise))
         self.tol = float(tol)
 

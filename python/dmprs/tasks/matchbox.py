@@ -136,7 +136,7 @@ class MatchboxAdapter(BaseAdapter):
         ep = _core.matchbox_simulate(trajectory.t, np.ascontiguousarray(trajectory.y[:, 0]),
                                      np.ascontiguousarray(trajectory.y[:, 1]), cfg)
         signals = _signals(ep)
-        if noise.measurement:
+        if noise.measures:
             signals["outcome_angle"] = noise.measure(signals["outcome_angle"], self._rng)
             signals["eps18"] = signals["outcome_angle"] - math.pi / 2
         return Outcome(Status.OK, signals=signals, executed=trajectory)

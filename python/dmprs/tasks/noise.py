@@ -8,7 +8,10 @@ index), so a noisy run is still reproducible bit for bit.
   end, so the command's start pose and final pose are kept.
 * Contact noise (the matchbox): the friction and restitution of the trial are multiplied by
   ``1 + contact x N(0, 1)`` (clipped at 0.05).
-* Measurement noise: ``N(0, measurement^2)`` added to the measured outcome signal.
+* Measurement noise: ``N(0, measurement^2)`` added to the measured outcome signal; and
+  outliers, readings gone wrong (a misdetection, a scale read while it settles): with
+  probability ``outliers`` a reading also gets ``N(0, outlier_scale^2)``, which gives it the
+  wrong sign about half the time when the scale dwarfs the error.
 
 Off (all zero, the default) nothing is drawn and the tasks behave exactly as without it.
 """
@@ -31,15 +34,28 @@ class Noise:
     execution: float = 0.0
     measurement: float = 0.0
     contact: float = 0.0
+    outliers: float = 0.0  # probability per reading
+    outlier_scale: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("execution", "measurement", "contact"):
+        for name in ("execution", "measurement", "contact", "outliers", "outlier_scale"):
             if as_scalar(getattr(self, name), f"noise.{name}") < 0:
                 raise InvalidInputError(f"noise.{name} = {getattr(self, name)} must be >= 0")
+        if self.outliers > 1:
+            raise InvalidInputError(f"noise.outliers = {self.outliers} is a probability: it must be <= 1")
+        if (self.outliers > 0) != (self.outlier_scale > 0):
+            raise InvalidInputError(
+                f"noise.outliers = {self.outliers} and noise.outlier_scale = {self.outlier_scale}: "
+                "give both (> 0) or neither")
 
     @property
     def off(self) -> bool:
-        return self.execution == 0 and self.measurement == 0 and self.contact == 0
+        return not self.measures and self.execution == 0 and self.contact == 0
+
+    @property
+    def measures(self) -> bool:
+        """Whether a reading is noisy at all (measurement noise or outliers)."""
+        return self.measurement > 0 or self.outliers > 0
 
     @staticmethod
     def rng(seed: int | None) -> np.random.Generator:
@@ -60,4 +76,8 @@ class Noise:
         return 1.0 if self.contact == 0 else max(0.05, 1.0 + self.contact * float(rng.standard_normal()))
 
     def measure(self, value: float, rng: np.random.Generator) -> float:
-        return value if self.measurement == 0 else value + self.measurement * float(rng.standard_normal())
+        if self.measurement > 0:
+            value += self.measurement * float(rng.standard_normal())
+        if self.outliers > 0 and rng.random() < self.outliers:  # drawn only when on: streams unchanged
+            value += self.outlier_scale * float(rng.standard_normal())
+        return value
