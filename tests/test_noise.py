@@ -82,7 +82,27 @@ def test_noisy_part_runs_and_counts_wrong_signs():
     assert all(t["true_eps"] is not None for t in result["trials"])
     rows = N.summarize_noisy([result])
     assert rows[0]["successes"] == 1 and "matchbox" in N.markdown_noisy(rows)
-    assert len(N.plan_noisy()) == 10 * sum(len(v) for v in N.LEARNERS.values())
+    assert len(N.plan_noisy()) == 10 * sum(len(v) for v in N.LEARNERS.values()) + 2 * len(N.BRACKET_OUTLIERS)
+
+
+def test_outliers_are_drawn_only_when_on_and_then_from_the_seed():
+    plain, spiky = Noise(measurement=0.01), Noise(measurement=0.01, outliers=0.5, outlier_scale=10.0)
+    assert plain.measure(1.0, np.random.default_rng(3)) == Noise(measurement=0.01).measure(1.0, np.random.default_rng(3))
+    readings = np.array([spiky.measure(0.0, np.random.default_rng(s)) for s in range(2000)])
+    assert np.array_equal(readings, [spiky.measure(0.0, np.random.default_rng(s)) for s in range(2000)])
+    share = np.mean(np.abs(readings) > 0.1)  # an outlier of scale 10 is beyond 0.1 in 99 % of draws
+    assert 0.45 < share < 0.55
+    for bad in ({"outliers": 0.1}, {"outlier_scale": 1.0}, {"outliers": 1.5, "outlier_scale": 1.0}):
+        with pytest.raises(InvalidInputError, match="noise.outlier"):
+            Noise(**bad)
+
+
+def test_the_noise_guard_keeps_golden_sections_bracket_through_outliers():
+    # the analytic task's root is known; 10 % of readings are outliers (docs/growing.md table)
+    plain, guarded = (N.summarize_noisy([N.run_bracket(N.BracketSpec(0.1, g, seeds=30))])[0] for g in (False, True))
+    assert guarded["held"] >= 28 and plain["held"] <= 25, (plain, guarded)
+    assert guarded["max_outside"] < 3 < plain["max_outside"]
+    assert guarded["reopened"] > 0 and plain["reopened"] == 0
 
 
 def test_analytic_setup_takes_execution_noise():
