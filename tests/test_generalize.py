@@ -153,6 +153,54 @@ def test_lwr_gp_of_identical_motions_is_that_motion_everywhere():
         assert np.abs(gen.parameters(q) - want).max() < 1e-6 * np.abs(want).max()
 
 
+def affine_trajectory(q, samples=300):
+    """Data affine in the (scalar or vector) query on one time grid: its DMP parameters are too."""
+    q = np.atleast_1d(np.asarray(q, dtype=float))
+    t = np.linspace(0.0, 1.2, samples)
+    s = t / 1.2
+    y = np.stack([(1.0 + q.sum()) * min_jerk(s) + 0.1 * q[0] * np.sin(3 * s),
+                  0.3 + (0.5 - q[-1]) * min_jerk(s)], axis=1)
+    return dmprs.Trajectory(t, y)
+
+
+@pytest.mark.parametrize("queries", [[[0.0], [0.5], [1.0], [1.5]],
+                                     [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.4, 0.6]]])
+def test_lwr_gp_with_an_affine_trend_extrapolates_like_linear_on_affine_data(queries):
+    db = dmprs.Database(tuple(f"q{i}" for i in range(len(queries[0]))))
+    for q in queries:
+        db.add(q, affine_trajectory(q))
+    lin = dmprs.Generalizer(db, "linear", n_basis=15)  # piecewise linear: exact on affine data
+    aff = dmprs.Generalizer(db, "lwr-gp", n_basis=15, trend="affine")
+    plain = dmprs.Generalizer(db, "lwr-gp", n_basis=15)
+    n = len(queries[0])
+    for q in ([0.7] * n, [-0.6] * n, [2.4] * n, [1.8, -0.5][:n]):
+        want = lin.parameters(q)
+        assert np.abs(aff.parameters(q) - want).max() < 1e-6 * np.abs(want).max(), q
+    far = [2.4] * n  # the constant trend cannot get there
+    assert np.abs(plain.parameters(far) - lin.parameters(far)).max() > 0.05 * np.abs(lin.parameters(far)).max()
+    for demo, own in zip(db, plain.demo_dmps):  # the demos as the default reproduces them
+        assert np.array_equal(aff.predict(demo.query).weights, own.weights)
+
+
+def test_the_affine_trend_is_refused_by_name_and_works_on_poses():
+    with pytest.raises(InvalidInputError, match="trend = 'cubic' is invalid"):
+        dmprs.Generalizer(database([0.0, 1.0]), "lwr-gp", trend="cubic")
+    from dmprs.trajectory import CartesianTrajectory
+    db = dmprs.Database(("q",))
+    t = np.linspace(0.0, 1.0, 200)
+    for q in (0.0, 0.5, 1.0):
+        a = min_jerk(t)
+        position = np.zeros((200, 3))
+        position[:, 0] = (0.2 + q) * a
+        quaternion = np.zeros((200, 4))
+        quaternion[:, 0], quaternion[:, 3] = np.cos(0.5 * q * a), np.sin(0.5 * q * a)  # about z, angle q a
+        db.add(q, CartesianTrajectory(t, position, quaternion))
+    aff = dmprs.Generalizer(db, "lwr-gp", n_basis=15, trend="affine")
+    goal = aff.predict(1.5).goal  # beyond the demos: x = 1.7, angle 1.5 about z
+    assert goal[0] == pytest.approx(1.7, abs=1e-3)
+    assert 2 * np.arctan2(goal[6], goal[3]) == pytest.approx(1.5, abs=1e-3)
+
+
 def test_lwr_gp_in_2d_blends_between_demos():
     rng = np.random.default_rng(0)
     queries = [rng.uniform(0, 1, 2) for _ in range(7)]

@@ -21,6 +21,7 @@ __all__ = ["Generalizer"]
 
 _METHODS = ("linear", "lwr-gp")
 _KERNELS = ("tricube", "gaussian")
+_TRENDS = ("constant", "affine")
 
 
 def _needs_triangulation(queries: NDArray[np.float64]) -> bool:
@@ -60,7 +61,14 @@ class Generalizer:
     start to the GP noise (1e-5 relative or better in our tests). ``interpolate=False`` gives the plain locally
     constant blend of docs/method.md §3.2, which mixes a demo with its neighbours even at its own
     query. LWR cannot extrapolate the weights: far from the demos they tend to those of the
-    nearest ones (use "linear" to extrapolate, as the paper's Fig. 7 experiment needs).
+    nearest ones, and the GPs' tau, goal and start to the demos' mean. ``trend="affine"``
+    (ours) extrapolates instead: the weights by first-order LWR (Atkeson, Moore & Schaal 1997:
+    at q, the intercept of a model affine in the query, fitted to the demos' data with the same
+    kernel weights) and the GPs with the least-squares affine fit of their outputs as prior
+    mean (needs n + 1 demos spanning the query space, else the mean stays constant). It
+    reproduces the demos as the default does, is exact where the parameters are affine in q,
+    and extrapolates affinely from the nearest demos (throwing beyond the demos:
+    docs/throwing.md).
     "lwr-gp" refuses repeated queries; "linear" averages them.
 
     Which for a growing database (``learn(..., database=db)``; measured on 2-D pouring,
@@ -100,6 +108,7 @@ class Generalizer:
         gp_optimize: bool | None = None,
         gp_restarts: int = 4,
         triangulate: bool | None = None,
+        trend: str = "constant",
     ) -> None:
         if not isinstance(db, Database):
             raise InvalidInputError(f"db is a {type(db).__name__}; expected a dmprs.Database")
@@ -107,6 +116,8 @@ class Generalizer:
             raise InvalidInputError(f"method = {method!r} is invalid: use one of {_METHODS}")
         if kernel not in _KERNELS:
             raise InvalidInputError(f"kernel = {kernel!r} is invalid: use one of {_KERNELS}")
+        if trend not in _TRENDS:
+            raise InvalidInputError(f"trend = {trend!r} is invalid: use one of {_TRENDS}")
         if len(db) == 0:
             raise InvalidInputError("the database is empty: a generalizer needs at least 2 demonstrations")
         if len(db) < 2:
@@ -141,6 +152,7 @@ class Generalizer:
             gp_noise=as_scalar(gp_noise, "gp_noise", positive=True),
             gp_optimize=None if gp_optimize is None else bool(gp_optimize),
             gp_restarts=as_count(gp_restarts, "gp_restarts", 0),
+            trend=trend,
         )
         if db.is_cartesian:
             poses = [

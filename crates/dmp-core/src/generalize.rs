@@ -43,6 +43,18 @@ pub struct LwrGpOptions {
     /// (docs/method.md §3.2: with M <= 3, ML-II is ill-posed; then l = query range, signal = var).
     pub gp_optimize: Option<bool>,
     pub gp_restarts: usize,
+    /// The GPs' prior mean: the outputs' mean (the default), or their least-squares affine fit
+    /// in the query, so that tau, goal and start extrapolate affinely (the GP models what the
+    /// affine fit leaves). Needs n + 1 demos whose queries span the query space; with fewer
+    /// the mean stays constant.
+    pub gp_mean: GpMean,
+}
+
+/// The prior mean of the GPs of tau, goal and start ([`LwrGpOptions::gp_mean`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GpMean {
+    Constant,
+    Affine,
 }
 
 impl Default for LwrGpOptions {
@@ -52,6 +64,7 @@ impl Default for LwrGpOptions {
             gp_noise: 1e-4,
             gp_optimize: None,
             gp_restarts: 4,
+            gp_mean: GpMean::Constant,
         }
     }
 }
@@ -93,9 +106,45 @@ struct Linear {
 #[derive(Debug, Clone)]
 struct LwrGp {
     lwr: Lwr,
-    tau: GaussianProcess,
-    goal: Vec<GaussianProcess>,
-    y0: Vec<GaussianProcess>,
+    tau: TrendGp,
+    goal: Vec<TrendGp>,
+    y0: Vec<TrendGp>,
+}
+
+/// A GP over what an optional affine trend `c_0 + sum_d c_d q_d` leaves of the outputs.
+#[derive(Debug, Clone)]
+struct TrendGp {
+    trend: Option<Vec<f64>>,
+    gp: GaussianProcess,
+}
+
+impl TrendGp {
+    fn mean_at(&self, q: &[f64]) -> f64 {
+        let gp = self.gp.predict_mean_at(q);
+        match &self.trend {
+            None => gp,
+            Some(c) => c[0] + c[1..].iter().zip(q).map(|(c, q)| c * q).sum::<f64>() + gp,
+        }
+    }
+}
+
+/// The least-squares affine fit of `y` over the queries (columns of `x`, `n x m`), or None when
+/// the queries do not span the query space (fewer than n + 1 affinely independent).
+fn affine_trend(x: &DMatrix<f64>, y: &[f64]) -> Option<Vec<f64>> {
+    let (n, m) = x.shape();
+    if m < n + 1 {
+        return None;
+    }
+    let a = DMatrix::from_fn(m, n + 1, |k, j| if j == 0 { 1.0 } else { x[(j - 1, k)] });
+    let svd = a.svd(true, true);
+    let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
+    if smin.is_nan() || smin <= 1e-10 * smax {
+        return None;
+    }
+    let c = svd.solve(&DVector::from_column_slice(y), 0.0).ok()?;
+    c.iter()
+        .all(|v| v.is_finite())
+        .then(|| c.iter().copied().collect())
 }
 
 /// A generalizer over M demonstrations.
@@ -297,7 +346,17 @@ impl Generalizer {
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
         let optimize = opts.gp_optimize.unwrap_or(m >= 4);
-        let fit = |y: Vec<f64>| -> Result<GaussianProcess> {
+        let fit = |y: Vec<f64>| -> Result<TrendGp> {
+            let trend = match opts.gp_mean {
+                GpMean::Constant => None,
+                GpMean::Affine => affine_trend(&x, &y),
+            };
+            let y: Vec<f64> = match &trend {
+                None => y,
+                Some(c) => (0..m)
+                    .map(|k| y[k] - c[0] - (0..n).map(|d| c[1 + d] * x[(d, k)]).sum::<f64>())
+                    .collect(),
+            };
             let (ranges, var) = data_scales(&x.as_view(), &y);
             let noise = opts.gp_noise * opts.gp_noise * var;
             if !(noise > 0.0 && noise.is_finite()) {
@@ -323,7 +382,8 @@ impl Generalizer {
                 bounds: Some(bounds),
                 ..GpOptions::default()
             };
-            GaussianProcess::fit(&x.as_view(), &y, Some(initial), &gp_opts)
+            let gp = GaussianProcess::fit(&x.as_view(), &y, Some(initial), &gp_opts)?;
+            Ok(TrendGp { trend, gp })
         };
         let n_dof = dmps[0].n_dof();
         let tau = fit(dmps.iter().map(|d| d.tau()).collect())?;
@@ -415,11 +475,9 @@ impl Generalizer {
             }
             Model::LwrGp(model) => {
                 let w = model.lwr.weights_at(q)?;
-                let tau = model.tau.predict_mean_at(q);
-                let goal =
-                    DVector::from_iterator(n_dof, model.goal.iter().map(|g| g.predict_mean_at(q)));
-                let y0 =
-                    DVector::from_iterator(n_dof, model.y0.iter().map(|g| g.predict_mean_at(q)));
+                let tau = model.tau.mean_at(q);
+                let goal = DVector::from_iterator(n_dof, model.goal.iter().map(|g| g.mean_at(q)));
+                let y0 = DVector::from_iterator(n_dof, model.y0.iter().map(|g| g.mean_at(q)));
                 Ok((w, tau, goal, y0))
             }
         }
@@ -493,6 +551,7 @@ impl Generalizer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lwr::LocalModel;
 
     /// A 2-DOF demo whose amplitude, goal and duration depend on the query.
     fn demo(q: f64) -> (Vec<f64>, DMatrix<f64>) {
@@ -574,6 +633,83 @@ mod tests {
                 (&got - &want).amax()
             );
         }
+    }
+
+    /// One DOF whose data are affine in q on one time grid, so its fitted weights are too.
+    fn affine_demo(q: f64) -> (Vec<f64>, DMatrix<f64>) {
+        let t: Vec<f64> = (0..300).map(|j| j as f64 / 299.0).collect();
+        let y = DMatrix::from_fn(1, 300, |_, j| {
+            let s = j as f64 / 299.0;
+            let mj = 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5);
+            (1.0 + q) * mj + 0.1 * q * (3.0 * s).sin()
+        });
+        (t, y)
+    }
+
+    fn build_affine(qs: &[f64], affine: bool) -> Generalizer {
+        let data: Vec<_> = qs.iter().map(|&q| affine_demo(q)).collect();
+        let demos: Vec<Demonstration> = data
+            .iter()
+            .map(|(t, y)| Demonstration {
+                t,
+                y: y.as_view(),
+                yd: None,
+                ydd: None,
+            })
+            .collect();
+        let queries: Vec<Vec<f64>> = qs.iter().map(|&q| vec![q]).collect();
+        let mut options = LwrGpOptions::default();
+        if affine {
+            options.lwr.local_model = LocalModel::Linear;
+            options.gp_mean = GpMean::Affine;
+        }
+        Generalizer::new(
+            &queries,
+            &demos,
+            DmpConfig {
+                n_basis: 15,
+                ..DmpConfig::default()
+            },
+            Method::LwrGp(options),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn an_affine_trend_extrapolates_affine_parameters_and_keeps_the_demos() {
+        let qs = [0.0, 0.5, 1.0, 1.5];
+        let (aff, cst) = (build_affine(&qs, true), build_affine(&qs, false));
+        let nw = 15;
+        let w = |g: &Generalizer, q: f64| g.parameters(&[q]).unwrap().rows(0, nw).into_owned();
+        // at the demos: the constant model's weights, bit for bit (its demo fits), and the
+        // demos' tau, goal and start to the GP noise
+        for (k, &q) in qs.iter().enumerate() {
+            assert_eq!(w(&aff, q), w(&cst, q), "q={q}");
+            let (got, want) = (aff.parameters(&[q]).unwrap(), flatten(&aff.demo_dmps()[k]));
+            assert!((got - &want).amax() < 1e-6 * want.amax(), "q={q}");
+        }
+        // beyond and between them: the DMP of the demo that would be there (weights by
+        // first-order LWR, tau, goal and start by the GPs' affine mean)
+        let fit = |q: f64| flatten(&build_affine(&[q, q + 1.0], false).demo_dmps()[0]);
+        for q in [2.5, -0.8, 0.75] {
+            let want = fit(q);
+            let err = (aff.parameters(&[q]).unwrap() - &want).amax();
+            assert!(err < 1e-6 * want.amax(), "q={q}: {err} of {}", want.amax());
+        }
+        // the constant model cannot extrapolate: it stays near the last demo
+        let want = fit(2.5);
+        assert!((cst.parameters(&[2.5]).unwrap() - &want).amax() > 0.1 * want.amax());
+    }
+
+    #[test]
+    fn the_affine_trend_needs_queries_that_span_the_query_space() {
+        let x = DMatrix::from_row_slice(2, 3, &[0.0, 1.0, 2.0, 0.0, 1.0, 2.0]); // on a line
+        assert!(affine_trend(&x, &[1.0, 2.0, 3.0]).is_none());
+        let x = DMatrix::from_row_slice(2, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        let c = affine_trend(&x, &[1.0, 3.0, 0.0]).unwrap();
+        assert!(
+            (c[0] - 1.0).abs() < 1e-12 && (c[1] - 2.0).abs() < 1e-12 && (c[2] + 1.0).abs() < 1e-12
+        );
     }
 
     #[test]

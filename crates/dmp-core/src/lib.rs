@@ -29,7 +29,7 @@ pub use cartesian::{
 pub use cartesian_generalize::CartesianGeneralizer;
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
-pub use generalize::{Generalizer, LwrGpOptions, Method};
+pub use generalize::{Generalizer, GpMean, LwrGpOptions, Method};
 pub use gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
-pub use lwr::{Kernel, LwrOptions};
+pub use lwr::{Kernel, LocalModel, LwrOptions};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};

@@ -21,6 +21,20 @@
 //! Shepard-type factor that grows without bound as `q -> q_k` (Atkeson, Moore & Schaal 1997,
 //! "Locally weighted learning", on kernels that make LWR interpolate), makes `w(q_k)` the fit of
 //! demo k alone (up to the ridge) while leaving `w` continuous and a convex blend elsewhere.
+//!
+//! Local model (our addition): the above is locally *constant* in q, so beyond the demos the
+//! weights tend to those of the nearest ones and the generalization cannot extrapolate.
+//! `LocalModel::Linear` is first-order LWR (Atkeson, Moore & Schaal 1997): at q the weights are
+//! the intercept `W` of a model `W + sum_d B_d (q_k - q)_d` fitted to every demo's data with the
+//! same kernel weights,
+//!
+//! ```text
+//! min over W, B_1..B_n of  sum_k kappa_k | A_k (W + sum_d B_d delta_kd) - F_k |^2,   delta_k = D (q_k - q)
+//! ```
+//!
+//! one `(n + 1) N` square solve per query. It reproduces the demos as the constant model does
+//! (at a demo's query only that demo has weight, and delta = 0 there), is affine in q where the
+//! demos are, and extrapolates affinely from the nearest demos.
 
 use nalgebra::DMatrix;
 
@@ -53,6 +67,15 @@ impl Kernel {
     }
 }
 
+/// The model fitted around each query (module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LocalModel {
+    /// A kernel-weighted blend of the demos (Ude et al. 2010): cannot extrapolate.
+    Constant,
+    /// First-order LWR: extrapolates affinely from the nearest demos.
+    Linear,
+}
+
 /// Meta-parameters of the regression.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LwrOptions {
@@ -67,6 +90,7 @@ pub struct LwrOptions {
     pub ridge: f64,
     /// Multiply the kernel weights by `(d_min / d_k)^2` so that demos are reproduced.
     pub interpolate: bool,
+    pub local_model: LocalModel,
 }
 
 impl Default for LwrOptions {
@@ -76,6 +100,7 @@ impl Default for LwrOptions {
             bandwidth: 1.5,
             ridge: crate::dmp::FIT_RIDGE,
             interpolate: true,
+            local_model: LocalModel::Constant,
         }
     }
 }
@@ -195,6 +220,9 @@ impl Lwr {
     /// The shape weights `N x D` at `q` (length `n_dim`, checked by the caller).
     pub fn weights_at(&self, q: &[f64]) -> Result<DMatrix<f64>> {
         let kappa = self.demo_weights(q);
+        if self.options.local_model == LocalModel::Linear {
+            return self.local_linear(q, &kappa);
+        }
         let first = &self.normal[0];
         let mut ata = DMatrix::zeros(first.ata.nrows(), first.ata.ncols());
         let mut atf = DMatrix::zeros(first.atf.nrows(), first.atf.ncols());
@@ -210,6 +238,49 @@ impl Lwr {
             }
         }
         solve_ridge(ata, &atf, self.options.ridge, "locally weighted regression")
+    }
+
+    /// `LocalModel::Linear`: the block normal equations of the unknowns `[W; B_1; ..; B_n]`,
+    /// `sum_k kappa_k (x_k x_k^T) (x) A_k^T A_k` with `x_k = [1, delta_k]`; returns `W`.
+    fn local_linear(&self, q: &[f64], kappa: &[f64]) -> Result<DMatrix<f64>> {
+        let (n, p) = (self.n_dim, self.n_dim + 1);
+        let first = &self.normal[0];
+        let (nb, nd) = (first.ata.nrows(), first.atf.ncols());
+        let mut ata = DMatrix::zeros(p * nb, p * nb);
+        let mut atf = DMatrix::zeros(p * nb, nd);
+        let mut x = vec![1.0; p];
+        for (k, ne) in self.normal.iter().enumerate() {
+            if kappa[k] <= 0.0 {
+                continue;
+            }
+            let qk = &self.scaled_queries[k * n..(k + 1) * n];
+            for d in 0..n {
+                x[1 + d] = qk[d] - q[d] * self.inv_range[d];
+            }
+            for i in 0..p {
+                for j in 0..p {
+                    let c = kappa[k] * x[i] * x[j];
+                    if c != 0.0 {
+                        let mut block = ata.view_mut((i * nb, j * nb), (nb, nb));
+                        block.zip_apply(&ne.ata, |o, v| *o += c * v);
+                    }
+                }
+                let c = kappa[k] * x[i];
+                if c != 0.0 {
+                    let mut block = atf.view_mut((i * nb, 0), (nb, nd));
+                    block.zip_apply(&ne.atf, |o, v| *o += c * v);
+                }
+            }
+        }
+        // The ridge relative to trace / N of the intercept's block as in the constant model
+        // (at a demo's query the other blocks are zero), so that model's demo fits carry over.
+        let w = solve_ridge(
+            ata,
+            &atf,
+            self.options.ridge * p as f64,
+            "locally weighted linear regression",
+        )?;
+        Ok(w.rows(0, nb).into_owned())
     }
 }
 

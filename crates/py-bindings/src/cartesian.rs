@@ -286,7 +286,8 @@ impl PyCartesianGeneralizer {
     /// `queries` `(M, n)`; `demos` a list of [`PoseDemoArrays`] with `pose` `(T, 7)`.
     #[new]
     #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
-                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts))]
+                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts,
+                        trend="constant"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -305,6 +306,7 @@ impl PyCartesianGeneralizer {
         gp_noise: f64,
         gp_optimize: Option<bool>,
         gp_restarts: usize,
+        trend: &str,
     ) -> PyResult<Self> {
         let method = parse_method(
             method,
@@ -315,6 +317,7 @@ impl PyCartesianGeneralizer {
             gp_noise,
             gp_optimize,
             gp_restarts,
+            trend,
         )?;
         let qs = parse_queries(&queries)?;
         let mut views = Vec::with_capacity(demos.len());

@@ -1,7 +1,7 @@
 //! `dmprs._core.Generalizer`: the generalizers of `dmp_core::generalize` over demonstrations
 //! passed as numpy arrays. `dmprs.Generalizer` (Python) builds it from a `dmprs.Database`.
 
-use dmp_core::{Generalizer, Kernel, LwrGpOptions, LwrOptions, Method};
+use dmp_core::{Generalizer, GpMean, Kernel, LocalModel, LwrGpOptions, LwrOptions, Method};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
@@ -30,7 +30,18 @@ pub(crate) fn parse_method(
     gp_noise: f64,
     gp_optimize: Option<bool>,
     gp_restarts: usize,
+    trend: &str,
 ) -> PyResult<Method> {
+    // "affine": first-order LWR for the weights and an affine prior mean for the GPs.
+    let (local_model, gp_mean) = match trend {
+        "constant" => (LocalModel::Constant, GpMean::Constant),
+        "affine" => (LocalModel::Linear, GpMean::Affine),
+        other => {
+            return Err(invalid_input(format!(
+                "trend = {other:?} is invalid: use 'constant' or 'affine'"
+            )));
+        }
+    };
     let kernel = match kernel {
         "tricube" => Kernel::Tricube,
         "gaussian" => Kernel::Gaussian,
@@ -48,10 +59,12 @@ pub(crate) fn parse_method(
                 bandwidth,
                 ridge,
                 interpolate,
+                local_model,
             },
             gp_noise,
             gp_optimize,
             gp_restarts,
+            gp_mean,
         }),
         other => {
             return Err(invalid_input(format!(
@@ -93,7 +106,8 @@ impl PyGeneralizer {
     /// `queries` `(M, n)`; `demos` a list of `(t, y, yd, ydd)` with `y` `(T, D)`.
     #[new]
     #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
-                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts))]
+                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts,
+                        trend="constant"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -112,6 +126,7 @@ impl PyGeneralizer {
         gp_noise: f64,
         gp_optimize: Option<bool>,
         gp_restarts: usize,
+        trend: &str,
     ) -> PyResult<Self> {
         let method = parse_method(
             method,
@@ -122,6 +137,7 @@ impl PyGeneralizer {
             gp_noise,
             gp_optimize,
             gp_restarts,
+            trend,
         )?;
         let qs = parse_queries(&queries)?;
         let mut views = Vec::with_capacity(demos.len());
