@@ -73,17 +73,17 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
             paths.append(Path(strip))
     base = [r for r in results if r["kind"] == "baseline"]
     if base:
-        fig, ax = plt.subplots(figsize=(7, 3.8))
+        fig, ax = plt.subplots(figsize=(9, 3.8))
         labels, data = [], []
         for (demos, method) in sorted({(r["setup"].get("demos"), r["method"]) for r in base}):
             rs = [r for r in base if r["setup"].get("demos") == demos and r["method"] == method]
-            labels.append(f"{method}\n{demos}")
+            labels.append(f"{method}\n{str(demos).replace('_', ' ')}")
             data.append([r["trials_to_success"] or r["budget"] for r in rs])
         for demos in sorted({r["setup"].get("demos") for r in base}):
             ql = [r for r in results if r["kind"] == "learn" and r["experiment"] == "matchbox"
                   and r["setup"].get("demos") == demos and r["trials_to_success"]]
             if ql:
-                labels.append(f"query learners\n{demos}")
+                labels.append(f"query learners\n{str(demos).replace('_', ' ')}")
                 data.append([r["trials_to_success"] for r in ql])
         ax.boxplot(data, tick_labels=labels)
         ax.set_yscale("log")
