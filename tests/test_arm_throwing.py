@@ -145,6 +145,7 @@ def test_noise_is_drawn_from_the_trial_seed() -> None:
     ("linear", (1.05, 0.12), 5),   # inside the demos' landings: the floor is 5 trials
     ("linear", (1.27, -0.3), 8),   # 18 % beyond them in x, 5 % in y: the floor is 8
     ("lwr-gp", (0.85, -0.1), 5),
+    ("lwr-gp-affine", (1.27, -0.3), 8),  # plain lwr-gp cannot leave the demos' range
 ])
 def test_an_unseen_basket_is_hit_within_the_floor(generalizer: str, target: tuple[float, float], cap: int) -> None:
     setup = arm_throwing_setup(target, generalizer)
@@ -155,6 +156,12 @@ def test_an_unseen_basket_is_hit_within_the_floor(generalizer: str, target: tupl
     last = r.trials[-1]
     landing = np.array([last.signals["landing_x"], last.signals["landing_y"]])
     assert np.linalg.norm(landing - target) < 0.05
+
+
+def test_plain_lwr_gp_cannot_throw_beyond_the_demos() -> None:
+    setup = arm_throwing_setup((1.27, -0.3), "lwr-gp")
+    r = learn(setup.task, setup.generalizer, setup.desired_query, setup.make_learner(), max_trials=8)
+    assert not r.converged
 
 
 def test_the_reproduction_part_runs_summarizes_and_draws(tmp_path) -> None:

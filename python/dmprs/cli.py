@@ -58,7 +58,7 @@ def main() -> None:
 @click.option("--volume", type=float, default=None, help="bottle volume in litres (pouring, arm-pouring)")
 @click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
 @click.option("--target", type=float, nargs=2, default=None, help="basket position X Y in m (arm-throwing)")
-@click.option("--generalizer", default=None, help="linear | lwr-gp (arm-throwing)")
+@click.option("--generalizer", default=None, help="linear | lwr-gp | lwr-gp-affine (arm-throwing)")
 def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
               tol: float | None, log_dir: Path | None, seed: int, noise: float | None,
               volume: float | None, demos: str | None, target: tuple[float, float] | None,

@@ -38,7 +38,7 @@ class ThrowingSpec:
 
     target: tuple[float, float]
     region: str  # "inside" | "outside"
-    generalizer: str  # "linear" | "lwr-gp"
+    generalizer: str  # a key of dmprs.tasks.arm_throwing.experiment.GENERALIZERS
     learner: str
     noise_seed: int | None = None  # None: the exact robot
     tol: float = 0.05  # the basket's radius (m)
@@ -75,7 +75,7 @@ def baskets(n: int, seed: int = 0) -> dict[str, list[tuple[float, float]]]:
 
 
 def plan_throwing(quick: bool = False) -> list[ThrowingSpec]:
-    """Full: 10 inside and 10 outside baskets x both generalizers x the secant (Broyden), fixed
+    """Full: 10 inside and 10 outside baskets x the three generalizers x the secant (Broyden), fixed
     (J = I) and CMA-ES learners, and the noisy robot over 10 noise seeds at two baskets
     (linear, secant and error). Quick: two inside baskets and one outside, linear, secant."""
     if quick:
@@ -83,7 +83,8 @@ def plan_throwing(quick: bool = False) -> list[ThrowingSpec]:
         return [ThrowingSpec(t, region, "linear", "secant") for region in ("inside", "outside")
                 for t in b[region][: 2 if region == "inside" else 1]]
     b = baskets(10)
-    specs = [ThrowingSpec(t, region, gen, lrn) for gen in ("linear", "lwr-gp") for lrn in ("secant", "error", "cma")
+    specs = [ThrowingSpec(t, region, gen, lrn) for gen in ("linear", "lwr-gp", "lwr-gp-affine")
+             for lrn in ("secant", "error", "cma")
              for region in ("inside", "outside") for t in b[region]]
     specs += [ThrowingSpec(b[region][0], region, "linear", lrn, seed) for lrn in ("secant", "error")
               for region in ("inside", "outside") for seed in range(10)]

@@ -24,8 +24,13 @@ from dmprs.trajectory import Trajectory
 #: kernels of the demonstrations' DMPs: 30 reproduce a throw's joints within 3 mrad (the landing
 #: within ~1 cm of the scripted throw's)
 N_BASIS = 30
-#: the generalizers by name, with their options
-GENERALIZERS = ("linear", "lwr-gp")
+#: the generalizers by name, with their options: "lwr-gp-affine" is lwr-gp with an affine trend,
+#: which extrapolates beyond the demos (plain lwr-gp cannot: docs/throwing.md)
+GENERALIZERS: dict[str, dict[str, str]] = {
+    "linear": {"method": "linear"},
+    "lwr-gp": {"method": "lwr-gp"},
+    "lwr-gp-affine": {"method": "lwr-gp", "trend": "affine"},
+}
 #: m: eq. 17's scale for the "weighted" learner (the demos' landings span ~0.5 m)
 WEIGHT_SCALE = 0.3
 #: m: the "finite-difference" learner's probe step, and the CMA-ES step size
@@ -93,7 +98,8 @@ def arm_throwing_setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linea
 
     Five scripted throws (:data:`~dmprs.tasks.arm_throwing.DEMOS`) labelled with their measured
     landing points; ``generalizer``: ``"linear"`` (piecewise linear on their Delaunay
-    triangulation, affine extrapolation from the nearest triangle outside it) or ``"lwr-gp"``;
+    triangulation, affine extrapolation from the nearest triangle outside it), ``"lwr-gp"`` or
+    ``"lwr-gp-affine"`` (with an affine trend, which extrapolates);
     DMPs of ``n_basis`` kernels. Learners: ``secant`` (default: error learning with Broyden's
     update of the Jacobian), ``error`` (eq. 16, K = J = I), ``finite-difference``, ``weighted``
     (eq. 17), ``cma``. ``tol``: the basket's radius (m, default 5 cm). ``noise``: a
@@ -104,13 +110,13 @@ def arm_throwing_setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linea
     from dmprs.generalize import Generalizer
     from dmprs.tasks.arm_throwing.task import TOLERANCE, ArmThrowing
 
-    if generalizer not in GENERALIZERS:
-        raise InvalidInputError(f"generalizer = {generalizer!r} is invalid: use one of {GENERALIZERS}")
+    if not isinstance(generalizer, str) or generalizer not in GENERALIZERS:
+        raise InvalidInputError(f"generalizer = {generalizer!r} is invalid: use one of {tuple(GENERALIZERS)}")
     task = ArmThrowing(TOLERANCE if tol is None else tol, noise=noise)
     db = Database(query_names=task.query_names, query_units=task.query_units)
     for label, trajectory in demonstrations(n_basis):
         db.add(label, trajectory)
-    gen = Generalizer(db, method=generalizer, n_basis=n_basis)
+    gen = Generalizer(db, n_basis=n_basis, **GENERALIZERS[generalizer])
     return ExperimentSetup(task=task, database=db, generalizer=gen,
                            desired_query=task.validate_query(target), default_learner="secant",
                            learners=throwing_learners(max_trials))
