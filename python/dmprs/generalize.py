@@ -72,12 +72,11 @@ class Generalizer:
     "lwr-gp" refuses repeated queries; "linear" averages them.
 
     Which for a growing database (``learn(..., database=db)``; measured on 2-D pouring,
-    docs/growing.md): ``"linear"``, with its defaults, for a low-dimensional query: with 8 or
-    more demos its first trial succeeded for 77 % of new volumes against 47 % for ``"lwr-gp"``,
-    which blends several neighbours and so misses by more between close demos (use it there with
-    ``bandwidth=2.5``: 2.4 trials per volume against 3.0 with the default 1.5); ``"lwr-gp"`` where
+    docs/growing.md): ``"linear"``, with its defaults, for a low-dimensional query (1.7 trials
+    per new volume; with 8 or more demos 77 % of first trials succeeded); ``"lwr-gp"`` with
+    ``bandwidth=2.5, trend="affine"`` (1.8 trials, 63 %; without the trend 2.4 and 47 %) where
     demos are noisy or repeated samples of a smooth map, or the query too high-dimensional to
-    triangulate densely.
+    triangulate densely. To extrapolate, ``"linear"`` or ``trend="affine"``.
 
     Pose demonstrations (:class:`~dmprs.CartesianTrajectory`) work the same way and give a
     :class:`~dmprs.CartesianDMP`: weights and tau as above, positions like goals and starts, and
