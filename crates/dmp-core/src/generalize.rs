@@ -570,6 +570,14 @@ mod tests {
     }
 
     fn build(qs: &[f64], method: Method) -> Result<Generalizer> {
+        build_from(qs, demo, method)
+    }
+
+    fn build_from(
+        qs: &[f64],
+        demo: impl Fn(f64) -> (Vec<f64>, DMatrix<f64>),
+        method: Method,
+    ) -> Result<Generalizer> {
         let data: Vec<_> = qs.iter().map(|&q| demo(q)).collect();
         let demos: Vec<Demonstration> = data
             .iter()
@@ -647,32 +655,12 @@ mod tests {
     }
 
     fn build_affine(qs: &[f64], affine: bool) -> Generalizer {
-        let data: Vec<_> = qs.iter().map(|&q| affine_demo(q)).collect();
-        let demos: Vec<Demonstration> = data
-            .iter()
-            .map(|(t, y)| Demonstration {
-                t,
-                y: y.as_view(),
-                yd: None,
-                ydd: None,
-            })
-            .collect();
-        let queries: Vec<Vec<f64>> = qs.iter().map(|&q| vec![q]).collect();
         let mut options = LwrGpOptions::default();
         if affine {
             options.lwr.local_model = LocalModel::Linear;
             options.gp_mean = GpMean::Affine;
         }
-        Generalizer::new(
-            &queries,
-            &demos,
-            DmpConfig {
-                n_basis: 15,
-                ..DmpConfig::default()
-            },
-            Method::LwrGp(options),
-        )
-        .unwrap()
+        build_from(qs, affine_demo, Method::LwrGp(options)).unwrap()
     }
 
     #[test]
