@@ -219,6 +219,7 @@ def generalizer_args(draw: Any) -> dict[str, Any]:
             "gp_noise": draw(st.one_of(st.just(1e-4), maybe_number)),
             "gp_restarts": draw(st.one_of(st.integers(0, 3), count)),
             "bandwidth": draw(st.one_of(st.just(1.5), maybe_number)),
+            "trend": draw(st.sampled_from(["constant", "affine", "affine", "cubic", None])),
         },
         "q": draw(st.one_of(st.floats(-6, 6), number, anything)),
         "rel_step": draw(st.one_of(st.just(1e-4), maybe_number)),
@@ -250,6 +251,9 @@ def learner_args(draw: Any) -> dict[str, Any]:
     elif kind in ("golden", "root"):
         kw |= {"q0": draw(maybe_number), "low": draw(maybe_number), "high": draw(maybe_number),
                "q_tol": draw(st.one_of(st.none(), maybe_number))}
+        if kind == "golden":  # the noise guard
+            kw |= {"noise": draw(st.one_of(st.none(), maybe_number)),
+                   "max_repeats": draw(st.one_of(st.none(), st.integers(1, 5), count))}
     else:
         kw |= {"theta0": draw(vec), "sigma": draw(st.one_of(st.just(0.1), maybe_number)), "seed": draw(count)}
     return {"kind": kind, "kw": kw}
