@@ -107,7 +107,8 @@ class PiecewiseLinear:
         if nodes.shape[1] == 1:
             x = nodes[:, 0]
             i = int(np.clip(np.searchsorted(x, q[0]) - 1, 0, len(x) - 2))
-            a = (q[0] - x[i]) / (x[i + 1] - x[i])
+            with np.errstate(all="ignore"):  # an overflow is caught as non-finite in parameters()
+                a = (q[0] - x[i]) / (x[i + 1] - x[i])
             return np.array([i, i + 1]), np.array([1.0 - a, a])
         if self._hull_pinv is not None:
             b = self._hull_pinv @ (q - nodes[0])
