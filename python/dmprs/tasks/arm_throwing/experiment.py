@@ -26,7 +26,7 @@ from dmprs.trajectory import Trajectory
 N_BASIS = 30
 #: the generalizers by name, with their options: "lwr-gp-affine" is lwr-gp with an affine trend,
 #: which extrapolates beyond the demos (plain lwr-gp cannot: docs/throwing.md)
-GENERALIZERS: dict[str, dict[str, str]] = {
+GENERALIZERS: dict[str, dict[str, Any]] = {
     "linear": {"method": "linear"},
     "lwr-gp": {"method": "lwr-gp"},
     "lwr-gp-affine": {"method": "lwr-gp", "trend": "affine"},
