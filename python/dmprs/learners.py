@@ -319,8 +319,9 @@ class GoldenSection(_Learner):
     mode) guards the bracket against a noisy sign (docs/method.md §6.5): a reading with
     ``|eps| < 2 noise`` is repeated at the same q (up to ``max_repeats`` readings, default 3) and
     the sign of their mean moves the limit; and after 3 readings of one sign in a row the limit
-    they point to is tried again, and re-opened to the one it replaced if the new reading
-    contradicts it (``reopened`` counts these). One wrong sign then costs trials, not the run.
+    they point to is tried again, as is a limit a stop would rest on, and re-opened to the one
+    it replaced if the new reading contradicts it (``reopened`` counts these). One wrong sign
+    then costs trials, not the run.
     """
 
     __slots__ = ()

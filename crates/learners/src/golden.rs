@@ -37,8 +37,9 @@
 //!    sign the limit they point to, if a trial set it and no re-check has confirmed it, is asked
 //!    again. A reading at a limit that contradicts it re-opens the limit: it goes back to the
 //!    one it replaced (every limit remembers it), and the reading enters the box as any other.
+//!    A stop that rests on a limit (`HitBound`, `Bracketed`) re-checks it first in the same way.
 //!    One wrong sign of any size therefore costs about 4 trials, not the run; a correct bracket
-//!    costs a re-check only when the root is near one of its limits.
+//!    costs a re-check only when the root is near one of its limits, or before it stops.
 //!
 //! eps > 0 means the query must increase (docs/method.md §5.3).
 
@@ -235,6 +236,30 @@ impl GoldenSection {
         Some(limit)
     }
 
+    /// Noise guard 2, before stopping with `status`: the limit that status rests on, if a
+    /// trial set it and no re-check has confirmed it (`HitBound` high rests on q_l, low on q_h,
+    /// `Bracketed` on both).
+    fn recheck_before(&mut self, status: &Status) -> Option<f64> {
+        let sides: &[usize] = match status {
+            Status::HitBound { high: true, .. } => &[0],
+            Status::HitBound { high: false, .. } => &[1],
+            Status::Bracketed => &[0, 1],
+            _ => &[],
+        };
+        for &side in sides {
+            let (limit, confirmed) = if side == 0 {
+                (self.ql, self.low_confirmed)
+            } else {
+                (self.qh, self.high_confirmed)
+            };
+            if confirmed && !self.verified[side] {
+                self.streak = (false, 0);
+                return Some(limit);
+            }
+        }
+        None
+    }
+
     /// `HitBound` at an unconfirmed limit, else `Bracketed` (used when the bracket is spent).
     fn spent(&self) -> Status {
         if !self.high_confirmed {
@@ -353,6 +378,13 @@ impl AskTell for GoldenSection {
                 GoldenMode::Robust => (width < self.q_tol).then(|| self.spent()),
                 GoldenMode::Paper => (width <= COLLAPSE * self.first_width).then(|| self.spent()),
             };
+        }
+        if self.noise.is_some()
+            && let Some(limit) = stop.as_ref().and_then(|s| self.recheck_before(s))
+        {
+            // Guard 2: a stop that rests on a limit one reading set waits for its re-check.
+            self.next = limit;
+            stop = None;
         }
         self.rec
             .finish_tell(stop.or_else(|| diverged_unless_finite(&[self.next])));
