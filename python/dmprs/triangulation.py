@@ -166,7 +166,8 @@ class PiecewiseLinear:
             h = rel_step * scale[d]
             step = np.zeros_like(q)
             step[d] = h
-            jac[:, d] = (self.parameters(q + step) - self.parameters(q - step)) / (2.0 * h)
+            with np.errstate(all="ignore"):  # an overflow is refused just below, not warned about
+                jac[:, d] = (self.parameters(q + step) - self.parameters(q - step)) / (2.0 * h)
         if not np.isfinite(jac).all():
             raise ExtrapolationError(
                 f"the Jacobian at query {q.tolist()} overflows with rel_step = {rel_step:g}: the step "
