@@ -175,6 +175,15 @@ impl GoldenSection {
         self.reopened
     }
 
+    /// Side 0 (low) or 1 (high): the limit and whether a trial set it.
+    fn limit(&self, side: usize) -> (f64, bool) {
+        if side == 0 {
+            (self.ql, self.low_confirmed)
+        } else {
+            (self.qh, self.high_confirmed)
+        }
+    }
+
     /// Noise guard 1: the sign-bearing eps for this reading, or None to ask q again.
     fn reading(&mut self, q: f64, e: f64, sigma: f64) -> Option<f64> {
         let (sum, n) = match self.readings {
@@ -194,11 +203,7 @@ impl GoldenSection {
     /// (`up`, eps > 0, agrees with the low limit) or re-opens it to the limit it replaced.
     fn recheck_reading(&mut self, q: f64, up: bool) {
         for side in [0, 1] {
-            let (limit, confirmed) = if side == 0 {
-                (self.ql, self.low_confirmed)
-            } else {
-                (self.qh, self.high_confirmed)
-            };
+            let (limit, confirmed) = self.limit(side);
             if q != limit || !confirmed {
                 continue;
             }
@@ -224,11 +229,8 @@ impl GoldenSection {
             (up, 1)
         };
         // eps > 0 readings raise q_l and point towards q_h.
-        let (side, limit, confirmed) = if up {
-            (1, self.qh, self.high_confirmed)
-        } else {
-            (0, self.ql, self.low_confirmed)
-        };
+        let side = usize::from(up);
+        let (limit, confirmed) = self.limit(side);
         if self.streak.1 < RECHECK_STREAK || !confirmed || self.verified[side] {
             return None;
         }
@@ -247,11 +249,7 @@ impl GoldenSection {
             _ => &[],
         };
         for &side in sides {
-            let (limit, confirmed) = if side == 0 {
-                (self.ql, self.low_confirmed)
-            } else {
-                (self.qh, self.high_confirmed)
-            };
+            let (limit, confirmed) = self.limit(side);
             if confirmed && !self.verified[side] {
                 self.streak = (false, 0);
                 return Some(limit);

@@ -236,9 +236,8 @@ fn golden_section_finds_the_root_of_q_plus_0_3_sin_q() {
     }
 }
 
-/// Runs golden section on eps = 0.7 - q over [0, 1] from 0.5, the reading of the second trial
-/// (at q = 0.809, eps = -0.109) told with the wrong sign; returns it and the trials it took.
-fn golden_with_one_wrong_sign(noise: Option<f64>) -> (GoldenSection, usize) {
+/// Golden section (robust) over [0, 1] from 0.5, tol 1e-3, with the given noise guard.
+fn guarded_golden(noise: Option<f64>) -> GoldenSection {
     let cfg = GoldenConfig {
         mode: GoldenMode::Robust,
         tol: 1e-3,
@@ -246,7 +245,13 @@ fn golden_with_one_wrong_sign(noise: Option<f64>) -> (GoldenSection, usize) {
         noise,
         ..GoldenConfig::default()
     };
-    let mut g = GoldenSection::new(0.5, 0.0, 1.0, cfg).unwrap();
+    GoldenSection::new(0.5, 0.0, 1.0, cfg).unwrap()
+}
+
+/// Runs it on eps = 0.7 - q, the reading of the second trial (at q = 0.809, eps = -0.109) told
+/// with the wrong sign; returns it and the trials it took.
+fn golden_with_one_wrong_sign(noise: Option<f64>) -> (GoldenSection, usize) {
+    let mut g = guarded_golden(noise);
     let mut k = 0;
     while g.status() == Status::Running {
         let q = g.ask().unwrap();
@@ -273,18 +278,8 @@ fn the_noise_guard_reopens_the_limit_a_wrong_sign_set_and_converges() {
     assert!(g.reopened() >= 1);
     assert!((g.best().unwrap().q[0] - 0.7).abs() < 1e-3);
     // the guard costs trials, not the run: noise-free golden needs 12 here
-    let (clean, k_clean) = {
-        let cfg = GoldenConfig {
-            mode: GoldenMode::Robust,
-            tol: 1e-3,
-            max_trials: 40,
-            noise: Some(1e-4),
-            ..GoldenConfig::default()
-        };
-        let mut g = GoldenSection::new(0.5, 0.0, 1.0, cfg).unwrap();
-        let k = run(&mut g, |q| vec![0.7 - q[0]]);
-        (g, k)
-    };
+    let mut clean = guarded_golden(Some(1e-4));
+    let k_clean = run(&mut clean, |q| vec![0.7 - q[0]]);
     assert!(clean.converged() && clean.reopened() == 0);
     assert!(k <= k_clean + 8, "{k} trials against {k_clean}");
 }

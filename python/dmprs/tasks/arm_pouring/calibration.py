@@ -7,13 +7,11 @@ import functools
 import hashlib
 import json
 import os
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from dmprs._io import write_atomic
 from dmprs.errors import NumericalError
 from dmprs.tasks.arm_pouring.adapter import CONTROL_PERIOD, TARGET_VOLUME, ArmPouringAdapter, _check_volume
 from dmprs.tasks.arm_pouring.demonstrator import DEMO_TIMING, POUR_POSITION, pour_poses
@@ -74,11 +72,8 @@ def _calibrate(bottle_volume: float, target_volume: float, liquid_seed: int, tol
     if cache_dir is not None:
         path = _cache_path(cache_dir, {"v": v, "target": target, "seed": liquid_seed, "tol": tol,
                                        "max": max_evaluations, "bracket": bracket})
-        try:
-            d = json.loads(path.read_text())
-            return Calibration(**{**d, "evaluations": tuple(tuple(e) for e in d["evaluations"])})
-        except (OSError, ValueError, TypeError):
-            pass  # absent or damaged: computed and (re)written
+        if (cached := Calibration.load(path)) is not None:
+            return cached
     # The root finder searches q with eps > 0 meaning "increase q": more tilt pours more, so
     # eps = target - poured (docs/method.md §5.3).
     finder = IllinoisRootFinder(0.5 * (lo + hi), low=lo, high=hi, tol=tol, max_trials=max_evaluations)
@@ -93,10 +88,6 @@ def _calibrate(bottle_volume: float, target_volume: float, liquid_seed: int, tol
     peak, poured = min(evals, key=lambda e: (abs(e[1] - target), e[0]))
     cal = Calibration(v, target, int(liquid_seed), peak, poured, tuple(evals))
     if path is not None:
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write_atomic(path, json.dumps(asdict(cal)).encode())
-        except OSError:
-            pass  # the disk cache is an optimization only
+        cal.save(path)
     return cal
 

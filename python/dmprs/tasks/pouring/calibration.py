@@ -35,6 +35,25 @@ class Calibration:
     poured_volume: float  #: l
     evaluations: tuple[tuple[float, float], ...]  #: (peak tilt rad, poured l), in order
 
+    @classmethod
+    def load(cls, path: Path) -> Calibration | None:
+        """The calibration cached at ``path``; None if it is absent or damaged (then it is
+        computed and rewritten)."""
+        try:
+            d = json.loads(path.read_text())
+            return cls(**{**d, "evaluations": tuple(tuple(e) for e in d["evaluations"])})
+        except (OSError, ValueError, TypeError):
+            return None
+
+    def save(self, path: Path) -> None:
+        """Caches this calibration at ``path`` (atomically); a disk that refuses is ignored,
+        the cache being an optimization only."""
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_atomic(path, json.dumps(asdict(self)).encode())
+        except OSError:
+            pass
+
 
 def _poured(bottle_volume: float, peak: float, liquid_seed: int) -> float:
     adapter = PouringAdapter(bottle_volume, liquid_seed=liquid_seed)
@@ -95,12 +114,8 @@ def _calibrate(v: float, target: float, seed: int, tol: float, max_evals: int, l
     path = None
     if cache_dir is not None:
         path = Path(cache_dir) / f"pouring-demo-{_cache_key(**params)}.json"
-        if path.exists():
-            try:
-                d = json.loads(path.read_text())
-                return Calibration(**{**d, "evaluations": tuple(tuple(e) for e in d["evaluations"])})
-            except (OSError, ValueError, TypeError):
-                pass  # a damaged cache entry is recomputed and overwritten
+        if (cached := Calibration.load(path)) is not None:
+            return cached
 
     evals: list[tuple[float, float]] = []
 
@@ -135,9 +150,5 @@ def _calibrate(v: float, target: float, seed: int, tol: float, max_evals: int, l
     cal = Calibration(bottle_volume=v, target_volume=target, liquid_seed=seed, peak_tilt=peak,
                       poured_volume=poured, evaluations=tuple(evals))
     if path is not None:
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write_atomic(path, json.dumps(asdict(cal)).encode())
-        except OSError:
-            pass  # the disk cache is an optimization only
+        cal.save(path)
     return cal
