@@ -22,6 +22,15 @@ def pyplot():
     return plt
 
 
+def save_figure(fig, path: Path) -> Path:
+    """Lays out, writes (110 dpi, the reproduction's figures) and closes ``fig``; returns ``path``."""
+    plt = pyplot()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def plot_run(run: str | Path, out: str | Path | None = None) -> Path:
     """Error and query per trial of a logged run, in the style of the paper's Figs. 4 and 9."""
     log = RunLog(run)

@@ -13,7 +13,7 @@ from dmprs.reproduce.parts import PARTS
 def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
     """Figs. 4, 7, 9 in the paper's style and a baseline comparison (needs matplotlib)."""
     try:
-        from dmprs.plots import pyplot
+        from dmprs.plots import pyplot, save_figure
 
         plt = pyplot()
     except Exception:  # noqa: BLE001 - the report is written without figures
@@ -40,10 +40,7 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
         ax[1].set(ylabel="error eps (deg)", xlabel="trial")
         ax[1].xaxis.get_major_locator().set_params(integer=True)
         ax[0].legend(fontsize=7)
-        fig.tight_layout()
-        paths.append(out / fname)
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        paths.append(save_figure(fig, out / fname))
     for part, tol_ml, title, fname in (
             ("pouring", 10, "Pouring, golden section (Fig. 9)", "fig9_pouring.png"),
             ("arm_pouring", 20, "Pouring with the 7-DOF arm (MuJoCo), golden section", "fig9_arm_pouring.png")):
@@ -61,10 +58,7 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
         ax[1].set(ylabel="learned query (l)", xlabel="trial")
         ax[1].xaxis.get_major_locator().set_params(integer=True)
         ax[0].legend(fontsize=7)
-        fig.tight_layout()
-        paths.append(out / fname)
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        paths.append(save_figure(fig, out / fname))
     if any(r["kind"] == "learn" and r["part"] == "arm_pouring" for r in results):
         from dmprs.tasks.arm_pouring.experiment import frame_strip
 
@@ -89,10 +83,7 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
         ax.set_yscale("log")
         ax.set(ylabel="trials to upright (budget if never)", title="Matchbox: weight space vs query space")
         ax.tick_params(axis="x", labelsize=7)
-        fig.tight_layout()
-        paths.append(out / "baselines.png")
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        paths.append(save_figure(fig, out / "baselines.png"))
     for extra in PARTS:
         if any(r.get("kind") == extra.kind for r in results):
             path = extra.figure(results, out)

@@ -160,7 +160,7 @@ def markdown_growing(rows: list[dict[str, Any]]) -> str:
 def figure_growing(results: list[dict[str, Any]], out: str | Path) -> Path:
     """Trials to success and first-trial |error| against database size, per generalizer
     (mean over the orders, and every run as a dot); written to ``out/growing_pouring.png``."""
-    from dmprs.plots import pyplot
+    from dmprs.plots import pyplot, save_figure
 
     plt = pyplot()
     out = Path(out)
@@ -186,8 +186,4 @@ def figure_growing(results: list[dict[str, Any]], out: str | Path) -> Path:
     ax[1].set(ylabel="first-trial abs error (ml)", xlabel="demonstrations in the database", yscale="log")
     ax[1].legend(fontsize=7)
     ax[1].xaxis.get_major_locator().set_params(integer=True)
-    fig.tight_layout()
-    path = out / "growing_pouring.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out / "growing_pouring.png")

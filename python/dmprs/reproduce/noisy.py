@@ -226,7 +226,7 @@ def markdown_noisy(rows: list[dict[str, Any]]) -> str:
 def figure_noisy(results: list[dict[str, Any]], out: str | Path) -> Path:
     """The measured error per trial of every noisy run (the paper's Figs. 6 and 11 way),
     one panel per experiment; written to ``out/noisy_robot.png``."""
-    from dmprs.plots import pyplot
+    from dmprs.plots import pyplot, save_figure
 
     plt = pyplot()
     out = Path(out)
@@ -247,8 +247,4 @@ def figure_noisy(results: list[dict[str, Any]], out: str | Path) -> Path:
         ax.set(ylabel=f"measured error ({unit})", title=f"{exp}, noisy robot, {len(runs)} runs")
         ax.legend(fontsize=7)
     axes[-1, 0].set(xlabel="trial")
-    fig.tight_layout()
-    path = out / "noisy_robot.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out / "noisy_robot.png")

@@ -154,7 +154,7 @@ def figure_throwing(results: list[dict[str, Any]], out: str | Path) -> Path:
     """Landing points per trial on the floor plan (the paper's Fig. 2 way): the demos' landings,
     each basket (5 cm circle) and the trials' landings joined in order, one panel per generalizer
     (exact robot, the secant learner, or the first learner present); ``out/throwing.png``."""
-    from dmprs.plots import pyplot
+    from dmprs.plots import pyplot, save_figure
 
     plt = pyplot()
     out = Path(out)
@@ -181,9 +181,5 @@ def figure_throwing(results: list[dict[str, Any]], out: str | Path) -> Path:
         ax.set_aspect("equal")
         ax.set(xlabel="x (m)", ylabel="y (m)", title=f"{gen}, {learner}: landing per trial")
         ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    path = out / "throwing.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out / "throwing.png")
 
