@@ -17,14 +17,38 @@ from dmprs.errors import DmprsError, InvalidInputError, NumericalError
 T50 = np.linspace(0.0, 1.0, 50)
 
 
-@pytest.mark.parametrize("alpha_x", [17.5, 20.0, 30.0])
-def test_a_large_alpha_x_fits_instead_of_panicking(alpha_x: float) -> None:
+@pytest.mark.parametrize("alpha_x", [17.5, 18.42])
+def test_a_large_alpha_x_fits_up_to_the_design_matrix_floor(alpha_x: float) -> None:
     dmp = dmprs.DMP.fit(T50, np.sin(T50), alpha_x=alpha_x)
     assert np.isfinite(dmp.weights).all()
     db = dmprs.Database(["q"])
     for q in (0.0, 1.0):
         db.add([q], dmprs.Trajectory(T50, (1 + q) * np.sin(T50)))
     assert np.isfinite(dmprs.Generalizer(db, alpha_x=alpha_x).predict([0.5]).weights).all()
+
+
+def test_a_fit_whose_phase_falls_below_the_design_matrix_floor_is_refused() -> None:
+    # The fuzz campaign's case: three samples, alpha_x = 22.6. Fitted, its rollout went to 1587
+    # for a 0.5 movement; now the fit says why it cannot be done, for a DMP and a generalizer.
+    with pytest.raises(InvalidInputError, match=r"alpha_x = 22\.6 is invalid: must be at most 18\.42"):
+        dmprs.DMP.fit([0, 2.5, 5], [0, 0.35, 0.5], n_basis=2, alpha_z=98, alpha_x=22.6, width_factor=5)
+    db = dmprs.Database(["q"])
+    for q in (0.0, 1.0):
+        db.add([q], dmprs.Trajectory(T50, (1 + q) * np.sin(T50)))
+    for method in ("linear", "lwr-gp"):
+        with pytest.raises(InvalidInputError, match="alpha_x = 30 is invalid"):
+            dmprs.Generalizer(db, method, alpha_x=30.0)
+
+
+def test_a_rollout_is_bounded_in_work_even_until_rest() -> None:
+    # 900 Euler sub-steps per sample (alpha_z = 9e5 at dt / tau = 1e-3): 100 s of it is
+    # refused at once; going on "until rest" with an unreachable tolerance stops at the same
+    # bound (after a few seconds at most), instead of running for minutes.
+    dmp = dmprs.DMP(np.ones((1, 25)), [1.0], [0.0], 1.0, alpha_z=9e5)
+    with pytest.raises(NumericalError, match="more than the 5e7 state updates"):
+        dmp.rollout(duration=100.0)
+    with pytest.raises(NumericalError, match="more than the 5e7 state updates"):
+        dmp.rollout(until_rest=True, rest_tol=1e-300)
 
 
 def test_a_stiff_rollout_is_stable_and_ends_near_the_demonstration() -> None:

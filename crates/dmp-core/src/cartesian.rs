@@ -40,7 +40,7 @@ use crate::dmp::{Demonstration, Dmp, DmpConfig};
 use crate::error::{Error, Result, check_finite_matrix, check_increasing};
 use crate::finite_difference as diff;
 use crate::quaternion::{self, Quaternion};
-use crate::rollout::{MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, n_steps};
+use crate::rollout::{MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, check_work, n_steps};
 
 /// A pose is `[x, y, z, qw, qx, qy, qz]`: position (m), then a scalar-first unit quaternion.
 pub const POSE_WIDTH: usize = 7;
@@ -332,7 +332,7 @@ impl CartesianDmp {
     /// Fits position and orientation to one pose demonstration by batch least squares (module
     /// docs): `tau = t_T - t_1`, goal and start = the last and first pose.
     pub fn fit(demo: &CartesianDemonstration<'_>, config: DmpConfig) -> Result<Self> {
-        config.validate()?;
+        config.validate_for_fit()?;
         let prepared = PreparedPose::new(demo)?;
         let dmp = Dmp::fit(&prepared.demonstration(demo.t), config)?;
         Self::from_coordinates(dmp, prepared.goal(), prepared.start())
@@ -449,6 +449,7 @@ impl CartesianDmp {
                 requirement: "is too small for the duration: the rollout would exceed 20 million values",
             });
         }
+        check_work(steps + 1.0, N_COORDS, "Cartesian DMP rollout")?;
         let cap = steps as usize + 1;
         let mut out = CartesianTrajectory {
             t: Vec::with_capacity(cap),
@@ -525,6 +526,10 @@ impl CartesianDmp {
             let past_end = step as f64 >= steps;
             if past_end && (!opts.until_rest || at_rest) {
                 break;
+            }
+            if past_end {
+                // Going on until rest: the work beyond `steps` was not bounded up front.
+                check_work((step + 2) as f64, N_COORDS, "Cartesian DMP rollout")?;
             }
             if step as f64 >= max_steps || out.t.len() * POSE_WIDTH >= MAX_VALUES {
                 return Err(Error::Numerical {

@@ -47,7 +47,7 @@ impl CartesianGeneralizer {
         config: DmpConfig,
         method: Method,
     ) -> Result<Self> {
-        config.validate()?;
+        config.validate_for_fit()?;
         let mut prepared = Vec::with_capacity(demos.len());
         for (k, demo) in demos.iter().enumerate() {
             prepared.push(PreparedPose::new(demo).map_err(|e| Error::InDemo {

@@ -21,7 +21,7 @@ use crate::error::{Error, Result, check_finite_matrix, check_increasing};
 use crate::finite_difference;
 
 /// Design-matrix entries below this are set to zero, as in the lab's fitting code.
-const DESIGN_CUTOFF: f64 = 1e-8;
+pub(crate) const DESIGN_CUTOFF: f64 = 1e-8;
 
 /// A validated demonstration with its derivatives and the DMP parameters read off it directly.
 #[derive(Debug, Clone)]

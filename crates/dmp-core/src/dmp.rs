@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use crate::basis::Basis;
 use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
-use crate::error::{Error, Result, check_scalar};
+use crate::error::{Error, Result, check_scalar, fmt_g};
 
 /// Relative ridge added to the normal equations of the fit. It keeps a kernel that no sample
 /// activates at weight 0 instead of making the system singular, and changes well-posed fits by
@@ -74,7 +74,32 @@ impl DmpConfig {
         }
         Ok(())
     }
+
+    /// [`Self::validate`], and the bound a fit adds on `alpha_x`: the phase at the end of the
+    /// demonstration, `exp(-alpha_x)`, must stay above the design matrix's cut-off (1e-8). Beyond
+    /// it the last samples' rows vanish, no weight is held to them, and the late kernels (centres
+    /// below the cut-off) get weights of 1e7-1e9 that the rollout's explicit-Euler phase cannot
+    /// follow: the movement is no longer reproduced.
+    pub fn validate_for_fit(&self) -> Result<()> {
+        self.validate()?;
+        if self.alpha_x > MAX_FIT_ALPHA_X {
+            return Err(Error::InvalidParameter {
+                name: "alpha_x",
+                value: fmt_g(self.alpha_x),
+                requirement: "must be at most 18.42 (ln 1e8) to fit a demonstration: the phase at \
+                              its end, exp(-alpha_x), falls below the design matrix's cut-off \
+                              1e-8 beyond that, so the last samples hold no weight and the fitted \
+                              movement is not reproduced (below about 12 rollouts are as accurate \
+                              as with the default 2; docs/method.md §2.3)",
+            });
+        }
+        Ok(())
+    }
 }
+
+/// The largest `alpha_x` a fit accepts: `-ln` of the design matrix's cut-off, where the phase at
+/// the end of the demonstration reaches it.
+pub const MAX_FIT_ALPHA_X: f64 = 18.420_680_743_952_367;
 
 /// Positions of a demonstration with optional measured derivatives, all `D x T` (one column per
 /// sample; a C-ordered `(T, D)` numpy array is exactly this layout).
@@ -155,7 +180,7 @@ impl Dmp {
     ///
     /// Missing derivatives are computed with [`crate::finite_difference::gradient`] (second order, non-uniform grid).
     pub fn fit(demo: &Demonstration<'_>, config: DmpConfig) -> Result<Self> {
-        config.validate()?;
+        config.validate_for_fit()?;
         let prepared = PreparedDemo::new(demo)?;
         let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
         let normal = normal_equations(&prepared, &basis, &config);

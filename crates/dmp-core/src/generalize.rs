@@ -186,7 +186,7 @@ impl Generalizer {
         config: DmpConfig,
         method: Method,
     ) -> Result<Self> {
-        config.validate()?;
+        config.validate_for_fit()?;
         let name = method.name();
         let m = demos.len();
         if queries.len() != m {

@@ -75,6 +75,32 @@ pub(crate) fn n_steps(duration: f64, dt: f64) -> f64 {
     }
 }
 
+/// The most work a rollout may take, in state updates: each Euler (sub-)step updates the phase
+/// with its kernel activations and every DOF, `n_dof + 1` of them. Like [`MAX_VALUES`] for
+/// memory, it bounds the time (a few seconds on one core) of a mistyped duration or of a stiff
+/// DMP at a coarse `dt`; every rollout within [`MAX_VALUES`] without sub-steps stays within it.
+pub const MAX_WORK: f64 = 5e7;
+
+/// Refuses a rollout of `steps` Euler (sub-)steps of `n_dof` DOFs beyond [`MAX_WORK`];
+/// `context` names the rollout.
+pub(crate) fn check_work(steps: f64, n_dof: usize, context: &'static str) -> Result<()> {
+    let work = steps * (n_dof + 1) as f64;
+    if work.is_nan() || work > MAX_WORK {
+        return Err(Error::Numerical {
+            context,
+            detail: format!(
+                "the rollout would take {} Euler steps of {} DOFs, more than the {} state updates \
+                 a rollout may take (a few seconds); use a larger dt or a shorter duration, or a \
+                 larger tau or smaller alpha_z, which need fewer sub-steps",
+                fmt_g(steps),
+                n_dof,
+                fmt_g(MAX_WORK)
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// Euler sub-steps per sample beyond which a rollout is refused: that many mean a `dt` far too
 /// coarse for the DMP's stiffness, and the work would grow without bound.
 pub const MAX_SUBSTEPS: usize = 1000;
@@ -126,15 +152,9 @@ impl Dmp {
                 requirement: "is too small for the duration: the rollout would exceed 20 million values",
             });
         }
-        let cfg = *self.config();
         let substeps = self.substeps(opts.dt)?;
-        if values * substeps as f64 > (MAX_SUBSTEPS * MAX_VALUES) as f64 / 100.0 {
-            return Err(self.too_coarse(
-                opts.dt,
-                substeps as f64,
-                "the rollout would take too long",
-            ));
-        }
+        let cfg = *self.config();
+        check_work((steps + 1.0) * substeps as f64, n_dof, "DMP rollout")?;
         let capacity = (steps as usize + 1) * n_dof;
         let mut out = Trajectory {
             t: Vec::with_capacity(steps as usize + 1),
@@ -180,6 +200,10 @@ impl Dmp {
             let past_end = step as f64 >= steps;
             if past_end && (!opts.until_rest || at_rest) {
                 break;
+            }
+            if past_end {
+                // Going on until rest: the work beyond `steps` was not bounded up front.
+                check_work(((step + 2) * substeps) as f64, n_dof, "DMP rollout")?;
             }
             if step as f64 >= max_steps || out.y.len() >= MAX_VALUES {
                 return Err(Error::Numerical {

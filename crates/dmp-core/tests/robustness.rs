@@ -2,6 +2,7 @@
 //! clear error: never a panic, never NaN or inf (the reliability issue). Against independent
 //! truth where there is one: the closed-form spring for stiff settings the sub-steps rescue.
 
+use dmp_core::dmp::MAX_FIT_ALPHA_X;
 use dmp_core::rollout::stable_step;
 use dmp_core::{Demonstration, Dmp, DmpConfig, Error, RolloutOptions};
 use nalgebra::{DMatrix, DVector};
@@ -24,10 +25,11 @@ fn fit(t: &[f64], y: &DMatrix<f64>, config: DmpConfig) -> dmp_core::Result<Dmp> 
 }
 
 #[test]
-fn a_large_alpha_x_fits_instead_of_panicking() {
-    // Every design-matrix entry of the late rows falls below the cut-off (the issue's example).
+fn a_large_alpha_x_fits_up_to_the_design_matrix_floor_and_is_refused_beyond() {
+    // Below ln 1e8 the late rows keep some entries above the cut-off: finite weights. Beyond it
+    // (the issue's alpha_x = 22.6 reproduced a 0.5 movement as 1587) the fit is refused.
     let (t, y) = demo_data(50, 1.0, 1.0, 1.0);
-    for alpha_x in [17.0, 20.0, 30.0, 45.0] {
+    for alpha_x in [17.0, 18.42] {
         let config = DmpConfig {
             alpha_x,
             ..DmpConfig::default()
@@ -38,6 +40,52 @@ fn a_large_alpha_x_fits_instead_of_panicking() {
             "alpha_x = {alpha_x}"
         );
     }
+    assert!((MAX_FIT_ALPHA_X - 1e8f64.ln()).abs() < 1e-12);
+    for alpha_x in [18.43, 20.0, 22.6, 45.0] {
+        let config = DmpConfig {
+            alpha_x,
+            ..DmpConfig::default()
+        };
+        let err = fit(&t, &y, config).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            matches!(
+                err,
+                Error::InvalidParameter {
+                    name: "alpha_x",
+                    ..
+                }
+            ) && msg.contains("18.42"),
+            "{msg}"
+        );
+    }
+}
+
+#[test]
+fn a_rollout_beyond_its_work_bound_is_refused_at_once() {
+    // alpha_z = 1e4 at tau = 0.01: a thousand sub-steps per 1 ms sample; 100 s of it would take a
+    // minute. Refused before any step, naming the bound.
+    let (t, y) = demo_data(11, 0.01, 50.0, 1.0);
+    let config = DmpConfig {
+        alpha_z: 1e4,
+        beta_z: 2.5e3,
+        ..DmpConfig::default()
+    };
+    let dmp = fit(&t, &y, config).unwrap();
+    let opts = RolloutOptions {
+        duration: Some(100.0),
+        ..RolloutOptions::new(1e-3)
+    };
+    let msg = dmp.rollout(&opts).unwrap_err().to_string();
+    assert!(
+        msg.contains("state updates") && msg.contains("5e7"),
+        "{msg}"
+    );
+    let opts = RolloutOptions {
+        duration: Some(1.0),
+        ..RolloutOptions::new(1e-3)
+    };
+    assert!(dmp.rollout(&opts).is_ok());
 }
 
 #[test]
@@ -134,8 +182,10 @@ proptest! {
     ) {
         let (t, y) = demo_data(40, span, freq, 1.0);
         let config = DmpConfig { alpha_z, beta_z: alpha_z / 4.0, alpha_x, ..DmpConfig::default() };
-        let dmp = fit(&t, &y, config).unwrap();
-        let dmp = dmp.with_tau(tau).unwrap().with_goal(DVector::from_element(1, goal)).unwrap();
+        // Fitted with a fittable phase, then given this one (a fit refuses alpha_x > ln 1e8).
+        let fitted = fit(&t, &y, DmpConfig { alpha_x: alpha_x.min(MAX_FIT_ALPHA_X), ..config }).unwrap();
+        let dmp = Dmp::new(config, fitted.weights().clone(), DVector::from_element(1, goal),
+                           fitted.y0().clone(), tau).unwrap();
         match dmp.rollout(&RolloutOptions { duration: Some(10.0 * tau), ..RolloutOptions::new(dt) }) {
             Ok(tr) => {
                 prop_assert!(tr.y.iter().chain(&tr.yd).chain(&tr.ydd).all(|v| v.is_finite()));
