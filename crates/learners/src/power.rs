@@ -150,11 +150,15 @@ impl Power {
 
     fn update(&mut self) {
         let ranked = self.ranked();
+        // The update is a ratio of return-weighted sums, so dividing every return by one
+        // constant changes nothing but overflow: returns above 1 (a user's R up to 1e308) are
+        // divided by the largest, returns of at most 1 (exp(-(eps/s)^2)) are used as they are.
+        let scale = self.rollouts[ranked[0]].1.max(1.0);
         for p in 0..self.mean.len() {
             let (mut num, mut den) = (0.0, 0.0);
             for &j in ranked.iter().take(self.n_best) {
                 let (theta, r, var) = &self.rollouts[j];
-                let w = 1.0 / var[p];
+                let (w, r) = (1.0 / var[p], r / scale);
                 num += w * r * (theta[p] - self.mean[p]);
                 den += w * r;
             }
@@ -165,6 +169,7 @@ impl Power {
                 let (mut num, mut den) = (0.0, 0.0);
                 for &j in ranked.iter().take(self.window) {
                     let (theta, r, _) = &self.rollouts[j];
+                    let r = r / scale;
                     num += r * (theta[p] - self.mean[p]).powi(2);
                     den += r;
                 }

@@ -233,12 +233,31 @@ fn power_never_asks_a_non_finite_query() {
         e.is_input_error() && e.to_string().contains("overflows"),
         "{e}"
     );
-    // A return of 1e308 overflows the return-weighted mean: the learner stops as diverged.
+}
+
+#[test]
+fn power_is_invariant_to_the_scale_of_finite_returns_up_to_f64_max() {
+    // The update is a ratio of return-weighted sums: returns scaled by 2^1000 (exactly, about
+    // 1e301) give the same means bit for bit, and a return of 1e308 no longer overflows them.
+    let returns = [1.5, 3.0, 0.5, 2.0, 1.25, 4.0];
+    let run = |scale: f64| {
+        let mut p = Power::new(&[0.0; 3], &[0.3], PowerConfig::default()).unwrap();
+        for r in returns {
+            let th = p.ask().unwrap();
+            p.tell(&th, &[r * scale]).unwrap();
+        }
+        (p.mean().to_vec(), p.variance().to_vec(), p.status())
+    };
+    let (plain, scaled) = (run(1.0), run(2f64.powi(1000)));
+    assert_eq!(plain, scaled);
+    assert!(plain.0.iter().all(|m| m.is_finite()));
     let mut p = Power::new(&[0.0; 3], &[0.3], PowerConfig::default()).unwrap();
-    let th = p.ask().unwrap();
-    p.tell(&th, &[1e308]).unwrap();
-    assert_eq!(p.status(), Status::Diverged);
-    assert!(p.ask().unwrap_err().is_state_error());
+    for r in [1e308, f64::MAX, 1e-300] {
+        let th = p.ask().unwrap();
+        p.tell(&th, &[r]).unwrap();
+        assert!(p.mean().iter().chain(p.variance()).all(|v| v.is_finite()));
+        assert_ne!(p.status(), Status::Diverged);
+    }
 }
 
 #[test]
