@@ -264,8 +264,11 @@ def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None) -> 
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from dmprs.reproduce import reproduce
+    from dmprs.reproduce import reproduce, skipped
 
+    # Said before any work, not after minutes of it: what an optional package would add.
+    for note in skipped(quick):
+        click.echo(f"skipped: {note}", err=True)
     # MuJoCo's offscreen renderer (the arm's frame strip) needs a GL backend chosen before MuJoCo
     # is imported; EGL is headless. Without one the report says so in one line and carries on.
     os.environ.setdefault("MUJOCO_GL", "egl")

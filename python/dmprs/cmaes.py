@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs._extras import require
 from dmprs.errors import InvalidInputError, LearnerStateError
 from dmprs.learners import Trial
 
@@ -52,6 +53,7 @@ class CMAES:
                  max_trials: int = 200, lower: ArrayLike | None = None, upper: ArrayLike | None = None,
                  feedback: str = "error", tol: float | None = None, first_x0: bool = False,
                  options: dict[str, Any] | None = None) -> None:
+        require("cma", "dmprs.cmaes.CMAES")
         import cma
 
         x = np.atleast_1d(as_float_array(x0, "x0", (0, 1))).copy()

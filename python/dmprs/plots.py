@@ -6,19 +6,19 @@ from pathlib import Path
 
 import numpy as np
 
+from dmprs._extras import require
 from dmprs.errors import DmprsError
 from dmprs.runlog import RunLog
 
 
 def pyplot():
     """matplotlib.pyplot with the Agg backend, or a DmprsError saying how to install it."""
-    try:
-        import matplotlib
+    require("matplotlib", "plotting")
+    import matplotlib
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise DmprsError("plotting needs matplotlib: pip install 'dmprs[plot]'") from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     return plt
 
 

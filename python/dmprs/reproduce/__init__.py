@@ -24,12 +24,12 @@ from typing import Any
 
 from dmprs.parallel import pmap
 from dmprs.reproduce.figures import write_figures
-from dmprs.reproduce.plan import LearnSpec, plan
+from dmprs.reproduce.plan import LearnSpec, plan, skipped
 from dmprs.reproduce.report import PAPER, markdown, summarize
 from dmprs.reproduce.run import _prepare_pouring, dispatch, run_learning
 
-__all__ = ["PAPER", "LearnSpec", "dispatch", "markdown", "plan", "reproduce", "run_learning", "summarize",
-           "write_figures"]
+__all__ = ["PAPER", "LearnSpec", "dispatch", "markdown", "plan", "reproduce", "run_learning", "skipped",
+           "summarize", "write_figures"]
 
 
 def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "local",
@@ -56,7 +56,8 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
         _prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]))
         results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result)
         report = summarize(results)
-        report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1))
+        report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1),
+                      skipped=skipped(quick))
         (out / "report.json").write_text(json.dumps({"summary": report, "runs": results}, indent=1, default=str))
         figures = write_figures(results, out)  # the arm's frame strip reads the cached calibration
     finally:

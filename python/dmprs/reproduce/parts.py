@@ -7,11 +7,13 @@ runner, and the report appends each part's section in this order.
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from dmprs._extras import available
 
 
 @dataclass(frozen=True)
@@ -25,7 +27,7 @@ class Part:
     needs: str | None = None
 
     def available(self) -> bool:
-        return self.needs is None or importlib.util.find_spec(self.needs) is not None
+        return self.needs is None or available(self.needs)
 
     def _get(self, name: str) -> Callable[..., Any]:
         return getattr(importlib.import_module(self.module), f"{name}_{self.kind.replace('-', '_')}")

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import importlib.util
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
+from dmprs._extras import available, install_hint
 from dmprs.baselines import BaselineSpec
 from dmprs.reproduce.parts import PARTS
 
@@ -26,9 +27,17 @@ class LearnSpec:
         return f"{self.experiment}({opts}) / {self.learner}"
 
 
-def plan(quick: bool = False) -> list[Any]:
-    """The runs of the job; ``quick`` runs every part at small scale. The parts of
-    :data:`dmprs.reproduce.parts.PARTS` whose extra is installed follow the paper's experiments."""
+def _needs(spec: Any) -> str | None:
+    """The optional package a spec of the paper's experiments needs, if any."""
+    if isinstance(spec, BaselineSpec) and spec.method == "cma":
+        return "cma"
+    if isinstance(spec, LearnSpec) and spec.experiment.startswith("arm-"):
+        return "mujoco"
+    return None
+
+
+def _paper_specs(quick: bool) -> list[Any]:
+    """The runs of the paper's experiments and the baselines, whatever is installed."""
     specs: list[Any] = []
     query_learners = ["error"] if quick else ["error", "weighted", "secant", "broyden", "golden-robust", "root", "pg"]
     for part, demos in (("matchbox", "default"), ("matchbox_both_flipped_back", "both_flipped_back")):
@@ -51,13 +60,34 @@ def plan(quick: bool = False) -> list[Any]:
         for seed in seeds:
             specs.append(BaselineSpec("matchbox", "cma", seed, budget, sigmas[len(sigmas) // 2], 0.5,
                                       (("demos", demos),)))
-    if importlib.util.find_spec("mujoco") is not None:
-        # the paper's pouring on the 7-DOF arm (Fig. 9 on the robot; docs/arm.md): golden section
-        # as the paper, the root finder beside it; floor 0.4-0.9 l within 6 trials each
-        for v in [0.6] if quick else [0.4, 0.5, 0.6, 0.7, 0.8, 0.9]:
-            for learner in ["golden"] if quick else ["golden", "root"]:
-                specs.append(LearnSpec("arm_pouring", "arm-pouring", learner, 6, (("bottle_volume", v),)))
+    # the paper's pouring on the 7-DOF arm (Fig. 9 on the robot; docs/arm.md): golden section
+    # as the paper, the root finder beside it; floor 0.4-0.9 l within 6 trials each
+    for v in [0.6] if quick else [0.4, 0.5, 0.6, 0.7, 0.8, 0.9]:
+        for learner in ["golden"] if quick else ["golden", "root"]:
+            specs.append(LearnSpec("arm_pouring", "arm-pouring", learner, 6, (("bottle_volume", v),)))
+    return specs
+
+
+def plan(quick: bool = False) -> list[Any]:
+    """The runs of the job; ``quick`` runs every part at small scale. Runs whose optional package
+    is missing are left out (:func:`skipped` says which); the parts of
+    :data:`dmprs.reproduce.parts.PARTS` whose extra is installed follow the paper's experiments."""
+    specs = [s for s in _paper_specs(quick) if (need := _needs(s)) is None or available(need)]
     for extra in PARTS:
         if extra.available():
             specs += extra.plan(quick)
     return specs
+
+
+def skipped(quick: bool = False) -> list[str]:
+    """One line per group of runs :func:`plan` leaves out, naming the extra that brings them."""
+    missing = Counter(
+        (need, s.method if isinstance(s, BaselineSpec) else s.experiment)
+        for s in _paper_specs(quick) if (need := _needs(s)) is not None and not available(need))
+    notes = [f"{n} run(s) of {what} not run: they need {need} ({install_hint(need)})"
+             for (need, what), n in missing.items()]
+    notes += [f"{part.title}: not run, it needs {part.needs} ({install_hint(part.needs)})"
+              for part in PARTS if part.needs is not None and not part.available()]
+    if not available("matplotlib"):
+        notes.append(f"figures: not drawn, they need matplotlib ({install_hint('matplotlib')})")
+    return notes

@@ -49,9 +49,7 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
                      "paper": PAPER["baselines"]})
     sections = [{"kind": part.kind, "title": part.title, "markdown": part.markdown(results)}
                 for part in PARTS if any(r.get("kind") == part.kind for r in results)]
-    skipped = [f"{part.title}: not run, it needs `{part.needs}` (pip install 'dmprs[robot]')"
-               for part in PARTS if not part.available()]
-    return {"rows": rows, "sections": sections, "skipped": skipped}
+    return {"rows": rows, "sections": sections}
 
 
 def _cell(row: dict[str, Any]) -> str:
