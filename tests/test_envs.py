@@ -158,6 +158,6 @@ def test_a_seeded_episode_is_reproducible_bit_for_bit():
     env = dmprs.envs.make_pouring(**SMALL_POURING)
     runs = []
     for _ in range(2):
-        obs, info = env.reset(seed=np.int64(11))
+        obs, _ = env.reset(seed=np.int64(11))
         runs.append((obs.tobytes(), *env.step(np.array([0.12]))[1:4]))
     assert runs[0] == runs[1]
