@@ -256,3 +256,29 @@ def test_declared_labels_and_absent_nans_pass_conformance_undeclared_ones_fail()
     assert sp.signal_problems({"s": 1.0, "t0": float("nan"), "r": "upright"}) == []
     problems = sp.signal_problems({"s": float("nan"), "t0": float("inf"), "r": 3})
     assert len(problems) == 3 and "not a label" in problems[2]
+
+
+@pytest.mark.parametrize(("outcome", "problem"), [
+    (lambda tr: Outcome("ok", signals={"s": 1.0}, executed=tr), "status is the str 'ok', not a dmprs.adapters.Status"),
+    (lambda tr: Outcome(Status.OK, signals=[("s", 1.0)], executed=tr), "signals is list"),
+    (lambda tr: Outcome(Status.OK, signals={"s": 1.0}, executed=tr.y), "executed is ndarray"),
+    (lambda tr: Outcome(Status.OK, signals={"s": 1.0}, executed=tr, message=None), "message is NoneType"),
+    (lambda tr: Outcome(Status.OK, signals={"s": "1"}, executed=tr), "not a real number"),
+])
+def test_conformance_checks_the_types_of_an_outcome(outcome, problem):
+    class Sloppy(Toy):
+        def _execute(self, trajectory):
+            return outcome(trajectory)
+
+    with pytest.raises(AdapterConformanceError, match=problem):
+        check_adapter(Sloppy(), line())
+
+
+def test_conformance_checks_the_outcome_of_a_rejection_too():
+    class BadRejection(Toy):
+        def execute(self, trajectory, dry_run=False, timeout_s=None):
+            out = super().execute(trajectory, dry_run, timeout_s)
+            return Outcome(out.status.value, message=out.message) if out.status is not Status.OK else out
+
+    with pytest.raises(AdapterConformanceError, match=r"dry run: .*status is the str 'dry_run'"):
+        check_adapter(BadRejection(), line())

@@ -77,6 +77,7 @@ def plot_run(run: str | Path, out: str | Path | None = None) -> Path:
         raise DmprsError(f"{log.trials_path} has no scored trial to plot")
     n_query = len(ok[0].query)
     for t in ok:  # a run in weight space (a baseline's) has no error per query dimension
+        assert t.eps is not None
         if len(t.eps) != n_query:
             raise DmprsError(f"{log.trials_path}, trial {t.index}: the error has {len(t.eps)} value(s) but the "
                              f"query {n_query}; only a run in the query space can be plotted")
