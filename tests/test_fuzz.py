@@ -29,8 +29,7 @@ def test_only_dmprs_errors_and_finite_outputs(name: str) -> None:
     strategy, run = TARGETS[name]
     budget = TEST_EXAMPLES.get(name)  # the slower targets (files, whole runs, MuJoCo): fewer examples
 
-    @FUZZ
-    @settings(max_examples=budget or 200, deadline=None if budget else timedelta(seconds=2))
+    @settings(FUZZ, max_examples=budget or 200, deadline=None if budget else timedelta(seconds=2))
     @given(strategy)
     def check(args: Any) -> None:
         try:
