@@ -282,3 +282,23 @@ def test_conformance_checks_the_outcome_of_a_rejection_too():
 
     with pytest.raises(AdapterConformanceError, match=r"dry run: .*status is the str 'dry_run'"):
         check_adapter(BadRejection(), line())
+
+
+def test_replay_of_a_damaged_recording_is_an_error_outcome_not_a_hang(tmp_path):
+    import json
+    import os
+
+    rec = RecordingAdapter(AnalyticAdapter(), tmp_path)
+    with rec:
+        for _ in range(2):
+            rec.reset(seed=0)
+            rec.execute(bump(1.0))
+    (tmp_path / "trial_0000.npz").unlink()
+    os.mkfifo(tmp_path / "trial_0000.npz")
+    lines = (tmp_path / "recording.jsonl").read_text().splitlines()
+    lines[1] = json.dumps({**json.loads(lines[1]), "file": "../../etc/passwd"})
+    (tmp_path / "recording.jsonl").write_text("\n".join(lines) + "\n")
+    with ReplayAdapter(tmp_path, spec=AnalyticAdapter().spec) as replay:
+        first, second = replay.execute(bump(1.0)), replay.execute(bump(1.0))
+    assert first.status is Status.ERROR and "is a FIFO" in first.message
+    assert second.status is Status.ERROR and "not a recorded trial_NNNN.npz" in second.message
