@@ -476,7 +476,11 @@ _RUN_TEMPLATE: dict[str, Path] = {}
 
 
 def _template_run() -> Path:
-    """A logged 2-trial run of the analytic task that did not converge (made once per process)."""
+    """A logged 2-trial run of the analytic task that did not converge (made once per process;
+    matplotlib imported with it, so that a forked child's plot does not spend seconds on it)."""
+    from dmprs.plots import pyplot
+
+    pyplot()
     if "run" not in _RUN_TEMPLATE:
         from click.testing import CliRunner
 
@@ -780,7 +784,7 @@ def _arm_ops(a: dict[str, Any]) -> list[Any]:
 
 
 #: Targets whose examples take longer than the tally's 5 s default to answer, in s.
-HANG_TIMEOUTS: dict[str, float] = {"MuJoCo arm adapters and setups": 60.0}
+HANG_TIMEOUTS: dict[str, float] = {"MuJoCo arm adapters and setups": 60.0, "run logs: dmprs resume / plot": 30.0}
 #: What to compute once in the tally's parent, before it forks a child per example.
 WARMUPS: dict[str, Callable[[], Any]] = {
     "database directory": lambda: None,
