@@ -193,7 +193,7 @@ def test_the_adapter_passes_the_conformance_suite() -> None:
 def test_bad_setup_options_are_refused_with_reasons() -> None:
     with pytest.raises(ValueError, match="generalizer = 'gp' is invalid"):
         arm_throwing_setup((1.0, 0.0), "gp")
-    with pytest.raises(ValueError, match="tol = -0.01 must be > 0 m"):
+    with pytest.raises(ValueError, match="tol = -0.01 is invalid: must be > 0"):
         ArmThrowing(-0.01)
     with pytest.raises(ValueError, match="target|desired_query"):
         arm_throwing_setup((1.0, float("nan")))
