@@ -1,11 +1,17 @@
 """Counts what the fuzz targets of ``tests/fuzz_targets.py`` do, each example in a forked child so
-that a panic, an abort or a hang is counted instead of ending the run:
+that a panic, an abort or a hang is counted instead of ending the run. From the repository's root,
+with dmprs installed (editable or as a wheel; the source tree is not put on the path, so an
+installed wheel's built extension is the one imported):
 
-    PYTHONPATH=python python3 -m tests.fuzz_tally [examples per target]
+    python3 -m tests.fuzz_tally [examples per target] [target name part ...]
 
-Prints one row per target and a total: inputs tried, clear errors (DmprsError), panics
-(pyo3 PanicException), aborts (the child killed by a signal), leaked exception types (anything
-else), hangs (no answer within 5 s), non-finite outputs.
+e.g. ``python3 -m tests.fuzz_tally 300 "database" "run logs"``; with no name, every target and
+the reliability issue's examples. Prints one row per target and a total: inputs tried, clear
+errors (DmprsError), ok, panics (pyo3 PanicException), aborts (the child killed by a signal),
+leaked exception types (anything else, and refusals whose message does not name the file),
+hangs (no answer within 5 s, or the target's ``HANG_TIMEOUTS``), non-finite outputs, and garbage
+accepted (``AcceptedGarbage``: a write outside the directory given or through a link, a foreign
+file overwritten, files left behind, an action or target taken that must be refused).
 """
 
 from __future__ import annotations
@@ -18,9 +24,10 @@ from typing import Any
 
 from hypothesis import HealthCheck, given, settings
 
-from tests.fuzz_targets import TARGETS, non_finite
+from tests.fuzz_targets import HANG_TIMEOUTS, TARGETS, WARMUPS, AcceptedGarbage, non_finite
 
-COLUMNS = ["inputs", "clear errors", "ok", "panics", "aborts", "leaked types", "hangs", "non-finite"]
+COLUMNS = ["inputs", "clear errors", "ok", "panics", "aborts", "leaked types", "hangs", "non-finite",
+           "garbage accepted"]
 # "non-finite" also counts garbage returned without an error (see the issue examples below).
 HANG_S = 5.0
 
@@ -95,6 +102,8 @@ def _child(name: str, args: Any, conn: Any) -> None:
         conn.send(("non-finite", non_finite(out)) if non_finite(out) else ("ok", ""))
     except DmprsError:
         conn.send(("clear errors", ""))
+    except AcceptedGarbage as exc:
+        conn.send(("garbage accepted", str(exc)[:200]))
     except BaseException as exc:  # noqa: BLE001 - classifying is the point
         kind = "panics" if type(exc).__name__ == "PanicException" else "leaked types"
         conn.send((kind, f"{type(exc).__name__}: {str(exc)[:120]} @ {traceback.format_exc(limit=-1)[-200:]}"))
@@ -104,7 +113,7 @@ def _one(name: str, args: Any) -> tuple[str, str]:
     parent, child = mp.Pipe(duplex=False)
     proc = mp.get_context("fork").Process(target=_child, args=(name, args, child))
     proc.start()
-    if parent.poll(HANG_S):
+    if parent.poll(HANG_TIMEOUTS.get(name, HANG_S)):
         result = parent.recv()
         proc.join()
         return result
@@ -130,31 +139,35 @@ def _tally(name: str, strategy: Any, examples: int, counts: Any, notes: list[str
     tally()
 
 
-def main(examples: int) -> None:
+def main(examples: int, names: list[str]) -> None:
+    chosen = {n: t for n, t in TARGETS.items() if not names or any(p.lower() in n.lower() for p in names)}
     if examples == 0:  # only the issue's examples
-        TARGETS.clear()
+        chosen.clear()
     total: collections.Counter[str] = collections.Counter()
     print("| target | " + " | ".join(COLUMNS) + " |")
     print("|---" * (len(COLUMNS) + 1) + "|")
     notes: list[str] = []
-    for name, (strategy, _) in TARGETS.items():
+    for name, (strategy, _) in chosen.items():
+        if name in WARMUPS:
+            WARMUPS[name]()  # once, in the parent: every forked child inherits it
         counts: collections.Counter[str] = collections.Counter()
 
         _tally(name, strategy, examples, counts, notes)
         total.update(counts)
         print(f"| {name} | " + " | ".join(str(counts[c]) for c in COLUMNS) + " |", flush=True)
-    counts = collections.Counter()
-    for k in range(len(_issue_examples())):
-        kind, detail = _one("issue examples", k)
-        counts["inputs"] += 1
-        counts[kind] += 1
-        if kind not in ("ok", "clear errors"):
-            notes.append(f"issue example {k}: {kind}: {detail}")
-    total.update(counts)
-    print("| the issue's examples | " + " | ".join(str(counts[c]) for c in COLUMNS) + " |", flush=True)
+    if not names:
+        counts = collections.Counter()
+        for k in range(len(_issue_examples())):
+            kind, detail = _one("issue examples", k)
+            counts["inputs"] += 1
+            counts[kind] += 1
+            if kind not in ("ok", "clear errors"):
+                notes.append(f"issue example {k}: {kind}: {detail}")
+        total.update(counts)
+        print("| the issue's examples | " + " | ".join(str(counts[c]) for c in COLUMNS) + " |", flush=True)
     print("| **total** | " + " | ".join(str(total[c]) for c in COLUMNS) + " |")
     print("\n".join(notes), file=sys.stderr)
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 300)
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 300, sys.argv[2:])

@@ -256,3 +256,49 @@ def test_declared_labels_and_absent_nans_pass_conformance_undeclared_ones_fail()
     assert sp.signal_problems({"s": 1.0, "t0": float("nan"), "r": "upright"}) == []
     problems = sp.signal_problems({"s": float("nan"), "t0": float("inf"), "r": 3})
     assert len(problems) == 3 and "not a label" in problems[2]
+
+
+@pytest.mark.parametrize(("outcome", "problem"), [
+    (lambda tr: Outcome("ok", signals={"s": 1.0}, executed=tr), "status is the str 'ok', not a dmprs.adapters.Status"),
+    (lambda tr: Outcome(Status.OK, signals=[("s", 1.0)], executed=tr), "signals is list"),
+    (lambda tr: Outcome(Status.OK, signals={"s": 1.0}, executed=tr.y), "executed is ndarray"),
+    (lambda tr: Outcome(Status.OK, signals={"s": 1.0}, executed=tr, message=None), "message is NoneType"),
+    (lambda tr: Outcome(Status.OK, signals={"s": "1"}, executed=tr), "not a real number"),
+])
+def test_conformance_checks_the_types_of_an_outcome(outcome, problem):
+    class Sloppy(Toy):
+        def _execute(self, trajectory):
+            return outcome(trajectory)
+
+    with pytest.raises(AdapterConformanceError, match=problem):
+        check_adapter(Sloppy(), line())
+
+
+def test_conformance_checks_the_outcome_of_a_rejection_too():
+    class BadRejection(Toy):
+        def execute(self, trajectory, dry_run=False, timeout_s=None):
+            out = super().execute(trajectory, dry_run, timeout_s)
+            return Outcome(out.status.value, message=out.message) if out.status is not Status.OK else out
+
+    with pytest.raises(AdapterConformanceError, match=r"dry run: .*status is the str 'dry_run'"):
+        check_adapter(BadRejection(), line())
+
+
+def test_replay_of_a_damaged_recording_is_an_error_outcome_not_a_hang(tmp_path):
+    import json
+    import os
+
+    rec = RecordingAdapter(AnalyticAdapter(), tmp_path)
+    with rec:
+        for _ in range(2):
+            rec.reset(seed=0)
+            rec.execute(bump(1.0))
+    (tmp_path / "trial_0000.npz").unlink()
+    os.mkfifo(tmp_path / "trial_0000.npz")
+    lines = (tmp_path / "recording.jsonl").read_text().splitlines()
+    lines[1] = json.dumps({**json.loads(lines[1]), "file": "../../etc/passwd"})
+    (tmp_path / "recording.jsonl").write_text("\n".join(lines) + "\n")
+    with ReplayAdapter(tmp_path, spec=AnalyticAdapter().spec) as replay:
+        first, second = replay.execute(bump(1.0)), replay.execute(bump(1.0))
+    assert first.status is Status.ERROR and "is a FIFO" in first.message
+    assert second.status is Status.ERROR and "not a recorded trial_NNNN.npz" in second.message

@@ -185,7 +185,7 @@ def test_a_diverging_simulation_is_an_error_outcome(monkeypatch, tmp_path):
     qvel = liquid.qvel.copy()
     qvel[8] = 1e30
     exploded = arm_scene.SettledLiquid(liquid.n, liquid.seed, liquid.model, liquid.qpos, qvel, liquid.solver)
-    monkeypatch.setattr(arm_scene, "settled_liquid", lambda *a, **k: exploded)
+    monkeypatch.setattr(arm_scene, "settle_liquid", lambda *a, **k: exploded)
     out = execute(adapter, joint_move(0.05, duration=0.3))
     assert out.status is Status.ERROR and "diverged" in out.message
 
@@ -224,3 +224,44 @@ def test_calibration_finds_the_peak_and_is_cached_on_disk(tmp_path, monkeypatch)
 
     monkeypatch.setattr(arm_pouring, "poured_volume", no_pours)
     assert arm_pouring.calibrate_peak_tilt(0.06, **args) == cal
+
+
+def test_timeout_interrupts_the_settling_of_the_liquid_and_the_hold():
+    import time
+
+    polls = []
+    assert arm_scene.settle_liquid(50, 4243, should_stop=lambda: polls.append(1) or len(polls) > 3) is None
+    assert len(polls) == 4  # asked every 10 steps, stopped at once, and nothing cached:
+    assert arm_scene.settle_liquid(50, 4243, should_stop=lambda: False) is not None
+
+    adapter = ArmPouringAdapter(0.1, liquid_seed=4242)  # a liquid no other test settles
+    move = joint_move(0.02, duration=0.15)
+    with adapter:
+        adapter.reset(seed=0)
+        start = time.perf_counter()
+        out = adapter.execute(move, timeout_s=0.1)  # the 0.4 s settle alone is ~0.5 s of MuJoCo
+        assert out.status is Status.TIMEOUT and time.perf_counter() - start < 0.3
+        slow = ArmPouringAdapter(0.1, liquid_seed=4242, hold=5.0)  # then 5 s of holding still
+        with slow:
+            slow.reset(seed=0)
+            start = time.perf_counter()
+            out = slow.execute(move, timeout_s=0.1)
+            assert out.status is Status.TIMEOUT and time.perf_counter() - start < 0.3
+
+
+@pytest.mark.parametrize(("options", "why"), [
+    ({"hold": "x"}, "hold must be a real number"), ({"hold": -1}, "hold = -1 s must be between 0 and 10"),
+    ({"hold": float("nan")}, "hold is nan"), ({"liquid_seed": "0"}, "liquid_seed = '0'"),
+    ({"reseed_liquid": "no"}, "reseed_liquid must be True or False"), ({"bottle_volume": "big"}, "bottle_volume"),
+])
+def test_adapter_options_are_checked_at_the_boundary(options, why):
+    with pytest.raises(ValueError, match=why) as info:
+        ArmPouringAdapter(**options)
+    assert type(info.value).__name__ == "InvalidInputError"
+
+
+def test_the_task_refuses_a_bottle_it_cannot_simulate():
+    with pytest.raises(ValueError, match="at most the simulated bottle's capacity of 1 l"):
+        ArmPouring(0.5).validate_query([1.5])
+    with pytest.raises(ValueError, match="tol must be a real number"):
+        ArmPouring(0.5, tol="x")

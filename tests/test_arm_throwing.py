@@ -11,6 +11,7 @@ import pytest
 
 from dmprs.adapters import Status
 from dmprs.dmp import DMP
+from dmprs.errors import InvalidInputError
 from dmprs.loop import learn
 from dmprs.sim import throw_scene as ts
 from dmprs.tasks.arm_throwing import DEMOS, ArmThrowing, ArmThrowingAdapter, throw_trajectory
@@ -192,7 +193,7 @@ def test_the_adapter_passes_the_conformance_suite() -> None:
 def test_bad_setup_options_are_refused_with_reasons() -> None:
     with pytest.raises(ValueError, match="generalizer = 'gp' is invalid"):
         arm_throwing_setup((1.0, 0.0), "gp")
-    with pytest.raises(ValueError, match="tol = -0.01 must be > 0 m"):
+    with pytest.raises(ValueError, match="tol = -0.01 is invalid: must be > 0"):
         ArmThrowing(-0.01)
     with pytest.raises(ValueError, match="target|desired_query"):
         arm_throwing_setup((1.0, float("nan")))
@@ -200,3 +201,47 @@ def test_bad_setup_options_are_refused_with_reasons() -> None:
         arm_throwing_setup((1.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="unknown learner 'golden'"):
         arm_throwing_setup((1.0, 0.0)).make_learner("golden")
+
+
+def test_timeout_interrupts_the_simulation(adapter: ArmThrowingAdapter) -> None:
+    import time
+
+    throw = throw_trajectory(0.8, 0.0)  # 1.5 s of arm motion and ~0.5 s of flight: ~0.6 s of MuJoCo
+    ts.settled_ball()  # warm (cached per process, as in any run after the first trial)
+    adapter.reset(seed=0)
+    start = time.perf_counter()
+    out = adapter.execute(throw, timeout_s=0.1)
+    assert out.status is Status.TIMEOUT and time.perf_counter() - start < 0.3
+    assert out.executed is not None and out.executed.duration <= throw.duration  # up to the interruption
+    adapter.reset(seed=0)
+    assert adapter.execute(throw).ok  # and the next trial runs whole
+
+
+def test_the_reach_bounds_hold_for_the_fastest_legal_throw() -> None:
+    """The reach is an upper bound from the joint speed limits: a full-strength throw (peak joint
+    speeds at 91-92 % of their limits) lands well inside it and its release speed is below the
+    bound's."""
+    span = ts.reach()
+    r = _run(throw_trajectory(1.0, 0.0))
+    assert r.landed and span.low < float(np.hypot(*r.landing)) < span.high
+    assert np.linalg.norm(r.release_velocity) < span.release_speed
+    assert 0.17 == pytest.approx(span.low) and 5 < span.high < 10
+
+
+@pytest.mark.parametrize("target", [(1e9, 0.0), (0.05, 0.05), (-6.5, 6.5)])
+def test_a_basket_beyond_reach_is_refused_with_the_range(target) -> None:
+    with pytest.raises(InvalidInputError, match=r"beyond the task's reach: a ball lands 0\.17 to 8\.\d+ m"):
+        ArmThrowing().validate_query(target)
+    with pytest.raises(InvalidInputError, match=r"target = .* beyond the task's reach"):
+        arm_throwing_setup(target)
+
+
+@pytest.mark.parametrize(("options", "why"), [
+    ({"tol": "x"}, "tol must be a real number"), ({"tol": -1.0}, "tol = -1 is invalid"),
+    ({"n_basis": [30]}, "n_basis must be an integer"), ({"max_trials": 0}, "max_trials = 0"),
+    ({"generalizer": ["linear"]}, "generalizer = "), ({"noise": "loud"}, "noise is a str"),
+    ({"target": "far"}, "target has dtype"),
+])
+def test_setup_options_are_checked_at_the_boundary(options, why) -> None:
+    with pytest.raises(InvalidInputError, match=why):
+        arm_throwing_setup(**options)

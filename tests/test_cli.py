@@ -1,5 +1,6 @@
 """The dmprs command line, run in-process with click's runner."""
 
+import pytest
 from click.testing import CliRunner
 
 import dmprs
@@ -111,3 +112,119 @@ def test_learn_refuses_a_foreign_non_empty_log_dir(tmp_path):
     out = CliRunner().invoke(main, ["learn", "analytic", "--log-dir", str(tmp_path)])
     _one_line_error(out, "not a dmprs run")
     assert (tmp_path / "thesis.tex").read_text() == "precious"
+
+
+# --- damaged run logs: one line naming the file and the trial or field, never a traceback ---------
+
+def _unfinished_run(tmp_path):
+    """A 2-trial run of the analytic task that did not converge (so resume has work to do)."""
+    out = run("learn", "analytic", "--log-dir", tmp_path / "run", "--max-trials", 2, "--noise", 0.05,
+              "--tol", 1e-9)
+    assert out.exit_code == 1 and "not converged" in out.output, out.output
+    return tmp_path / "run"
+
+
+def _rewrite_trial(run_dir, index, **fields):
+    import json
+
+    log = run_dir / "trials.jsonl"
+    lines = log.read_text().splitlines()
+    record = json.loads(lines[index])
+    for key, value in fields.items():
+        if value is _DROP:
+            del record[key]
+        else:
+            record[key] = value
+    lines[index] = json.dumps(record)
+    log.write_text("\n".join(lines) + "\n")
+
+
+_DROP = object()
+
+
+def _single_line_error(out, *needles):
+    assert out.exit_code == 1 and (out.exception is None or isinstance(out.exception, SystemExit)), out.output
+    lines = out.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Error: "), out.output
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+
+
+@pytest.mark.parametrize(("fields", "why"), [
+    ({"eps": ["NaN"]}, "trial 1: 'eps' is [nan]: not finite"),
+    ({"eps": [1.0, 2.0]}, "trial 1: 'eps' has 2 value(s), expected 1"),
+    ({"query": [1.0, 2.0]}, "trial 1: 'query' has 2 value(s), expected 1"),
+    ({"query": "1.0"}, "trial 1: 'query' is '1.0', expected a list of numbers"),
+    ({"query": _DROP}, "trial 1: 'query' is missing"),
+    ({"trial": 5}, "record 2 is numbered 5, expected 1"),
+    ({"trial": True}, "trial 1: 'trial' is True"),
+    ({"status": "fine"}, "trial 1: 'status' is 'fine'"),
+    ({"success": "yes"}, "trial 1: 'success' is 'yes'"),
+    ({"signals": [1]}, "trial 1: 'signals' is [1]"),
+    ({"message": 3}, "trial 1: 'message' is 3"),
+    ({"file": "../../etc/passwd"}, "trial 1: 'file' is '../../etc/passwd'"),
+])
+def test_resume_and_plot_name_the_file_and_trial_of_a_damaged_record(tmp_path, fields, why):
+    run_dir = _unfinished_run(tmp_path)
+    _rewrite_trial(run_dir, 1, **fields)
+    for command in ("resume", "plot"):
+        _single_line_error(run(command, run_dir), f"{run_dir / 'trials.jsonl'}", why)
+
+
+@pytest.mark.parametrize("damage", ["fifo", "zero", "deep", "huge", "list", "dir"])
+def test_resume_and_plot_refuse_a_damaged_file_at_once(tmp_path, damage):
+    import os
+
+    run_dir = _unfinished_run(tmp_path)
+    for name in ("trials.jsonl", "run.json"):
+        target = run_dir / name
+        saved = target.read_bytes()
+        target.unlink()
+        if damage == "fifo":
+            os.mkfifo(target)
+        elif damage == "zero":
+            target.symlink_to("/dev/zero")
+        elif damage == "dir":
+            target.mkdir()
+        else:
+            target.write_text({"deep": "[" * 10**5 + "]" * 10**5, "huge": '{"trial": 1' + "0" * 400 + "}",
+                               "list": "[1, 2]"}[damage] + "\n")
+        for command in ("resume", "plot"):
+            _single_line_error(run(command, run_dir), str(target))
+        if target.is_dir():
+            target.rmdir()
+        else:
+            target.unlink()
+        target.write_bytes(saved)
+
+
+def test_plot_refuses_damaged_labels_and_desired_query(tmp_path):
+    import json
+
+    run_dir = _unfinished_run(tmp_path)
+    meta = json.loads((run_dir / "run.json").read_text())
+    for field, value in (("query_units", ["l", "m"]), ("desired_query", [[1.0]]), ("query_names", "x")):
+        (run_dir / "run.json").write_text(json.dumps({**meta, field: value}))
+        _single_line_error(run("plot", run_dir), str(run_dir / "run.json"), repr(field))
+
+
+def test_plot_into_a_folder_replaces_a_link_instead_of_following_it(tmp_path):
+    run_dir = _unfinished_run(tmp_path)
+    folder, outside = tmp_path / "figs", tmp_path / "outside"
+    folder.mkdir()
+    outside.mkdir()
+    (folder / "learning.png").symlink_to(outside / "written-through-a-link.png")
+    assert run("plot", run_dir, "--out", folder).exit_code == 0
+    assert list(outside.iterdir()) == [] and not (folder / "learning.png").is_symlink()
+    assert (folder / "learning.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_run_log_never_writes_through_a_link(tmp_path):
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / "trials.jsonl").symlink_to(outside / "trials.jsonl")
+    out = run("learn", "analytic", "--log-dir", run_dir, "--max-trials", 2)
+    _single_line_error(out, str(run_dir), "trials.jsonl")
+    assert list(outside.iterdir()) == [] and sorted(p.name for p in run_dir.iterdir()) == ["trials.jsonl"]

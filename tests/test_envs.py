@@ -99,7 +99,7 @@ def test_bad_actions_and_order(envs):
     _, _, _, _, info = env.step(np.array([100.0]))  # clipped to the demonstrations' span
     assert info["clipped"] and info["query"][0] == env.action_space.high[0]
     fresh = dmprs.envs.make_matchbox()
-    with pytest.raises(InvalidInputError, match="before reset"):
+    with pytest.raises(dmprs.envs.ResetNeeded, match="before reset"):
         fresh.step(np.array([1.5]))
     with pytest.raises(InvalidInputError, match="action = 'torques'"):
         dmprs.envs.make_matchbox(action="torques")
@@ -111,3 +111,53 @@ def test_registration_is_explicit():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "dmprs/MatchboxFlip-v0"
+
+
+@pytest.fixture(scope="module")
+def matchbox():
+    return dmprs.envs.make_matchbox()
+
+
+@pytest.mark.parametrize(("action", "why"), [
+    (np.array([1.5 + 0j]), "dtype complex128"), (1.5 + 0j, "dtype complex128"),
+    (np.array([[1.5]]), r"shape \(1, 1\)"), (np.array(1.5), r"shape \(\)"), ([1.5, 1.6], r"shape \(2,\)"),
+    ("1.5", "not an array of numbers"), (None, "not an array of numbers"), (b"x", "not an array of numbers"),
+    (np.array([1.5], dtype=object), "dtype object"), (np.array([True]), "dtype bool"), ([[1.0], [2.0, 3.0]], "not an array"),
+    ([2**70], "dtype object"), (np.array([np.inf]), "not finite"), ([np.nan], "not finite"),
+])
+def test_an_action_of_the_wrong_type_or_shape_is_refused_naming_the_space(matchbox, action, why):
+    matchbox.reset(seed=0)
+    with pytest.raises(InvalidInputError, match=rf"the action = .*{why}.*; the space is Box\(") as info:
+        matchbox.step(action)
+    assert isinstance(info.value, ValueError)
+    matchbox.step(np.array([1.5]))  # a refused action is no step: the episode is still open
+
+
+def test_a_step_after_the_episode_ended_needs_a_reset(matchbox):
+    matchbox.reset(seed=0)
+    *_, terminated, truncated, _ = matchbox.step(np.array([1.5]))
+    assert terminated and not truncated
+    with pytest.raises(dmprs.envs.ResetNeeded, match="after the episode ended") as info:
+        matchbox.step(np.array([1.5]))
+    assert isinstance(info.value, gym.error.ResetNeeded) and isinstance(info.value, dmprs.DmprsError)
+    matchbox.reset()
+    matchbox.step(np.array([1.5]))
+
+
+@pytest.mark.parametrize(("seed", "options", "why"), [
+    (-1, None, "seed = -1"), (1.5, None, "seed = 1.5"), ("3", None, "seed = '3'"), (True, None, "seed = True"),
+    (0, {"contxt": [1.0]}, "unknown keys"), (0, [1], "options = "), (0, {"context": [np.nan]}, "not finite"),
+    (0, {"context": [0.0]}, "outside the space"), (0, {"context": "a"}, "not an array"),
+])
+def test_bad_seeds_and_options_are_refused(matchbox, seed, options, why):
+    with pytest.raises(InvalidInputError, match=why):
+        matchbox.reset(seed=seed, options=options)
+
+
+def test_a_seeded_episode_is_reproducible_bit_for_bit():
+    env = dmprs.envs.make_pouring(**SMALL_POURING)
+    runs = []
+    for _ in range(2):
+        obs, _ = env.reset(seed=np.int64(11))
+        runs.append((obs.tobytes(), *env.step(np.array([0.12]))[1:4]))
+    assert runs[0] == runs[1]

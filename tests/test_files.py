@@ -14,12 +14,17 @@ import pytest
 
 from dmprs._io import (
     append_jsonl,
+    atomic_temp_target,
+    create_empty,
     directory_lock,
     load_npz,
     parse_json,
     read_bytes,
     read_json,
     read_jsonl,
+    regular_files,
+    remove_if,
+    remove_stale_temp_files,
     truncate_cut_line,
     write_atomic,
 )
@@ -172,3 +177,64 @@ def test_read_jsonl_names_the_line_and_tolerates_only_a_cut_last_line(tmp_path):
     f.write_text('{"a": 1}\n{"b": ')
     records, cut = read_jsonl(f)
     assert records == [{"a": 1}] and "line 2" in cut
+
+
+def test_the_temp_files_of_atomic_writes_are_recognised_by_name(tmp_path, monkeypatch):
+    import tempfile
+
+    names = []
+    real = tempfile.mkstemp
+
+    def spy(*args, **kwargs):
+        fd, name = real(*args, **kwargs)
+        names.append(os.path.basename(name))
+        return fd, name
+
+    monkeypatch.setattr(tempfile, "mkstemp", spy)
+    write_atomic(tmp_path / "manifest.json", b"{}")
+    assert atomic_temp_target(names[0]) == "manifest.json"  # the name write_atomic really used
+    assert atomic_temp_target("manifest.json") is None and atomic_temp_target(".x.tmp") is None
+
+
+def test_regular_files_follow_no_link_and_skip_fifos_and_folders(tmp_path):
+    (tmp_path / "a").write_text("a")
+    (tmp_path / "link").symlink_to(tmp_path / "a")
+    os.mkfifo(tmp_path / "fifo")
+    (tmp_path / "dir").mkdir()
+    assert regular_files(tmp_path) == ["a"]
+
+
+def test_create_empty_never_through_a_link_nor_into_a_fifo(tmp_path):
+    create_empty(tmp_path / "new")
+    (tmp_path / "new").write_text("kept")
+    create_empty(tmp_path / "new")  # an existing file is left as it is
+    assert (tmp_path / "new").read_text() == "kept"
+    (tmp_path / "link").symlink_to(tmp_path / "elsewhere")
+    with pytest.raises(OSError, match="symbolic link"):
+        create_empty(tmp_path / "link")
+    assert not (tmp_path / "elsewhere").exists()
+    os.mkfifo(tmp_path / "fifo")
+    with pytest.raises(OSError, match="FIFO"):
+        create_empty(tmp_path / "fifo")
+
+
+def test_remove_if_removes_only_regular_files_whose_content_is_ours(tmp_path):
+    (tmp_path / "ours").write_bytes(b"ours")
+    (tmp_path / "theirs").write_bytes(b"theirs")
+    (tmp_path / "big").write_bytes(b"ours" * 100)
+    (tmp_path / "link").symlink_to(tmp_path / "ours")
+    os.mkfifo(tmp_path / "fifo")
+    ours = lambda data: data.startswith(b"ours")
+    assert [remove_if(tmp_path / n, ours, limit=10) for n in ("link", "fifo", "theirs", "big", "ours")] == [
+        False, False, False, False, True]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["big", "fifo", "link", "theirs"]
+
+
+def test_stale_temp_files_are_removed_only_for_the_targets_named(tmp_path):
+    for name in (".manifest.json.abcd_123.tmp", ".notes.txt.abcd_123.tmp", ".manifest.json.tmp", "x.tmp"):
+        (tmp_path / name).write_text("")
+    (tmp_path / ".manifest.json.zzzz_999.tmp").symlink_to(tmp_path / "x.tmp")
+    removed = remove_stale_temp_files(tmp_path, lambda target: target == "manifest.json")
+    assert removed == [".manifest.json.abcd_123.tmp"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        ".manifest.json.tmp", ".manifest.json.zzzz_999.tmp", ".notes.txt.abcd_123.tmp", "x.tmp"]

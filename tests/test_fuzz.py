@@ -1,6 +1,7 @@
 """Property-based fuzzing of the public API (the reliability issue): whatever a caller passes,
-only :class:`~dmprs.errors.DmprsError` subclasses escape, nothing non-finite is returned, and every
-call returns within its deadline. The inputs are drawn in ``tests/fuzz_targets.py``."""
+only :class:`~dmprs.errors.DmprsError` subclasses escape, nothing non-finite is returned, nothing
+is written outside the directory given nor garbage accepted (``AcceptedGarbage``), and every call
+returns within its deadline. The inputs are drawn in ``tests/fuzz_targets.py``."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from dmprs.errors import DmprsError
-from tests.fuzz_targets import TARGETS, non_finite
+from tests.fuzz_targets import TARGETS, TEST_EXAMPLES, non_finite
 
 # A derandomized run: the same examples in CI and on every machine, about a minute in all.
 FUZZ = settings(
@@ -26,8 +27,9 @@ FUZZ = settings(
 @pytest.mark.parametrize("name", list(TARGETS))
 def test_only_dmprs_errors_and_finite_outputs(name: str) -> None:
     strategy, run = TARGETS[name]
+    budget = TEST_EXAMPLES.get(name)  # the slower targets (files, whole runs, MuJoCo): fewer examples
 
-    @FUZZ
+    @settings(FUZZ, max_examples=budget or 200, deadline=None if budget else timedelta(seconds=2))
     @given(strategy)
     def check(args: Any) -> None:
         try:

@@ -243,12 +243,16 @@ def test_the_trial_log_is_strict_json_and_reads_back_non_finite_values(tmp_path)
 
     import numpy as np
 
-    from dmprs.runlog import RunLog, TrialRecord
+    from dmprs.runlog import RunLog, RunLogError, TrialRecord
 
     log = RunLog.create(tmp_path, {"task": "t"})
-    record = TrialRecord(0, np.array([np.nan]), "ok", eps=np.array([np.inf]), signals={"s": -np.inf})
+    record = TrialRecord(0, np.array([0.5]), "ok", eps=np.array([0.25]), signals={"s": -np.inf, "n": np.nan})
     log.append(record, None, None)
     line = (tmp_path / "trials.jsonl").read_text()
     json.loads(line, parse_constant=lambda c: pytest.fail(f"bare {c} in the log"))
     back = RunLog(tmp_path).read()[0][0]
-    assert np.isnan(back.query[0]) and back.eps[0] == np.inf and back.signals["s"] == -np.inf
+    assert back.signals["s"] == -np.inf and np.isnan(back.signals["n"]) and back.eps[0] == 0.25
+    # a trial's query and error are finite: the trial runner never logs others, so one is damage
+    log.append(TrialRecord(1, np.array([0.5]), "ok", eps=np.array([np.inf])), None, None)
+    with pytest.raises(RunLogError, match=r"trials\.jsonl, trial 1: 'eps' is \[inf\]: not finite"):
+        RunLog(tmp_path).read()

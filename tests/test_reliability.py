@@ -105,12 +105,18 @@ def test_sizes_that_cannot_be_meant_are_refused_at_once(call, name: str) -> None
 def test_a_long_gp_fit_stops_on_ctrl_c() -> None:
     x = np.linspace(0.0, 10.0, 300)
     gp = dmprs.GaussianProcess(n_restarts=1000)
+    # Python installs its KeyboardInterrupt handler only if SIGINT was not ignored at start, and a
+    # shell ignores SIGINT in background jobs (`&`, nohup): set the handler this test relies on.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
     start = time.perf_counter()
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        gp.fit(x, np.sin(x))
-    timer.join()
+    try:
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            gp.fit(x, np.sin(x))
+    finally:
+        timer.join()
+        signal.signal(signal.SIGINT, previous)
     # A thousand restarts at m = 300 take minutes; the interrupt lands within one restart.
     assert time.perf_counter() - start < 10.0
 

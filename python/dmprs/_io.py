@@ -18,6 +18,7 @@ import contextlib
 import io
 import json
 import os
+import re
 import stat
 import tempfile
 import zipfile
@@ -408,3 +409,59 @@ def truncate_cut_line(path: Path) -> None:
             f.truncate(data.rfind(b"\n") + 1)
             f.flush()
             os.fsync(f.fileno())
+
+
+# --- files a writer owns in its directory -------------------------------------------------------
+
+#: The temporary files of :func:`write_atomic`: ``.<target name>.<8 random characters>.tmp``
+#: (``tempfile.mkstemp``'s names). A crash between the write and the rename leaves one behind.
+_ATOMIC_TEMP = re.compile(r"^\.(?P<target>.+)\.[a-z0-9_]{8}\.tmp$")
+
+
+def atomic_temp_target(name: str) -> str | None:
+    """The file a temporary file of :func:`write_atomic` named ``name`` was to become, or None
+    if ``name`` is not such a name."""
+    m = _ATOMIC_TEMP.match(name)
+    return m["target"] if m else None
+
+
+def regular_files(directory: Path) -> list[str]:
+    """The names of the regular files directly in ``directory`` (a link, a FIFO, a device or a
+    subdirectory is not one: nothing here follows a link), sorted."""
+    with os.scandir(directory) as entries:
+        return sorted(e.name for e in entries if e.is_file(follow_symlinks=False))
+
+
+def create_empty(path: Path) -> None:
+    """Creates ``path`` as an empty regular file if it does not exist; never through a link, never
+    anything but a regular file (see :func:`append_jsonl`)."""
+    os.close(_open_for_writing(Path(path), os.O_WRONLY | os.O_CREAT))
+
+
+def remove_if(path: Path, owned: Callable[[bytes], bool], *, limit: int) -> bool:
+    """Removes the regular file ``path`` (not a link: its entry is checked first) if ``owned``
+    says its contents are ours; a file larger than ``limit`` bytes, or one that cannot be read,
+    is left alone. Returns whether it was removed."""
+    try:
+        if not stat.S_ISREG(os.lstat(path).st_mode):
+            return False
+        if not owned(read_bytes(path, limit=limit)):
+            return False
+        os.unlink(path)
+    except (OSError, DmprsError):
+        return False
+    return True
+
+
+def remove_stale_temp_files(directory: Path, targets: Callable[[str], bool]) -> list[str]:
+    """Removes the temporary files an interrupted :func:`write_atomic` left in ``directory`` for
+    the files ``targets`` accepts (by name); returns their names. Call it only under the
+    directory's exclusive :func:`directory_lock`: a running writer's temporary file would go too."""
+    removed = []
+    for name in regular_files(directory):
+        target = atomic_temp_target(name)
+        if target is not None and targets(target):
+            with contextlib.suppress(OSError):
+                os.unlink(Path(directory) / name)
+                removed.append(name)
+    return removed

@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from dmprs.errors import DmprsError
+from dmprs.errors import DmprsError, InvalidInputError
 
 
 def _progress(console: Any) -> Any:
@@ -122,17 +122,21 @@ def resume_cmd(run: Path, max_trials: int | None) -> None:
         logged_cap = _field(meta, "max_trials", int, where)
         tol = _field(meta, "tol", (int, float), where, None)
         seed = _field(meta, "seed", int, where, 0)
+        # A logged option that does not fit is the log's fault: say which field of which file.
         try:
             setup = experiments.SETUPS[experiment](**setup_options)
-        except TypeError as exc:
-            raise DmprsError(f"{where}: setup_options {setup_options!r} do not fit {experiment!r} ({exc})") from None
+        except (TypeError, ValueError) as exc:
+            raise DmprsError(f"{where}: setup_options {setup_options!r:.80} do not fit {experiment!r} ({exc})") from None
         try:
             learner = setup.make_learner(learner_name, **learner_options)
-        except TypeError as exc:
+        except (TypeError, ValueError) as exc:
             raise DmprsError(f"{where}: learner_options do not fit {learner_name!r} ({exc})") from None
-        result = learn(setup.task, setup.generalizer, setup.desired_query, learner,
-                       max_trials=logged_cap if max_trials is None else max_trials, tol=tol,
-                       log_dir=run, resume=True, seed=seed, on_trial=_progress(console))
+        try:
+            result = learn(setup.task, setup.generalizer, setup.desired_query, learner,
+                           max_trials=logged_cap if max_trials is None else max_trials, tol=tol,
+                           log_dir=run, resume=True, seed=seed, on_trial=_progress(console))
+        except InvalidInputError as exc:
+            raise DmprsError(f"{where}: {exc}") from None
     except DmprsError as exc:
         raise click.ClickException(str(exc)) from None
     _report(console, result)

@@ -15,19 +15,28 @@ demo files are named by their content, so they never overwrite the files of the 
 the manifest is replaced last, atomically, and only then are files no manifest refers to removed.
 A crash at any point leaves either the old or the new database, both loadable.
 
-Loading trusts nothing: the manifest must be a dmprs database of a schema this version can
-read; every demo file must match its sha256 and is read with ``allow_pickle=False``. Any failure
-raises :class:`~dmprs.errors.DatabaseError` naming the file.
+A save refuses a directory that holds files dmprs did not write (a non-empty directory without a
+dmprs manifest, or with a ``manifest.json`` that is not one), before it writes anything there. It
+writes no file through a link. The next save removes what an interrupted one left behind, but only
+files that are provably dmprs's own: demo files no manifest lists whose content matches the
+sha256 in their name, and the temporary files of its atomic writes.
+
+Loading trusts nothing and writes nothing: the manifest must be a regular file holding a dmprs
+database of a schema this version can read; every demo file must be a regular file of bounded
+size, match its sha256, and hold float64 arrays (npy headers are checked before any data is
+read; nothing is unpickled). Any failure raises :class:`~dmprs.errors.DatabaseError` naming the
+file.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import io
 import json
 import os
 import re
-import zipfile
+import stat
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,7 +46,20 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_count, as_query
-from dmprs._io import LOCK_FILE, directory_lock, write_atomic
+from dmprs._io import (
+    JSON_MAX_BYTES,
+    LOCK_FILE,
+    MiB,
+    atomic_temp_target,
+    directory_lock,
+    load_npz,
+    read_bytes,
+    read_json,
+    regular_files,
+    remove_if,
+    remove_stale_temp_files,
+    write_atomic,
+)
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -55,6 +77,10 @@ _POSE_KEYS = {
     "query", "t", "position", "quaternion", "velocity", "angular_velocity", "acceleration",
     "angular_acceleration",
 }
+#: The largest manifest and demo file a database may hold (a link to a device, or a huge file,
+#: is refused before anything is read).
+MANIFEST_MAX_BYTES = JSON_MAX_BYTES
+DEMO_MAX_BYTES = 1024 * MiB
 #: what :meth:`Database.add` can do with a query already present
 DUPLICATE_POLICIES = ("refuse", "replace", "keep")
 
@@ -235,36 +261,29 @@ class Database:
     # --- persistence ------------------------------------------------------------------------
     def save(self, path: str | os.PathLike[str]) -> None:
         """Writes the database to the directory ``path`` (created if missing) atomically; see the
-        module docs. Refuses a non-empty directory that is not a dmprs database."""
+        module docs. Refuses a non-empty directory that is not a dmprs database, leaving nothing
+        in it."""
         root = Path(path)
         try:
             root.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise DatabaseError(f"cannot create the database directory {root}: {exc}") from None
         try:
+            _refuse_foreign(root)  # before the lock file: a refused save writes nothing
             with directory_lock(root, shared=False):
+                _refuse_foreign(root)  # again: another process may have written meanwhile
                 self._save_locked(root)
         except OSError as exc:
             raise DatabaseError(f"{root}: cannot save the database ({exc.strerror or exc})") from None
 
     def _save_locked(self, root: Path) -> None:
-        existing = [p.name for p in root.iterdir() if p.name != LOCK_FILE]
-        if existing and _MANIFEST not in existing and not all(_DEMO_FILE.match(n) for n in existing):
-            raise DatabaseError(
-                f"{root} is a non-empty directory without a {_MANIFEST}; refusing to write a "
-                "database into it"
-            )
-        # Only files the previous manifest listed are ours to delete later: a file that merely
-        # looks like a demo file may be the user's.
-        previous = _manifest_files(root / _MANIFEST)
         entries = []
         for demo in self._demos:
             data = _npz_bytes(demo)
             digest = hashlib.sha256(data).hexdigest()
             name = f"demo_{digest[:16]}.npz"
-            target = root / name
-            if not (target.is_file() and _sha256_file(target) == digest):
-                _atomic_write(target, data)
+            if not _is_own_demo(root / name, digest):
+                _atomic_write(root / name, data)
             entries.append({"file": name, "sha256": digest, "label": demo.label, "metadata": dict(demo.metadata)})
         manifest = {
             "format": _FORMAT,
@@ -275,23 +294,20 @@ class Database:
         }
         text = json.dumps(manifest, indent=2, allow_nan=False) + "\n"
         _atomic_write(root / _MANIFEST, text.encode("utf-8"))
-        # The new manifest is durable: files only the old one referred to can go.
+        # The new manifest is durable: the demo files it does not list can go, and so can the
+        # temporary files of an interrupted earlier save (the lock says no save is running). Only
+        # files that are provably ours: content-named demo files whose content matches their name
+        # (a file merely named like one may be the user's), and our own temporary files.
         keep = {e["file"] for e in entries}
-        for name in previous - keep:
-            try:
-                (root / name).unlink()
-            except OSError:
-                pass  # a stale file is harmless: no manifest refers to it
-        # Temporary files of an interrupted earlier save (the lock says no save is running).
-        for p in root.glob(".*.tmp"):
-            try:
-                p.unlink()
-            except OSError:
-                pass
+        for name in regular_files(root):
+            if name not in keep and _DEMO_FILE.match(name):
+                remove_if(root / name, functools.partial(_named_by_content, name), limit=DEMO_MAX_BYTES)
+        remove_stale_temp_files(root, _is_own_file_name)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Database:
-        """Reads a database written by :meth:`save`, verifying every file."""
+        """Reads a database written by :meth:`save`, verifying every file. A read writes
+        nothing (not even the lock file)."""
         root = Path(path)
         if not root.is_dir():
             raise DatabaseError(f"{root / _MANIFEST}: cannot read the manifest (no directory {root})")
@@ -301,21 +317,10 @@ class Database:
     @classmethod
     def _load_locked(cls, root: Path) -> Database:
         mpath = root / _MANIFEST
-        try:
-            raw = mpath.read_bytes()
-        except OSError as exc:
-            raise DatabaseError(f"{mpath}: cannot read the manifest ({exc.strerror or exc})") from None
-        try:
-            manifest = json.loads(raw.decode("utf-8"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise DatabaseError(f"{mpath}: not valid JSON, the file is corrupted or truncated ({exc})") from None
-        except RecursionError:
-            raise DatabaseError(f"{mpath}: nested too deeply to be a dmprs manifest") from None
-        if not isinstance(manifest, dict) or manifest.get("format") != _FORMAT:
-            raise DatabaseError(f"{mpath}: not a dmprs database manifest (no \"format\": \"{_FORMAT}\")")
+        manifest = _read_manifest(mpath)
         version = manifest.get("schema_version")
         if not isinstance(version, int) or isinstance(version, bool) or version < 1:
-            raise DatabaseError(f"{mpath}: invalid schema_version {version!r}")
+            raise DatabaseError(f"{mpath}: invalid schema_version {version!r:.60}")
         if version > SCHEMA_VERSION:
             raise DatabaseError(
                 f"{mpath}: schema version {version} was written by a newer dmprs; this version "
@@ -351,18 +356,68 @@ def _npz_bytes(demo: Demo) -> bytes:
     return buf.getvalue()
 
 
-def _manifest_files(mpath: Path) -> set[str]:
-    """The demo files an existing manifest lists (none if it is missing or unreadable)."""
+def _read_manifest(mpath: Path) -> dict[str, Any]:
+    """The manifest as a dict with this module's format tag, or a DatabaseError naming it."""
+    if not os.path.lexists(mpath):
+        raise DatabaseError(f"{mpath}: cannot read the manifest (no such file)")
+    manifest = read_json(mpath, what="manifest", error=DatabaseError, limit=MANIFEST_MAX_BYTES)
+    if not isinstance(manifest, dict) or manifest.get("format") != _FORMAT:
+        raise DatabaseError(f"{mpath}: not a dmprs database manifest (no \"format\": \"{_FORMAT}\")")
+    return manifest
+
+
+def _is_own_file_name(name: str) -> bool:
+    return name == _MANIFEST or bool(_DEMO_FILE.match(name))
+
+
+def _is_own_temp(name: str) -> bool:
+    """Whether ``name`` is a temporary file of this module's atomic writes."""
+    target = atomic_temp_target(name)
+    return target is not None and _is_own_file_name(target)
+
+
+def _named_by_content(name: str, data: bytes) -> bool:
+    """Whether ``data`` is the content the demo file name ``name`` was made from."""
+    return hashlib.sha256(data).hexdigest()[:16] == name[5:21]
+
+
+def _is_own_demo(path: Path, digest: str | None = None) -> bool:
+    """Whether ``path`` is a regular file (not a link) holding the content of ``digest``, or (without
+    one) the content its name was made from."""
     try:
-        entries = json.loads(mpath.read_text(encoding="utf-8")).get("demos", [])
-        return {e["file"] for e in entries if isinstance(e, dict) and isinstance(e.get("file"), str)
-                and _DEMO_FILE.match(e["file"])}
-    except (OSError, ValueError, AttributeError, TypeError, RecursionError):
-        return set()
+        if not stat.S_ISREG(os.lstat(path).st_mode):
+            return False
+        data = read_bytes(path, limit=DEMO_MAX_BYTES, error=DatabaseError)
+    except (OSError, DatabaseError):
+        return False
+    return hashlib.sha256(data).hexdigest() == digest if digest else _named_by_content(path.name, data)
 
 
-def _sha256_file(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+def _refuse_foreign(root: Path) -> None:
+    """Raises unless ``root`` may hold this database: empty, a dmprs database (its manifest says
+    so), or only the files of an interrupted first save (content-named demo files whose content
+    matches their name, our temporary files). Anything else is somebody else's: never overwritten."""
+    names = [e.name for e in os.scandir(root) if e.name != LOCK_FILE]
+    if not names:
+        return
+    if _MANIFEST in names:
+        try:
+            _read_manifest(root / _MANIFEST)
+        except DatabaseError as exc:
+            raise DatabaseError(
+                f"{root} holds a {_MANIFEST} that is not a dmprs database's ({exc}); refusing to write "
+                "a database into it"
+            ) from None
+        return
+    regular = set(regular_files(root))
+    foreign = [n for n in sorted(names) if not (n in regular and (
+        _is_own_temp(n) or (_DEMO_FILE.match(n) and _is_own_demo(root / n))))]
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (", ..." if len(foreign) > 3 else "")
+        raise DatabaseError(
+            f"{root} is a non-empty directory without a {_MANIFEST} (it holds {shown}); refusing to write "
+            "a database into it"
+        )
 
 
 def _atomic_write(target: Path, data: bytes) -> None:
@@ -380,34 +435,27 @@ def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Dem
     if not _DEMO_FILE.match(name):
         raise DatabaseError(f"{mpath}: demos[{k}] names {name!r}, which is not a demo file of a dmprs database")
     fpath = root / name
-    try:
-        data = fpath.read_bytes()
-    except OSError as exc:
-        raise DatabaseError(f"{fpath}: cannot read demonstration {k} ({exc.strerror or exc})") from None
+    data = read_bytes(fpath, limit=DEMO_MAX_BYTES, what=f"file of demonstration {k}", error=DatabaseError)
     digest = hashlib.sha256(data).hexdigest()
     if digest != entry["sha256"]:
         raise DatabaseError(
             f"{fpath}: checksum mismatch (sha256 {digest[:16]}..., the manifest expects "
-            f"{entry['sha256'][:16]}...): the file is corrupted, truncated or was replaced"
+            f"{entry['sha256'][:16]:.16}...): the file is corrupted, truncated or was replaced"
         )
     try:
-        with np.load(io.BytesIO(data), allow_pickle=False) as npz:
-            keys = set(npz.files)
-            pose = "position" in keys
-            missing = ({"query", "t", "position", "quaternion"} if pose else {"query", "t", "y"}) - keys
-            extra = keys - (_POSE_KEYS if pose else _ARRAY_KEYS)
-            if missing or extra:
-                raise ValueError(
-                    f"arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd, or query, "
-                    "t, position, quaternion and optionally their derivatives"
-                )
-            arrays = {key: npz[key] for key in keys}
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
-        raise DatabaseError(f"{fpath}: not a readable demonstration file ({exc})") from None
-    except MemoryError:  # a crafted header claiming far more elements than the file holds
+        arrays = load_npz(data, str(fpath), limit=DEMO_MAX_BYTES, error=DatabaseError, kinds="fiu")
+    except DatabaseError as exc:
+        why = str(exc).removeprefix(f"{fpath}: ")
+        raise DatabaseError(f"{fpath}: not a readable demonstration file ({why})") from None
+    keys = set(arrays)
+    pose = "position" in keys
+    missing = ({"query", "t", "position", "quaternion"} if pose else {"query", "t", "y"}) - keys
+    extra = keys - (_POSE_KEYS if pose else _ARRAY_KEYS)
+    if missing or extra:
         raise DatabaseError(
-            f"{fpath}: an array header claims more data than fits in memory ({len(data)} bytes on disk)"
-        ) from None
+            f"{fpath}: arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd, or query, "
+            "t, position, quaternion and optionally their derivatives"
+        )
     for key, arr in arrays.items():
         if arr.dtype != np.float64:
             raise DatabaseError(f"{fpath}: array {key!r} has dtype {arr.dtype}, expected float64")

@@ -11,6 +11,7 @@ A run can be resumed from its log; a last line cut mid-write is reported and dro
 from __future__ import annotations
 
 import json
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,15 +20,19 @@ from typing import Any
 import numpy as np
 
 from dmprs._io import (
+    MiB,
     append_jsonl,
+    create_empty,
     float_from_json,
+    read_json,
     read_jsonl,
+    regular_files,
     strict_json,
     truncate_cut_line,
     write_atomic,
     write_npz_atomic,
 )
-from dmprs.adapters import Outcome
+from dmprs.adapters import Outcome, Status
 from dmprs.errors import RunLogError
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -59,16 +64,57 @@ class TrialRecord:
         }
 
     @classmethod
-    def from_json(cls, d: dict[str, Any]) -> TrialRecord:
-        return cls(
-            index=int(d["trial"]),
-            query=_floats(d["query"]),
-            status=str(d["status"]),
-            eps=None if d.get("eps") is None else _floats(d["eps"]),
-            success=bool(d.get("success", False)),
-            signals={k: float_from_json(v) for k, v in dict(d.get("signals", {})).items()},
-            message=str(d.get("message", "")),
-        )
+    def from_json(cls, d: dict[str, Any], where: str = "trial record", n_query: int | None = None,
+                  n_eps: int | None = None) -> TrialRecord:
+        """The record a log line holds, every field checked (types, finite numbers, an error for
+        every ok trial); a bad field raises :class:`RunLogError` naming ``where`` and the field.
+        ``n_query``, ``n_eps``: the lengths the query and the error must have (any when None)."""
+        index = d.get("trial")
+        if type(index) is not int or index < 0:
+            raise RunLogError(f"{where}: 'trial' is {_shown(index)}, expected a trial number (an integer >= 0)")
+        status = d.get("status")
+        if status not in _STATUSES:
+            raise RunLogError(f"{where}: 'status' is {_shown(status)}, expected one of {', '.join(_STATUSES)}")
+        query = _numbers(d.get("query", _MISSING), "query", where, n_query)
+        eps = d.get("eps")
+        if eps is not None or status == Status.OK.value:
+            eps = _numbers(eps, "eps", where, n_eps)
+        success = d.get("success", False)
+        message = d.get("message", "")
+        signals = d.get("signals", {})
+        if type(success) is not bool:
+            raise RunLogError(f"{where}: 'success' is {_shown(success)}, expected true or false")
+        if not isinstance(message, str):
+            raise RunLogError(f"{where}: 'message' is {_shown(message)}, expected a string")
+        if not isinstance(signals, dict) or not all(
+                isinstance(v, (str, int, float)) or v is None for v in signals.values()):
+            raise RunLogError(f"{where}: 'signals' is {_shown(signals)}, expected an object of numbers and strings")
+        return cls(index=index, query=query, status=status, eps=eps, success=success,
+                   signals={k: float_from_json(v) for k, v in signals.items()}, message=message)
+
+
+_MISSING = object()
+_STATUSES = tuple(s.value for s in Status)
+
+
+def _shown(value: Any) -> str:
+    return "missing" if value is _MISSING else f"{value!r:.60}"
+
+
+def _numbers(value: Any, name: str, where: str, n: int | None) -> np.ndarray:
+    """A logged list of ``n`` finite numbers, or a RunLogError naming the field (NaN and
+    infinities are logged as strings, see ``_io.strict_json``: they are read, then refused)."""
+    if isinstance(value, list):
+        value = [float_from_json(v) for v in value]
+    if not isinstance(value, list) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        raise RunLogError(f"{where}: {name!r} is {_shown(value)}, expected a list of numbers")
+    arr = np.asarray(value, dtype=float)
+    if n is not None and arr.shape != (n,):
+        raise RunLogError(f"{where}: {name!r} has {arr.size} value(s), expected {n} (one per query dimension)")
+    if not np.isfinite(arr).all():
+        raise RunLogError(f"{where}: {name!r} is {value!r:.60}: not finite")
+    return arr
 
 
 class RunLog:
@@ -84,10 +130,14 @@ class RunLog:
         log = cls(directory)
         try:
             log.directory.mkdir(parents=True, exist_ok=True)
-            if log.trials_path.exists() and log.trials_path.stat().st_size > 0:
+            if log.trials_path.is_file() and log.trials_path.stat().st_size > 0:
                 raise RunLogError(
                     f"{log.trials_path} already holds trials: resume the run or choose another log_dir")
-            foreign = sorted(p.name for p in log.directory.iterdir() if not _RUN_FILE.match(p.name))
+            # Anything but the regular files of a run (a link, a FIFO, a folder) is not ours: a run
+            # never writes through or into one.
+            regular = set(regular_files(log.directory))
+            foreign = sorted(p.name for p in log.directory.iterdir()
+                             if not (_RUN_FILE.match(p.name) and p.name in regular))
             if foreign:
                 raise RunLogError(
                     f"{log.directory} is a non-empty directory that is not a dmprs run (it holds "
@@ -99,39 +149,54 @@ class RunLog:
             data = {"schema_version": LOG_SCHEMA_VERSION, **meta}
             text = json.dumps(strict_json(data), indent=2, default=_jsonable, allow_nan=False)
             write_atomic(log.meta_path, text.encode())
-            log.trials_path.touch()
+            create_empty(log.trials_path)
         except OSError as exc:
             raise RunLogError(f"cannot write the run log in {log.directory}: {exc}") from exc
         return log
 
     def meta(self) -> dict[str, Any]:
+        """The run description (``run.json``), checked to be one."""
         try:
-            data = json.loads(self.meta_path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise RunLogError(f"{self.meta_path} is not a readable run description: {exc}") from None
+            data = read_json(self.meta_path, what="run description", error=RunLogError, limit=META_MAX_BYTES)
+        except RunLogError as exc:
+            why = str(exc).removeprefix(f"{self.meta_path}: ")
+            raise RunLogError(f"{self.meta_path} is not a readable run description: {why}") from None
         if not isinstance(data, dict) or "schema_version" not in data:
-            raise RunLogError(f"{self.meta_path} is not a dmprs run description")
+            raise RunLogError(f"{self.meta_path}: not a dmprs run description (a JSON object with a schema_version)")
         version = data["schema_version"]
         if type(version) is not int or version < 1:
-            raise RunLogError(f"{self.meta_path}: schema_version is {version!r}, expected a positive integer")
-        if data["schema_version"] > LOG_SCHEMA_VERSION:
+            raise RunLogError(f"{self.meta_path}: schema_version is {version!r:.60}, expected a positive integer")
+        if version > LOG_SCHEMA_VERSION:
             raise RunLogError(
-                f"{self.meta_path} has schema version {data['schema_version']}; this dmprs reads "
+                f"{self.meta_path} has schema version {version}; this dmprs reads "
                 f"up to {LOG_SCHEMA_VERSION}: upgrade dmprs")
+        names = data.get("query_names")
+        if names is not None and not (isinstance(names, list) and names and all(isinstance(n, str) for n in names)):
+            raise RunLogError(f"{self.meta_path}: 'query_names' is {names!r:.60}, expected a list of strings")
         return data
 
     def read(self) -> tuple[list[TrialRecord], str | None]:
-        """The complete trials, and a note if the last line was cut mid-write."""
+        """The complete trials, and a note if the last line was cut mid-write. Every record is
+        checked (see :meth:`TrialRecord.from_json`); queries and errors must have one value per
+        query dimension of ``run.json`` when it names them (a learning run), else as many as the
+        first trial's (a baseline's weights and error)."""
         if not self.directory.is_dir():
             raise RunLogError(f"{self.directory} is not a run directory")
-        try:
-            raw, cut = read_jsonl(self.trials_path)
-            trials = [TrialRecord.from_json(r) for r in raw]
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise RunLogError(f"{self.trials_path} cannot be read: {exc}") from None
-        for i, tr in enumerate(trials):
-            if tr.index != i:
-                raise RunLogError(f"{self.trials_path}: record {i + 1} is numbered {tr.index}")
+        names = self.meta().get("query_names") if os.path.lexists(self.meta_path) else None
+        n_query = n_eps = None if names is None else len(names)
+        raw, cut = read_jsonl(self.trials_path, what="trial log", error=RunLogError)
+        trials = []
+        for i, r in enumerate(raw):
+            record = TrialRecord.from_json(r, f"{self.trials_path}, trial {i}", n_query, n_eps)
+            if record.index != i:
+                raise RunLogError(f"{self.trials_path}: record {i + 1} is numbered {record.index}, expected {i} "
+                                  "(a trial is missing or repeated)")
+            name = r.get("file")
+            if name is not None and not (isinstance(name, str) and _TRIAL_FILE.match(name)):
+                raise RunLogError(f"{self.trials_path}, trial {i}: 'file' is {name!r:.60}, expected trial_NNNN.npz")
+            n_query = len(record.query)
+            n_eps = n_eps if record.eps is None else len(record.eps)
+            trials.append(record)
         self._check_trial_files(raw)
         return trials, cut
 
@@ -157,7 +222,10 @@ class RunLog:
 
     def repair(self) -> None:
         """Drops a cut last line before appending to a resumed run."""
-        truncate_cut_line(self.trials_path)
+        try:
+            truncate_cut_line(self.trials_path)
+        except OSError as exc:
+            raise RunLogError(f"cannot repair {self.trials_path}: {exc}") from None
 
     def append(
         self, record: TrialRecord, command: Trajectory | CartesianTrajectory | None, outcome: Outcome | None
@@ -181,12 +249,9 @@ class RunLog:
 
 # Files a run directory may hold (and the temporary files of their atomic writes).
 _RUN_FILE = re.compile(r"^(run\.json|trials\.jsonl|trial_\d{4,}\.npz|learning\.png|\..*\.tmp)$")
-
-
-def _floats(values: Any) -> np.ndarray:
-    """A logged list of numbers, NaN and infinities written as strings (see ``_io.strict_json``)."""
-    items = values if isinstance(values, list) else [values]
-    return np.asarray([float_from_json(v) for v in items], dtype=float)
+_TRIAL_FILE = re.compile(r"^trial_\d{4,}\.npz$")
+#: run.json is a few hundred bytes; anything near this is not one
+META_MAX_BYTES = 16 * MiB
 
 
 def _jsonable(value: Any) -> Any:

@@ -3,14 +3,14 @@ scikit-learn's ``check_estimator`` and Gymnasium's ``check_env``."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from dmprs.adapters.base import Adapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
 from dmprs.errors import AdapterConformanceError
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 
 def check_adapter(
@@ -22,7 +22,9 @@ def check_adapter(
 ) -> list[str]:
     """Checks that ``adapter`` follows the protocol; raises listing every failure.
 
-    ``valid_trajectory`` must be one the adapter accepts. With ``execute=False`` nothing moves
+    ``valid_trajectory`` must be one the adapter accepts. Every outcome is checked for its types:
+    a :class:`~dmprs.adapters.Status` (not a string that equals one), a str message, a
+    trajectory or None as executed, and a mapping of declared signals of their declared types. With ``execute=False`` nothing moves
     (for a first check on real hardware): only the spec, check, dry run, stop and connection
     handling are exercised. With ``deterministic=True`` two executions after ``reset(seed=0)``
     must give identical signals (simulations); set it False for real robots.
@@ -75,8 +77,23 @@ def check_adapter(
         return np.hstack([y, y[:, :1]])
 
     def outcome_shape(o: Outcome, allowed: set[Status]) -> None:
+        """The outcome's types, whatever its status: a learner and a run log rely on each."""
         assert isinstance(o, Outcome), f"execute() returned {type(o).__name__}, not Outcome"
+        # A plain string equals a Status (Status is a str enum) but is not one: `outcome.ok` is
+        # False for it, so every trial would be logged as an error.
+        assert isinstance(o.status, Status), (
+            f"status is the {type(o.status).__name__} {o.status!r:.40}, not a dmprs.adapters.Status")
         assert o.status in allowed, f"status {o.status} not in {sorted(s.value for s in allowed)}"
+        assert isinstance(o.message, str), f"message is {type(o.message).__name__} {o.message!r:.40}, not a str"
+        assert o.executed is None or isinstance(o.executed, (Trajectory, CartesianTrajectory)) or (
+            hasattr(o.executed, "t") and hasattr(o.executed, "pose")), (
+            f"executed is {type(o.executed).__name__}, not a trajectory or None")
+        assert isinstance(o.signals, Mapping), (
+            f"signals is {type(o.signals).__name__}, not a mapping of signal names to values")
+        if o.status is not Status.OK:  # a failed trial may lack signals, but not invent or garble them
+            assert isinstance(spec, AdapterSpec)
+            problems = [p for p in spec.signal_problems(o.signals) if not p.endswith(" is missing")]
+            assert not problems, "; ".join(problems)
 
     def lifecycle() -> None:
         adapter.connect()

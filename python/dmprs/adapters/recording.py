@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from dmprs._io import append_jsonl, read_jsonl, write_npz_atomic
+from dmprs._io import MiB, append_jsonl, load_npz, read_jsonl, write_npz_atomic
 from dmprs.adapters.base import Adapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
-from dmprs.errors import AdapterError, InvalidInputError
+from dmprs.errors import AdapterError, DmprsError, InvalidInputError
 from dmprs.trajectory import AnyTrajectory, CartesianTrajectory, Trajectory
 
 _INDEX = "recording.jsonl"
+_TRIAL_FILE = re.compile(r"^trial_\d{4,}\.npz$")
+#: a recorded trial's arrays: a few MB even for long trajectories
+_TRIAL_MAX_BYTES = 1024 * MiB
 
 
 def _trajectory_arrays(prefix: str, tr: AnyTrajectory | None) -> dict[str, np.ndarray]:
@@ -148,12 +152,18 @@ class ReplayAdapter(Adapter):
             return Outcome(Status.ERROR, message=f"the recording has only {len(self._records)} trials")
         record = self._records[self._next]
         self._next += 1
-        path = self.directory / record["file"]
-        with np.load(path, allow_pickle=False) as arrays:
+        name = record.get("file")
+        if not (isinstance(name, str) and _TRIAL_FILE.match(name)):
+            return Outcome(Status.ERROR, message=f"{self.directory / _INDEX}: trial {self._next - 1} names the file "
+                                                 f"{name!r:.60}, not a recorded trial_NNNN.npz")
+        path = self.directory / name
+        try:  # a regular file of bounded size, headers read before data (labels are strings)
+            arrays = load_npz(path, str(path), limit=_TRIAL_MAX_BYTES, kinds="fiubU")
             command = _trajectory_from(arrays, "cmd_")
             executed = _trajectory_from(arrays, "exe_")
-            signals = {k[4:]: (arrays[k].item() if arrays[k].ndim == 0 else arrays[k])
-                       for k in arrays.files if k.startswith("sig_")}
+        except DmprsError as exc:
+            return Outcome(Status.ERROR, message=f"cannot replay {path}: {exc}")
+        signals = {k[4:]: (v.item() if v.ndim == 0 else v) for k, v in arrays.items() if k.startswith("sig_")}
         if self.strict and command is not None:
             recorded, asked = _samples(command), _samples(trajectory)
             same = recorded.shape == asked.shape and np.allclose(

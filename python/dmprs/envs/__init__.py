@@ -30,7 +30,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from dmprs.envs.env import TaskEnv
+from dmprs.envs.env import ResetNeeded, TaskEnv
 from dmprs.envs.scenarios import (
     Scenario,
     arm_pouring_scenario,
@@ -39,7 +39,7 @@ from dmprs.envs.scenarios import (
     throwing_scenario,
 )
 
-__all__ = ["ENV_IDS", "Scenario", "TaskEnv", "arm_pouring_scenario", "make_arm_pouring", "make_matchbox",
+__all__ = ["ENV_IDS", "ResetNeeded", "Scenario", "TaskEnv", "arm_pouring_scenario", "make_arm_pouring", "make_matchbox",
            "make_pouring", "make_throwing", "matchbox_scenario", "pouring_scenario", "register_envs",
            "throwing_scenario"]
 

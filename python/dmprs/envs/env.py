@@ -14,8 +14,17 @@ step. Two action spaces:
 The reward is ``-|eps|`` in the task's outcome units (eps as the task defines it, method.md
 §5.3), or the scenario's ``failure_reward`` when the trial gives no measurement; ``info`` has the
 status, eps, success, query and the scalar outcome signals. Finite actions outside the space are
-clipped to it (as Gymnasium's continuous-control environments do; ``info["clipped"]`` says so);
-a non-finite action raises :class:`~dmprs.errors.InvalidInputError`.
+clipped to it (as Gymnasium's continuous-control environments do; ``info["clipped"]`` says so).
+An action that is not a real array of the space's shape (a complex, boolean, string or object
+array, a 2-D array, None, a string), or is not finite, raises
+:class:`~dmprs.errors.InvalidInputError` naming the action and the space: it is never reshaped
+or cast into one.
+
+An episode is one step: ``step`` before ``reset``, or again after the episode ended, raises
+:class:`ResetNeeded`, which is both a :class:`~dmprs.errors.DmprsError` and Gymnasium's own
+``gymnasium.error.ResetNeeded`` (what Gymnasium's ``OrderEnforcing`` wrapper raises for a step
+before reset), so code written for either catches it. ``reset(seed=s)`` makes the episode
+reproducible bit for bit: the context and the adapter's seed are drawn from ``s``.
 """
 
 from __future__ import annotations
@@ -26,13 +35,22 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs._arrays import short
 from dmprs.dmp import DMP
 from dmprs.envs.scenarios import Scenario
-from dmprs.errors import InvalidInputError
+from dmprs.errors import DmprsError, InvalidInputError
 
-__all__ = ["TaskEnv"]
+__all__ = ["ResetNeeded", "TaskEnv"]
 
 ACTIONS = ("query", "weights")
+#: the keys ``reset(options=...)`` understands
+RESET_OPTIONS = ("context",)
+
+
+class ResetNeeded(DmprsError, gym.error.ResetNeeded):
+    """``step`` before ``reset`` or after the episode ended. It lives here, not in
+    :mod:`dmprs.errors`, because it derives from Gymnasium's class (importing dmprs does not
+    import Gymnasium)."""
 
 
 class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
@@ -56,23 +74,55 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
             self._shape = w.shape[1:]
             self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(int(np.prod(self._shape)),), dtype=np.float64)
         self._context: NDArray[np.float64] | None = None
+        self._done = False
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None,
               ) -> tuple[NDArray[np.float64], dict[str, Any]]:
-        """Draws a context from the seeded generator (or takes ``options["context"]``)."""
-        super().reset(seed=seed)
+        """Draws a context from the generator seeded with ``seed`` (a non-negative integer, or None
+        to keep the current stream), or takes ``options["context"]``."""
+        if seed is not None and (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer))
+                                 or seed < 0):
+            raise InvalidInputError(f"seed = {short(seed)} is invalid: use a non-negative integer or None")
+        if options is not None and not isinstance(options, dict):
+            raise InvalidInputError(f"options = {short(options)} is invalid: use a dict or None")
+        unknown = sorted(map(str, set(options or {}) - set(RESET_OPTIONS)))
+        if unknown:
+            raise InvalidInputError(f"options has unknown keys {unknown}; {self.scenario.name} knows {RESET_OPTIONS}")
+        ctx = None
         if options and "context" in options:
-            ctx = np.atleast_1d(np.asarray(options["context"], dtype=np.float64))
-            if not self.observation_space.contains(ctx):
-                raise InvalidInputError(
-                    f"options['context'] = {ctx.tolist()} is outside {self.observation_space}")
-        else:
+            ctx = self._checked(options["context"], "options['context']", self.observation_space)
+        super().reset(seed=None if seed is None else int(seed))
+        if ctx is None:
             ctx = self.scenario.sample_context(self.np_random)
         self._context = ctx
+        self._done = False
         task = self.scenario.make_task(ctx)
         task.adapter.connect()
         task.adapter.reset(seed=int(self.np_random.integers(2**31)))
         return ctx.copy(), {"desired_query": self.scenario.desired_query(ctx)}
+
+    @staticmethod
+    def _checked(value: Any, name: str, box: gym.spaces.Space[Any], clip: bool = False) -> NDArray[np.float64]:
+        """``value`` as a finite float64 array of ``box``'s shape, or an InvalidInputError naming
+        ``name`` and ``box``; within ``box`` unless ``clip`` (then the caller clips)."""
+        assert isinstance(box, gym.spaces.Box)
+        space = f"the space is {box}"
+        try:
+            arr = None if value is None or isinstance(value, (str, bytes)) else np.asarray(value)
+        except (ValueError, TypeError):  # ragged sequences and the like
+            arr = None
+        if arr is None:
+            raise InvalidInputError(f"{name} = {short(value)} is not an array of numbers; {space}")
+        if arr.dtype.kind not in "fiu":
+            raise InvalidInputError(f"{name} = {short(value)} has dtype {arr.dtype}, not real numbers; {space}")
+        if arr.shape != box.shape:
+            raise InvalidInputError(f"{name} = {short(value)} has shape {arr.shape}; {space}")
+        out = arr.astype(np.float64)
+        if not np.isfinite(out).all():
+            raise InvalidInputError(f"{name} = {short(value)} is not finite; {space}")
+        if not clip and not box.contains(out):
+            raise InvalidInputError(f"{name} = {out.tolist()} is outside the space; {space}")
+        return out
 
     def _dmp(self, action: NDArray[np.float64], desired: NDArray[np.float64]) -> tuple[Any, NDArray[np.float64]]:
         gen = self.scenario.generalizer
@@ -88,10 +138,11 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
 
     def step(self, action: Any) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
         if self._context is None:
-            raise InvalidInputError(f"{self.scenario.name}: step() before reset()")
-        a = np.asarray(action, dtype=np.float64).reshape(self.action_space.shape)
-        if not np.isfinite(a).all():
-            raise InvalidInputError(f"the action {a.tolist()} is not finite")
+            raise ResetNeeded(f"{self.scenario.name}: step() before reset()")
+        if self._done:
+            raise ResetNeeded(f"{self.scenario.name}: step() after the episode ended (terminated); call reset() "
+                              "first: an episode is one step")
+        a = self._checked(action, "the action", self.action_space, clip=True)
         box = self.action_space
         assert isinstance(box, gym.spaces.Box)
         clipped = np.clip(a, box.low, box.high)
@@ -110,6 +161,7 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
             reward = -float(np.linalg.norm(eps))
         else:
             reward = float(self.scenario.failure_reward)
+        self._done = True
         return ctx.copy(), reward, True, False, info
 
     def close(self) -> None:

@@ -37,8 +37,8 @@ HOME_POSE = (0.75, 0.0, 0.34, 1.0, 0.0, 0.0, 0.0)
 HOME_SEED = (0.0, 0.6, 0.0, -1.2, 0.0, -1.0, 0.0)
 #: s of settling before a pour (the spheres come to rest within ~0.2 s)
 SETTLE_TIME = 0.4
-#: s between stop/timeout checks
-STOP_CHECK_EVERY = 100
+#: physics steps (1 ms each) between stop/timeout checks while settling and pouring
+STOP_CHECK_EVERY = 10
 
 #: MuJoCo's warnings that mean the state is no longer physical (on a bad qpos, qvel or qacc
 #: MuJoCo resets the state and carries on, so the warning is the only trace)
@@ -113,13 +113,31 @@ def _check_health(mujoco: Any, data: Any, when: float) -> None:
         raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")
 
 
-@functools.lru_cache(maxsize=8)
+#: settled liquids kept per process, most recently used last (each holds a compiled model)
+_SETTLED: dict[tuple[int, int, tuple[str, int, int]], SettledLiquid] = {}
+_SETTLED_KEPT = 8
+
+
 def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER, am.ITERATIONS, am.CONDIM),
                    ) -> SettledLiquid:
     """``n`` spheres spawned in the bottle at the home configuration and settled for
-    :data:`SETTLE_TIME` s; raises NumericalError if one is not in the bottle afterwards."""
+    :data:`SETTLE_TIME` s (cached per process); raises NumericalError if one is not in the bottle
+    afterwards."""
+    liquid = settle_liquid(n, seed, solver)
+    assert liquid is not None  # nothing can interrupt it
+    return liquid
+
+
+def settle_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER, am.ITERATIONS, am.CONDIM),
+                  should_stop: Callable[[], bool] | None = None) -> SettledLiquid | None:
+    """:func:`settled_liquid`, interruptible: None (and nothing cached) if ``should_stop()``
+    became true while settling (it is asked every :data:`STOP_CHECK_EVERY` steps)."""
     import mujoco
 
+    key = (n, seed, solver)
+    if key in _SETTLED:
+        _SETTLED[key] = _SETTLED.pop(key)  # most recently used
+        return _SETTLED[key]
     q_home = home_configuration()
     kinematic = am.load()
     kd = mujoco.MjData(kinematic)
@@ -134,7 +152,9 @@ def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOL
     data = mujoco.MjData(model)
     data.qpos[:7] = q_home
     data.ctrl[:] = q_home
-    for _ in range(round(SETTLE_TIME / am.TIMESTEP)):
+    for k in range(round(SETTLE_TIME / am.TIMESTEP)):
+        if should_stop is not None and k % STOP_CHECK_EVERY == 0 and should_stop():
+            return None
         mujoco.mj_step(model, data)
     _check_health(mujoco, data, SETTLE_TIME)
     mujoco.mj_kinematics(model, data)
@@ -145,7 +165,11 @@ def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOL
     qpos, qvel = data.qpos.copy(), data.qvel.copy()
     qpos.setflags(write=False)
     qvel.setflags(write=False)
-    return SettledLiquid(n, seed, model, qpos, qvel, solver)
+    liquid = SettledLiquid(n, seed, model, qpos, qvel, solver)
+    _SETTLED[key] = liquid
+    while len(_SETTLED) > _SETTLED_KEPT:
+        del _SETTLED[next(iter(_SETTLED))]
+    return liquid
 
 
 def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np.float64],
@@ -155,6 +179,8 @@ def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np
     """Follows the joint trajectory ``q`` (T, 7) with velocities ``qd`` at times ``t`` (from its
     first sample, which must be the home configuration), then holds the last sample for
     ``hold`` s, and counts. The caller validates the trajectory; this function trusts it.
+    ``should_stop()`` is asked every :data:`STOP_CHECK_EVERY` steps, while moving and while
+    holding; when it says so the pour ends there (``interrupted``).
     ``on_sample(model, data, t)`` is called at every count (every ``sample_period`` s), e.g. to
     render frames; it must not change ``data``."""
     import mujoco

@@ -26,7 +26,9 @@ Physics only; the task (:mod:`dmprs.tasks.arm_throwing`) validates the trajector
 from __future__ import annotations
 
 import functools
+import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -53,6 +55,8 @@ CUP_DEPTH = 0.02
 SETTLE_TIME = 0.3
 #: s: the longest flight after the trajectory ends before the throw counts as a failure
 MAX_FLIGHT = 3.0
+#: physics steps (1 ms each) between stop/timeout checks
+STOP_CHECK_EVERY = 10
 #: the home configuration (rad): the arm leaning back, elbow and wrist bent so the cup opens up
 HOME = (0.0, 0.4, 0.0, -0.6, 0.0, 0.55, 0.0)
 
@@ -160,6 +164,43 @@ def settled_ball() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
 
 
 @dataclass(frozen=True)
+class Reach:
+    """Where a throw can land: between ``low`` and ``high`` m from the base's axis (x = y = 0).
+
+    ``low``: the pedestal's footprint (a ball landing closer would be inside it). ``high``: an
+    upper bound from the physics: the ball's speed is at most ``release_speed`` = sum over the
+    joints of (velocity limit x the longest the chain from that joint to the ball can be; the
+    distances between consecutive joint anchors are fixed by the links), it is released at most
+    ``release_height`` m up (the first anchor's height plus the whole chain) and at most the
+    chain's length from the axis, and flies without drag: the farthest a projectile gets from
+    height h at speed v is ``(v / g) sqrt(v^2 + 2 g h)``."""
+
+    low: float
+    high: float
+    release_speed: float
+    release_height: float
+
+
+@functools.lru_cache(maxsize=1)
+def reach() -> Reach:
+    """The :class:`Reach` of this scene's arm, from its model (computed once)."""
+    import mujoco
+
+    m = model()
+    d = mujoco.MjData(m)
+    d.qpos[:] = settled_ball()[0]
+    mujoco.mj_kinematics(m, d)
+    points = [d.xanchor[m.joint(j).id].copy() for j in am.JOINT_NAMES] + [d.qpos[7:10].copy()]
+    links = [float(np.linalg.norm(b - a)) for a, b in itertools.pairwise(points)]
+    chain = [sum(links[j:]) for j in range(7)]  # the longest joint j -> ball can be
+    speed = sum(w * r for w, r in zip(am.VELOCITY_LIMITS, chain, strict=True))
+    height = float(points[0][2]) + chain[0]
+    g = -float(m.opt.gravity[2])
+    return Reach(PEDESTAL_HALF + BALL_RADIUS, chain[0] + speed / g * math.sqrt(speed**2 + 2 * g * height),
+                 speed, height)
+
+
+@dataclass(frozen=True)
 class ThrowResult:
     """What one throw did. ``landing`` (x, y; m) where the ball first touched the floor and
     ``landing_time`` (s from the trajectory's start), NaN if it did not land within
@@ -178,17 +219,21 @@ class ThrowResult:
     times: NDArray[np.float64]
     q: NDArray[np.float64]
     q_ref: NDArray[np.float64]
+    interrupted: bool = False
 
     @property
     def landed(self) -> bool:
         return bool(np.isfinite(self.landing).all())
 
 
-def simulate_throw(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np.float64]) -> ThrowResult:
+def simulate_throw(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np.float64],
+                   should_stop: Callable[[], bool] | None = None) -> ThrowResult:
     """Follows the joint trajectory ``q`` (T, 7) with velocities ``qd`` at times ``t`` (its first
     sample must be :data:`HOME`: the ball is settled there) with the servo at 1 kHz, holds the
     last sample, and stops when the ball touches the floor (or :data:`MAX_FLIGHT` s after the
-    end). The caller validates the trajectory; this function trusts it."""
+    end). The caller validates the trajectory; this function trusts it. ``should_stop()`` is
+    asked every :data:`STOP_CHECK_EVERY` steps; when it says so the throw ends there, not landed
+    (``interrupted``)."""
     import mujoco
 
     m = model()
@@ -240,6 +285,10 @@ def simulate_throw(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[n
         prev[:] = pos
         if k % 100 == 0:
             _check_health(mujoco, d, k * dt)
+        if should_stop is not None and k % STOP_CHECK_EVERY == 0 and should_stop():
+            n = min(k, n_move)
+            return ThrowResult(np.full(2, np.nan), math.nan, release[0], release[1], release[2], hit,
+                               times[: n + 1], executed[: n + 1], q_ref[: n + 1], interrupted=True)
     _check_health(mujoco, d, n_total * dt)
     return ThrowResult(np.full(2, np.nan), math.nan, release[0], release[1], release[2], hit, times, executed,
                        q_ref)

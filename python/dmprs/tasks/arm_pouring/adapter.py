@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs._arrays import as_flag, as_scalar, short
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
 from dmprs.tasks.arm_pouring.poses import is_pose_trajectory
@@ -24,6 +25,7 @@ TARGET_VOLUME = 0.2  #: l, the paper's task
 #: s: command sample period of a trajectory (the servo interpolates it to 1 kHz)
 CONTROL_PERIOD = 0.002
 MAX_DURATION = 8.0  #: s
+MAX_HOLD = 10.0  #: s the arm may hold still after a trajectory before the spheres are counted
 #: a pose trajectory must start at the home pose within these (m, rad)
 START_POSITION_TOL = 1e-3
 START_ORIENTATION_TOL = 1e-3
@@ -81,12 +83,13 @@ class ArmPouringAdapter(BaseAdapter):
         v = _check_volume(bottle_volume, "bottle_volume")
         self.n_particles = round(v / PARTICLE_VOLUME)
         self.bottle_volume = self.n_particles * PARTICLE_VOLUME
-        if not (isinstance(liquid_seed, (int, np.integer)) and not isinstance(liquid_seed, bool)
+        if not (isinstance(liquid_seed, (int, np.integer)) and not isinstance(liquid_seed, (bool, np.bool_))
                 and liquid_seed >= 0):
-            raise InvalidInputError(f"liquid_seed = {liquid_seed!r} must be a non-negative integer")
-        hold_s = float(hold)
-        if not (math.isfinite(hold_s) and 0 <= hold_s <= 10):
-            raise InvalidInputError(f"hold = {hold!r} s must be between 0 and 10")
+            raise InvalidInputError(f"liquid_seed = {short(liquid_seed)} must be a non-negative integer")
+        hold_s = as_scalar(hold, "hold")
+        if not 0 <= hold_s <= MAX_HOLD:
+            raise InvalidInputError(f"hold = {hold_s:g} s must be between 0 and {MAX_HOLD:g}")
+        reseed = as_flag(reseed_liquid, "reseed_liquid")
         self.home = home_configuration()
         super().__init__(AdapterSpec(
             name="arm-pouring",
@@ -118,7 +121,7 @@ class ArmPouringAdapter(BaseAdapter):
             min_samples=3,
         ))
         self.liquid_seed = int(liquid_seed)
-        self.reseed_liquid = bool(reseed_liquid)
+        self.reseed_liquid = reseed
         self.hold = hold_s
         self._seed = self.liquid_seed
         self._planned: tuple[Any, Trajectory, float, float] | None = None
@@ -226,7 +229,9 @@ class ArmPouringAdapter(BaseAdapter):
         joints, pe, re, problems = self.plan(trajectory)
         if problems or joints is None:  # execute() checked already; a changed trajectory is refused
             return Outcome(Status.REJECTED, message="; ".join(problems) or "not a trajectory")
-        liquid = scene.settled_liquid(self.n_particles, self._seed)
+        liquid = scene.settle_liquid(self.n_particles, self._seed, should_stop=self._interrupted)
+        if liquid is None:  # stopped or timed out while the liquid settled
+            return self._interrupted_outcome()
         qd = joints.yd if joints.yd is not None else np.gradient(joints.y, joints.t, axis=0)
         result = scene.simulate_pour(joints.t, joints.y, qd, liquid, hold=self.hold,
                                      should_stop=self._interrupted)

@@ -12,11 +12,14 @@ volume is learned by golden section (the paper's choice) or the root finder. Req
 from __future__ import annotations
 
 import functools
+import os
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from dmprs._arrays import short
+from dmprs.errors import InvalidInputError
 from dmprs.experiments import ExperimentSetup, query_learners
 
 #: l: success when |V_poured - 0.2 l| < this. Set from the measured noise floor of the granular
@@ -66,13 +69,18 @@ def arm_pouring_setup(bottle_volume: float = 0.5, target_volume: float = 0.2, to
 
     task = ArmPouring(bottle_volume, target_volume=target_volume, tol=tol, liquid_seed=liquid_seed,
                       reseed_liquid=reseed_liquid)
+    desired = task.validate_query(bottle_volume, "bottle_volume")
+    if isinstance(demo_seed, (bool, np.bool_)) or not isinstance(demo_seed, (int, np.integer)) or demo_seed < 0:
+        raise InvalidInputError(f"demo_seed = {short(demo_seed)} must be a non-negative integer")
+    if cache_dir is not None and not isinstance(cache_dir, (str, os.PathLike)):
+        raise InvalidInputError(f"cache_dir = {short(cache_dir)} must be a folder's path or None")
     db = Database(query_names=task.query_names, query_units=task.query_units)
-    for query, tr, _ in demonstrations(task.target_volume, demo_seed, cache_dir):
+    for query, tr, _ in demonstrations(task.target_volume, int(demo_seed), None if cache_dir is None else str(cache_dir)):
         db.add(query, CartesianTrajectory.from_pose(tr.t, tr.pose))
     gen = Generalizer(db, method="linear", n_basis=N_BASIS)
     low, high = min(DEMO_VOLUMES), max(DEMO_VOLUMES)
     return ExperimentSetup(
-        task=task, database=db, generalizer=gen, desired_query=task.validate_query(bottle_volume),
+        task=task, database=db, generalizer=gen, desired_query=desired,
         default_learner="golden", learners=query_learners(low, high, scale=0.05), low=low, high=high)
 
 

@@ -3,15 +3,15 @@ DMP."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dmprs._arrays import as_scalar
 from dmprs.adapters import Outcome
 from dmprs.errors import InvalidInputError
-from dmprs.tasks.arm_pouring.adapter import TARGET_VOLUME, ArmPouringAdapter, _check_volume
+from dmprs.tasks.arm_pouring.adapter import CAPACITY, TARGET_VOLUME, ArmPouringAdapter, _check_volume
 from dmprs.tasks.arm_pouring.poses import PoseTrajectory, tangent_to_pose
 from dmprs.tasks.base import Task
 
@@ -35,15 +35,13 @@ class ArmPouring(Task):
         super().__init__(adapter)
         self.bottle_volume = adapter.bottle_volume
         self.target_volume = _check_volume(target_volume, "target_volume", capacity=self.bottle_volume)
-        tol_f = float(tol)
-        if not (math.isfinite(tol_f) and tol_f > 0):
-            raise InvalidInputError(f"tol = {tol!r} must be > 0 l")
-        self.tol = tol_f
+        self.tol = as_scalar(tol, "tol", positive=True)
 
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
         q = super().validate_query(query, name)
-        if q[0] <= 0:
-            raise InvalidInputError(f"{name} = {q[0]:g} l: a bottle volume must be > 0")
+        if not 0 < q[0] <= CAPACITY:
+            raise InvalidInputError(f"{name} = {q[0]:g} l: a bottle volume must be > 0 and at most the simulated "
+                                    f"bottle's capacity of {CAPACITY:g} l")
         return q
 
     def trajectory(self, dmp: Any) -> Any:

@@ -77,8 +77,10 @@ class ArmThrowingAdapter(BaseAdapter):
         executed = self.noise.track(trajectory, self._rng)
         qd = np.gradient(executed.y, executed.t, axis=0, edge_order=2) if (
             executed is not trajectory or trajectory.yd is None) else trajectory.yd
-        r = simulate_throw(executed.t, executed.y, qd)
-        done = Trajectory(executed.t[0] + r.times, r.q)
+        r = simulate_throw(executed.t, executed.y, qd, should_stop=self._interrupted)
+        done = Trajectory(executed.t[0] + r.times, r.q) if len(r.times) >= 2 else None
+        if r.interrupted:
+            return self._interrupted_outcome(done)
         if not np.isfinite(r.release_time):
             return Outcome(Status.ABORTED, executed=done, message="the ball never left the cup")
         if r.hit:

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dmprs._arrays import as_count, short
 from dmprs.errors import InvalidInputError
 from dmprs.experiments import ExperimentSetup
 from dmprs.tasks.noise import Noise
@@ -111,12 +112,15 @@ def arm_throwing_setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linea
     from dmprs.tasks.arm_throwing.task import TOLERANCE, ArmThrowing
 
     if not isinstance(generalizer, str) or generalizer not in GENERALIZERS:
-        raise InvalidInputError(f"generalizer = {generalizer!r} is invalid: use one of {tuple(GENERALIZERS)}")
+        raise InvalidInputError(f"generalizer = {short(generalizer)} is invalid: use one of {tuple(GENERALIZERS)}")
+    n_basis = as_count(n_basis, "n_basis", 2)
+    max_trials = as_count(max_trials, "max_trials", 1)
     task = ArmThrowing(TOLERANCE if tol is None else tol, noise=noise)
+    desired = task.validate_query(target, "target")  # before the demonstrations: a refusal is quick
     db = Database(query_names=task.query_names, query_units=task.query_units)
     for label, trajectory in demonstrations(n_basis):
         db.add(label, trajectory)
     gen = Generalizer(db, n_basis=n_basis, **GENERALIZERS[generalizer])
     return ExperimentSetup(task=task, database=db, generalizer=gen,
-                           desired_query=task.validate_query(target), default_learner="secant",
+                           desired_query=desired, default_learner="secant",
                            learners=throwing_learners(max_trials))

@@ -3,11 +3,10 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dmprs._arrays import as_scalar
 from dmprs.adapters import Outcome
 from dmprs.errors import InvalidInputError
 from dmprs.tasks.arm_throwing.adapter import ArmThrowingAdapter
@@ -23,7 +22,8 @@ class ArmThrowing(Task):
 
     Query: the landing point (x, y) in m; ``eps = target - landing`` (``sign = +1``: the query is
     in outcome units, as for the matchbox); success when the landing is within ``tol`` (5 cm) of
-    the target (the Euclidean distance, a round basket). ``noise`` goes to the adapter.
+    the target (the Euclidean distance, a round basket); a target the ball cannot reach is refused
+    (:meth:`validate_query`). ``noise`` goes to the adapter.
     """
 
     name = "arm-throwing"
@@ -33,10 +33,22 @@ class ArmThrowing(Task):
 
     def __init__(self, tol: float = TOLERANCE, noise: Noise | None = None) -> None:
         super().__init__(ArmThrowingAdapter(noise))
-        tol_f = float(tol)
-        if not (math.isfinite(tol_f) and tol_f > 0):
-            raise InvalidInputError(f"tol = {tol!r} must be > 0 m")
-        self.tol = tol_f
+        self.tol = as_scalar(tol, "tol", positive=True)
+
+    def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
+        """A landing point the ball can reach (:func:`dmprs.sim.throw_scene.reach`); a basket
+        beyond it is refused, not simulated."""
+        from dmprs.sim.throw_scene import reach
+
+        q = super().validate_query(query, name)
+        r, span = float(np.hypot(*q)), reach()
+        if not span.low <= r <= span.high:
+            raise InvalidInputError(
+                f"{name} = ({q[0]:.6g}, {q[1]:.6g}) m is {r:.4g} m from the arm's base, beyond the task's reach: "
+                f"a ball lands {span.low:.3g} to {span.high:.3g} m from the base's axis (outside the pedestal; "
+                f"at most a {span.release_speed:.3g} m/s release, the iiwa's joint speed limits, from "
+                f"{span.release_height:.3g} m up, without drag)")
+        return q
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
         return np.array([float(outcome.signals["landing_x"]), float(outcome.signals["landing_y"])])
