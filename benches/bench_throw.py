@@ -25,8 +25,8 @@ import time
 import mujoco
 import numpy as np
 
+from dmprs.experiments.arm_throwing import setup as arm_throwing_setup
 from dmprs.sim import throw_scene as ts
-from dmprs.tasks.arm_throwing.experiment import arm_throwing_setup
 
 TARGETS = ((1.05, 0.12), (0.85, -0.1), (1.27, -0.3))
 

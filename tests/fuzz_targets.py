@@ -692,8 +692,8 @@ def run_env(a: dict[str, Any]) -> list[Any]:
 
 # --- the MuJoCo arm adapters and setups -----------------------------------------------------------
 def _warm_arms() -> None:
+    from dmprs.experiments.arm_throwing import demonstrations
     from dmprs.sim import throw_scene
-    from dmprs.tasks.arm_throwing.experiment import demonstrations
 
     demonstrations()
     throw_scene.settled_ball()
@@ -749,9 +749,9 @@ def _arm_ops(a: dict[str, Any]) -> list[Any]:
     import math
     import time
 
+    from dmprs.experiments.arm_throwing import setup as arm_throwing_setup
     from dmprs.tasks.arm_pouring import ArmPouring, ArmPouringAdapter
     from dmprs.tasks.arm_throwing import ArmThrowing, throw_trajectory
-    from dmprs.tasks.arm_throwing.experiment import arm_throwing_setup
 
     o = a["opts"]
     if a["what"] == "throwing setup":

@@ -14,7 +14,6 @@ from dmprs.generalize import Generalizer
 from dmprs.sim.arm_scene import HOME_POSE
 from dmprs.tasks.arm_pouring import (
     ArmPouring,
-    PoseTrajectory,
     demonstration_tangent,
     pose_to_tangent,
     pour_poses,
@@ -83,12 +82,13 @@ def test_tangent_map_round_trips(q, ref, position):
     assert np.linalg.norm(pose_to_tangent(pose, ref)[0, 3:]) <= np.pi + 1e-9  # the short way round
 
 
-def test_pose_trajectory_validates():
+def test_the_demonstrations_are_validated_pose_trajectories():
     t = np.linspace(0, 1, 5)
     with pytest.raises(ValueError, match="shape"):
-        PoseTrajectory(t, np.zeros((5, 6)))
+        CartesianTrajectory.from_pose(t, np.zeros((5, 6)))
     with pytest.raises(ValueError, match="increasing"):
-        PoseTrajectory(t[::-1], np.tile(HOME_POSE, (5, 1)))
+        CartesianTrajectory.from_pose(t[::-1], np.tile(HOME_POSE, (5, 1)))
+    assert isinstance(pour_poses(2.0), CartesianTrajectory)
 
 
 def test_a_generalized_pose_trajectory_can_be_logged_and_recorded(generalizers, tmp_path):
@@ -108,11 +108,11 @@ def test_a_generalized_pose_trajectory_can_be_logged_and_recorded(generalizers, 
 
 
 def test_noise_floor_and_setup_run_the_generalized_movement(monkeypatch):
-    from dmprs.tasks.arm_pouring import experiment as arm_experiments
+    from dmprs.experiments import arm_pouring as arm_experiments
 
     demos = tuple((np.array([v]), pour_poses(p), None) for v, p in PEAKS.items())  # uncalibrated
     monkeypatch.setattr(arm_experiments, "demonstrations", lambda *a, **k: demos)
-    setup = arm_experiments.arm_pouring_setup(0.2)
+    setup = arm_experiments.setup(0.2)
     assert setup.default_learner == "golden" and (setup.low, setup.high) == (0.3, 1.0)
     rows = arm_experiments.noise_floor(0.2, offsets=(0.0, 1e-4))
     assert [r["query"] for r in rows] == pytest.approx([0.2, 0.2001])

@@ -10,8 +10,8 @@ import pytest
 from dmprs.adapters import Status, check_adapter, load_adapter
 from dmprs.sim import arm_model as am
 from dmprs.sim import arm_scene
-from dmprs.tasks.arm_pouring import ArmPouring, ArmPouringAdapter, PoseTrajectory, pour_poses
-from dmprs.trajectory import Trajectory
+from dmprs.tasks.arm_pouring import ArmPouring, ArmPouringAdapter, pour_poses
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 SMALL = 0.01  # l: 5 spheres, for tests about the arm alone
 
@@ -115,10 +115,7 @@ def test_rejects_nan_in_a_pose_trajectory():
     good = pour_poses(2.0)
     pose = good.pose.copy()
     pose[50, 4] = np.nan
-    bad = PoseTrajectory.__new__(PoseTrajectory)
-    object.__setattr__(bad, "t", good.t)
-    object.__setattr__(bad, "pose", pose)
-    assert "pose[50, 4] is not finite" in rejected(bad)
+    assert "quaternion[50, 1] is not finite" in rejected(CartesianTrajectory.unchecked(good.t, pose))
 
 
 def test_rejects_a_joint_beyond_its_position_limit():
@@ -144,7 +141,7 @@ def test_rejects_a_pose_trajectory_into_the_glass():
     poses = pour_poses(0.0).pose.copy()
     t = pour_poses(0.0).t
     poses[:, 2] -= 0.25 * min_jerk(t / t[-1])
-    msg = rejected(PoseTrajectory(t, poses))
+    msg = rejected(CartesianTrajectory.from_pose(t, poses))
     assert "collide" in msg and "glass" in msg
 
 
@@ -153,7 +150,7 @@ def test_rejects_an_unreachable_pose():
     base = pour_poses(0.0, timing=(1.0, 0.4, 0.2, 0.4))
     poses = base.pose.copy()
     poses[:, 0] += 0.9 * min_jerk(t / 2.0)  # 0.9 m farther out: 1.65 m from the base
-    msg = rejected(PoseTrajectory(t, poses))
+    msg = rejected(CartesianTrajectory.from_pose(t, poses))
     assert "unreachable" in msg and "at t =" in msg
 
 
@@ -161,19 +158,19 @@ def test_rejects_a_non_unit_quaternion():
     base = pour_poses(1.0)
     poses = base.pose.copy()
     poses[10:, 3:] *= 1.01
-    assert "norm 1.01" in rejected(PoseTrajectory(base.t, poses))
+    assert "norm 1.01" in rejected(CartesianTrajectory.unchecked(base.t, poses))
 
 
 def test_rejects_a_start_away_from_home():
     base = pour_poses(1.0)
     poses = base.pose.copy()
     poses[:, 1] += 0.05
-    assert "starts 50 mm" in rejected(PoseTrajectory(base.t, poses))
+    assert "starts 50 mm" in rejected(CartesianTrajectory.from_pose(base.t, poses))
     assert "starts at" in rejected(Trajectory(base.t[:100], np.zeros((100, 7))))
 
 
 def test_rejects_the_wrong_kind_of_object():
-    assert "expected a dmprs.Trajectory (7 joints) or a pose trajectory" in rejected("not a trajectory")
+    assert "expected a dmprs.Trajectory (7 joints) or a dmprs.CartesianTrajectory" in rejected("not a trajectory")
     assert "7 DOFs" not in rejected(Trajectory(np.linspace(0, 1, 10), np.zeros((10, 3))))
 
 

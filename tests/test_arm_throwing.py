@@ -12,10 +12,11 @@ import pytest
 from dmprs.adapters import Status
 from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError
+from dmprs.experiments.arm_throwing import demonstrations
+from dmprs.experiments.arm_throwing import setup as arm_throwing_setup
 from dmprs.loop import learn
 from dmprs.sim import throw_scene as ts
 from dmprs.tasks.arm_throwing import DEMOS, ArmThrowing, ArmThrowingAdapter, throw_trajectory
-from dmprs.tasks.arm_throwing.experiment import arm_throwing_setup, demonstrations
 from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 

@@ -42,7 +42,7 @@ def test_demos_writes_a_loadable_database(tmp_path):
 
 def test_unknown_names_and_unreadable_runs_are_clean_errors(tmp_path):
     out = run("learn", "juggling")
-    assert out.exit_code != 0 and "unknown task 'juggling'" in out.output
+    assert out.exit_code != 0 and "unknown experiment 'juggling'" in out.output
     out = run("learn", "analytic", "--learner", "sgd")
     assert out.exit_code != 0 and "unknown learner 'sgd'" in out.output
     out = run("resume", tmp_path / "nothing")

@@ -94,7 +94,7 @@ def test_out_of_order_and_bad_feedback_are_clear_errors():
 
 
 def test_a_query_space_learner_of_learn_from_the_same_first_trial():
-    s = experiments.analytic_setup()
+    s = experiments.make("analytic")
     lrn = s.make_learner("cma", seed=2)
     result = learn(s.task, s.generalizer, s.desired_query, lrn, max_trials=40)
     assert result.converged and result.n_trials <= 40
@@ -102,12 +102,12 @@ def test_a_query_space_learner_of_learn_from_the_same_first_trial():
 
 
 def test_query_space_run_resumes_from_its_log(tmp_path):
-    s = experiments.analytic_setup()
+    s = experiments.make("analytic")
     full = learn(s.task, s.generalizer, s.desired_query, s.make_learner("cma", seed=2), max_trials=40)
     cut = tmp_path / "run"
     learn(s.task, s.generalizer, s.desired_query, s.make_learner("cma", seed=2), max_trials=40, log_dir=cut)
     crash_after(cut, 3)
-    s2 = experiments.analytic_setup()
+    s2 = experiments.make("analytic")
     resumed = learn(s2.task, s2.generalizer, s2.desired_query, s2.make_learner("cma", seed=2), max_trials=40,
                     log_dir=cut, resume=True)
     assert [t.query.tolist() for t in resumed.trials] == [t.query.tolist() for t in full.trials]

@@ -131,8 +131,8 @@ def npz(**arrays) -> bytes:
     "payload, message",
     [
         (b"this is not a zip file", "not a readable demonstration file"),
-        (npz(query=np.zeros(2), t=np.arange(5.0)), "expected query, t, y"),
-        (npz(query=np.zeros(2), t=np.arange(5.0), y=np.zeros((5, 3)), evil=np.zeros(1)), "expected query, t, y"),
+        (npz(query=np.zeros(2), t=np.arange(5.0)), r"are not a trajectory: missing y"),
+        (npz(query=np.zeros(2), t=np.arange(5.0), y=np.zeros((5, 3)), evil=np.zeros(1)), "unknown evil"),
         (npz(query=np.zeros(3), t=np.arange(5.0), y=np.zeros((5, 3))), r"query has shape \(3,\)"),
         (npz(query=np.zeros(2), t=np.arange(5), y=np.zeros((5, 3))), "dtype int64, expected float64"),
         (npz(query=np.zeros(2), t=np.zeros(5), y=np.zeros((5, 3))), "invalid trajectory.*strictly increasing"),

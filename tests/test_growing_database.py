@@ -6,7 +6,7 @@ import pytest
 
 import dmprs
 from dmprs.errors import InvalidInputError
-from dmprs.experiments import analytic_setup
+from dmprs.experiments import analytic
 from dmprs.learners import ErrorLearning
 from dmprs.loop import learn
 
@@ -71,7 +71,7 @@ def test_lwr_gp_refuses_repeats_with_a_clear_message():
 
 def relearn(policy: str | None) -> tuple[dmprs.Database, list]:
     """Learns the same desired outcome twice into one database (the second run is a repeat)."""
-    s = analytic_setup()
+    s = analytic.setup()
     results = []
     for _ in range(2):
         kw = {} if policy is None else {"database_policy": policy}
@@ -100,7 +100,7 @@ def test_learn_with_keep_adds_the_repeat():
 
 
 def test_learn_checks_the_policy_before_any_trial():
-    s = analytic_setup()
+    s = analytic.setup()
     with pytest.raises(InvalidInputError, match="database_policy"):
         learn(s.task, s.generalizer, s.desired_query, ErrorLearning(s.desired_query),
               database=s.database, database_policy="sometimes")

@@ -15,7 +15,7 @@ from dmprs.tasks.analytic import outcome_map
 
 
 def setup(**kw):
-    return experiments.analytic_setup(**kw)
+    return experiments.make("analytic", **kw)
 
 
 def test_error_learning_reaches_the_desired_outcome():
@@ -193,7 +193,7 @@ def test_bad_arguments():
         learn(s.task, s.generalizer, s.desired_query, lrn, max_trials=0)
     with pytest.raises(dmprs.InvalidInputError, match="unknown learner 'sgd'"):
         s.make_learner("sgd")
-    with pytest.raises(dmprs.InvalidInputError, match="unknown task 'juggling'"):
+    with pytest.raises(dmprs.InvalidInputError, match="unknown experiment 'juggling'"):
         experiments.run("juggling")
 
 

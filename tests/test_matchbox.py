@@ -118,12 +118,12 @@ def test_learning_stands_the_box_up_as_in_the_paper():
     from dmprs import experiments
 
     # Fig. 4: eq. 16 with K = I, one demo flipped back and one over: within 5 trials (paper: 4).
-    r = experiments.matchbox(demos="default", learner="error")
+    r = experiments.run("matchbox", demos="default", learner="error")
     assert r.converged and r.n_trials <= 5
     assert r.trials[-1].signals["regime"] == "upright"
     assert r.trials[0].query[0] == pytest.approx(math.pi / 2)  # the first trial is Ĝ(pi/2)
     # Fig. 7: both demos flipped back, pi/2 outside them (extrapolation), eq. 17: within 8.
-    r = experiments.matchbox(demos="both_flipped_back", learner="weighted")
+    r = experiments.run("matchbox", demos="both_flipped_back", learner="weighted")
     assert r.converged and r.n_trials <= 8
-    s = experiments.matchbox_setup(demos="both_flipped_back")
+    s = experiments.make("matchbox", demos="both_flipped_back")
     assert (s.database.queries < math.pi / 2).all()

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from dmprs.errors import InvalidInputError
-from dmprs.experiments import analytic_setup, matchbox_setup
+from dmprs.experiments import analytic, matchbox
 from dmprs.reproduce import noisy as N
 from dmprs.tasks.analytic import AnalyticAdapter, bump
 from dmprs.tasks.matchbox import MatchboxAdapter, strike
@@ -55,8 +55,8 @@ def test_matchbox_noise_is_off_by_default_and_seeded_when_on():
     assert one["outcome_angle"] == again["outcome_angle"] and one["outcome_angle"] != other["outcome_angle"]
     assert one["eps18"] == pytest.approx(one["outcome_angle"] - math.pi / 2)
     # the demonstrations are measured exactly, whatever the noise of the trials
-    np.testing.assert_array_equal(matchbox_setup(noise=Noise(measurement=0.3)).database.queries,
-                                  matchbox_setup().database.queries)
+    np.testing.assert_array_equal(matchbox.setup(noise=Noise(measurement=0.3)).database.queries,
+                                  matchbox.setup().database.queries)
 
 
 def test_pouring_measurement_noise_is_on_the_reading_not_the_liquid():
@@ -106,5 +106,5 @@ def test_the_noise_guard_keeps_golden_sections_bracket_through_outliers():
 
 
 def test_analytic_setup_takes_execution_noise():
-    s = analytic_setup(execution_noise=0.01)
+    s = analytic.setup(execution_noise=0.01)
     assert s.task.adapter.tracking.execution == 0.01

@@ -9,7 +9,7 @@ from dmprs import experiments
 
 @pytest.mark.parametrize("volume", [0.4, 0.5, 0.7])
 def test_golden_section_pours_two_decilitres(volume):
-    r = experiments.pouring(bottle_volume=volume, learner="golden", max_trials=7)
+    r = experiments.run("pouring", bottle_volume=volume, learner="golden", max_trials=7)
     assert r.converged, [t.signals.get("poured_volume") for t in r.trials]
     last = r.trials[-1]
     assert abs(last.signals["poured_volume"] - 0.2) < 0.010
@@ -19,7 +19,7 @@ def test_golden_section_pours_two_decilitres(volume):
 
 def test_outside_the_demonstrations_the_paper_mode_fails_and_robust_mode_succeeds():
     # docs/method.md §6.2 #5: with q0 outside [q_l, q_h] the algorithm box inverts the bracket.
-    paper = experiments.pouring(bottle_volume=0.25, learner="golden", max_trials=6)
-    robust = experiments.pouring(bottle_volume=0.25, learner="golden-robust", max_trials=6)
+    paper = experiments.run("pouring", bottle_volume=0.25, learner="golden", max_trials=6)
+    robust = experiments.run("pouring", bottle_volume=0.25, learner="golden-robust", max_trials=6)
     assert not paper.converged
     assert robust.converged

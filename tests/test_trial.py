@@ -17,7 +17,7 @@ from tests.conftest import crash_after
 
 
 def setup():
-    return experiments.analytic_setup()
+    return experiments.make("analytic")
 
 
 class Untold:

@@ -7,6 +7,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "PI2",
+    "UNIT_TOLERANCE",
     "CartesianDmp",
     "CartesianGeneralizer",
     "Dmp",
@@ -27,6 +28,7 @@ __all__ = [
 ]
 
 __version__: str
+UNIT_TOLERANCE: float
 
 _TrajectoryArrays: TypeAlias = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]

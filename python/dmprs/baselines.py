@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs import experiments
 from dmprs._core import __version__
 from dmprs.adapters.spec import Status
 from dmprs.dmp import DMP
@@ -115,14 +116,15 @@ def run_baseline(spec: BaselineSpec, log_dir: str | Path | None = None, *,
     """Runs one baseline until an evaluation rollout succeeds or the budget is spent; returns
     the trial count and history. With ``log_dir`` every rollout is logged (and ``resume=True``
     continues a logged run)."""
-    from dmprs import experiments
-
     if spec.method not in METHODS:
         raise InvalidInputError(f"unknown baseline {spec.method!r}; choose from {', '.join(METHODS)}")
     method = METHODS[spec.method]
-    setup = experiments.SETUPS[spec.experiment](**dict(spec.setup))
+    setup = experiments.make(spec.experiment, **dict(spec.setup))
     task, q0 = setup.task, setup.desired_query
     dmp0 = setup.generalizer.predict(q0)
+    if not isinstance(dmp0, DMP):
+        raise InvalidInputError(f"{spec.experiment}: the weight-space baselines learn joint-space DMPs; this "
+                                "experiment's demonstrations are poses")
     w0 = dmp0.weights
     sigma = np.repeat(spec.sigma_frac * np.maximum(np.abs(w0).max(axis=1), 1e-9), w0.shape[1])
     learner = method.make(spec, dmp0, sigma)

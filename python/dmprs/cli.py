@@ -8,7 +8,9 @@ from typing import Any
 
 import click
 
+from dmprs import experiments
 from dmprs.errors import DmprsError, InvalidInputError
+from dmprs.experiments import learner_help
 
 
 def _progress(console: Any) -> Any:
@@ -45,9 +47,7 @@ def main() -> None:
 @main.command("learn")
 @click.argument("task")
 @click.option("--learner", default=None,
-              help="error, weighted, secant, golden, golden-robust, root, pg, cma; pouring also fixed; "
-                   "arm-throwing secant, error, finite-difference, weighted, cma (default: the paper's "
-                   "choice for the task)")
+              help=f"{learner_help()} (default: the paper's choice for the task; each task offers some)")
 @click.option("--desired", type=float, default=None, help="desired query (task units)")
 @click.option("--max-trials", type=click.IntRange(min=1, max=10**6), default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")
@@ -65,7 +65,6 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
               generalizer: str | None) -> None:
     """Learn TASK (analytic, matchbox, pouring, arm-pouring, arm-throwing) from its
     demonstrations, one trial at a time."""
-    from dmprs import experiments
 
     options: dict[str, Any] = {k: v for k, v in {
         "desired": desired, "noise": noise, "bottle_volume": volume, "demos": demos,
@@ -102,7 +101,6 @@ def _field(meta: dict[str, Any], name: str, kind: Any, where: Path, default: Any
 @click.option("--max-trials", type=click.IntRange(min=1), default=None, help="raise the trial cap of the run")
 def resume_cmd(run: Path, max_trials: int | None) -> None:
     """Continue the run logged in RUN where it stopped."""
-    from dmprs import experiments
     from dmprs.loop import learn
     from dmprs.runlog import RunLog
 
@@ -113,9 +111,9 @@ def resume_cmd(run: Path, max_trials: int | None) -> None:
         if "experiment" not in meta:
             raise DmprsError(f"{where} was not written by 'dmprs learn': resume it from Python")
         experiment = _field(meta, "experiment", str, where)
-        if experiment not in experiments.SETUPS:
+        if experiment not in experiments.EXPERIMENTS:
             raise DmprsError(f"{where}: experiment {experiment!r} is unknown; "
-                             f"known: {', '.join(sorted(experiments.SETUPS))}")
+                             f"known: {', '.join(sorted(experiments.EXPERIMENTS))}")
         setup_options = _field(meta, "setup_options", dict, where, {})
         learner_options = _field(meta, "learner_options", dict, where, {})
         learner_name = _field(meta, "learner_name", str, where)
@@ -124,7 +122,7 @@ def resume_cmd(run: Path, max_trials: int | None) -> None:
         seed = _field(meta, "seed", int, where, 0)
         # A logged option that does not fit is the log's fault: say which field of which file.
         try:
-            setup = experiments.SETUPS[experiment](**setup_options)
+            setup = experiments.make(experiment, **setup_options)
         except (TypeError, ValueError) as exc:
             raise DmprsError(f"{where}: setup_options {setup_options!r:.80} do not fit {experiment!r} ({exc})") from None
         try:
@@ -164,12 +162,8 @@ def demos_group() -> None:
 @click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
 def demos_cmd(task: str, out: Path, demos: str | None) -> None:
     """Record TASK's scripted demonstrations into a database directory."""
-    from dmprs import experiments
-
     try:
-        if task not in experiments.SETUPS:
-            raise DmprsError(f"unknown task {task!r}; choose from {', '.join(sorted(experiments.SETUPS))}")
-        setup = experiments.SETUPS[task](**({"demos": demos} if demos else {}))
+        setup = experiments.make(task, **({"demos": demos} if demos else {}))
         setup.database.save(out)
     except DmprsError as exc:
         raise click.ClickException(str(exc)) from None

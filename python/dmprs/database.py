@@ -61,7 +61,7 @@ from dmprs._io import (
     write_atomic,
 )
 from dmprs.errors import DatabaseError, DmprsError, InvalidInputError
-from dmprs.trajectory import CartesianTrajectory, Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory, from_arrays
 
 __all__ = ["SCHEMA_VERSION", "Database", "Demo"]
 
@@ -72,11 +72,6 @@ _POSE_SCHEMA = 2
 _FORMAT = "dmprs.Database"
 _MANIFEST = "manifest.json"
 _DEMO_FILE = re.compile(r"^demo_[0-9a-f]{16}\.npz$")
-_ARRAY_KEYS = {"query", "t", "y", "yd", "ydd"}
-_POSE_KEYS = {
-    "query", "t", "position", "quaternion", "velocity", "angular_velocity", "acceleration",
-    "angular_acceleration",
-}
 #: The largest manifest and demo file a database may hold (a link to a device, or a huge file,
 #: is refused before anything is read).
 MANIFEST_MAX_BYTES = JSON_MAX_BYTES
@@ -344,12 +339,8 @@ class Database:
 
 
 def _npz_bytes(demo: Demo) -> bytes:
-    tr = demo.trajectory
-    arrays = {"query": demo.query}
-    names = sorted(_POSE_KEYS if isinstance(tr, CartesianTrajectory) else _ARRAY_KEYS)
-    for name in names:
-        if name != "query" and getattr(tr, name) is not None:
-            arrays[name] = getattr(tr, name)
+    # Sorted names after the query: the file's bytes, hence its content name, depend on nothing else.
+    arrays = {"query": demo.query, **dict(sorted(demo.trajectory.to_arrays().items()))}
     buf = io.BytesIO()
     savez: Any = np.savez  # numpy's stub types the keyword arrays as its own options
     savez(buf, **arrays)
@@ -447,29 +438,18 @@ def _read_demo(root: Path, mpath: Path, k: int, entry: Any, n_query: int) -> Dem
     except DatabaseError as exc:
         why = str(exc).removeprefix(f"{fpath}: ")
         raise DatabaseError(f"{fpath}: not a readable demonstration file ({why})") from None
-    keys = set(arrays)
-    pose = "position" in keys
-    missing = ({"query", "t", "position", "quaternion"} if pose else {"query", "t", "y"}) - keys
-    extra = keys - (_POSE_KEYS if pose else _ARRAY_KEYS)
-    if missing or extra:
-        raise DatabaseError(
-            f"{fpath}: arrays {sorted(keys)}; expected query, t, y and optionally yd, ydd, or query, "
-            "t, position, quaternion and optionally their derivatives"
-        )
     for key, arr in arrays.items():
         if arr.dtype != np.float64:
             raise DatabaseError(f"{fpath}: array {key!r} has dtype {arr.dtype}, expected float64")
-    q = arrays["query"]
-    if q.shape != (n_query,):
-        raise DatabaseError(f"{fpath}: query has shape {q.shape}, expected ({n_query},)")
+    q = arrays.pop("query", None)
+    if q is None or q.shape != (n_query,):
+        raise DatabaseError(f"{fpath}: query has shape {None if q is None else q.shape}, expected ({n_query},)")
     try:
-        traj: Trajectory | CartesianTrajectory
-        if pose:
-            traj = CartesianTrajectory(**{k: v for k, v in arrays.items() if k != "query"})
-        else:
-            traj = Trajectory(arrays["t"], arrays["y"], arrays.get("yd"), arrays.get("ydd"))
+        traj = from_arrays(arrays)
     except DmprsError as exc:
         raise DatabaseError(f"{fpath}: invalid trajectory ({exc})") from None
+    if traj is None:
+        raise DatabaseError(f"{fpath}: arrays {sorted(arrays)} hold no trajectory (no 't')")
     label = entry.get("label")
     metadata = entry.get("metadata", {})
     if (label is not None and not isinstance(label, str)) or not isinstance(metadata, dict):

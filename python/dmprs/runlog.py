@@ -233,10 +233,10 @@ class RunLog:
         """Writes the trial's arrays, then its line: the line is the commit point."""
         arrays: dict[str, Any] = {"query": record.query}
         if command is not None:
-            arrays.update(cmd_t=command.t, cmd_y=_samples(command))
+            arrays.update(command.to_arrays("cmd_"))
         if outcome is not None:
             if outcome.executed is not None:
-                arrays.update(exe_t=outcome.executed.t, exe_y=_samples(outcome.executed))
+                arrays.update(outcome.executed.to_arrays("exe_"))
             for k, v in outcome.signals.items():
                 arrays[f"sig_{k}"] = np.asarray(v)
         name = f"trial_{record.index:04d}.npz"
@@ -263,7 +263,3 @@ def _jsonable(value: Any) -> Any:
         return str(value)
     return repr(value)
 
-
-def _samples(tr: Trajectory | CartesianTrajectory) -> np.ndarray:
-    """The samples a log keeps: y, or the (T, 7) pose of a pose trajectory."""
-    return tr.pose if isinstance(tr, CartesianTrajectory) else tr.y

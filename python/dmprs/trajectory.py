@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs import quaternion as quaternion_
 from dmprs._arrays import as_float_array, check_finite, check_increasing
 from dmprs.errors import InvalidInputError
+
+_JOINT_FIELDS = ("t", "y", "yd", "ydd")
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,6 +84,11 @@ class Trajectory:
     def __len__(self) -> int:
         return self.n_samples
 
+    def to_arrays(self, prefix: str = "") -> dict[str, NDArray[np.float64]]:
+        """Its arrays by field name (``t``, ``y`` and the known derivatives), each name prefixed:
+        what the database, the run logs and the recordings store (:func:`from_arrays` reads it)."""
+        return {f"{prefix}{name}": getattr(self, name) for name in _JOINT_FIELDS if getattr(self, name) is not None}
+
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Trajectory):
             return NotImplemented
@@ -101,32 +110,9 @@ class Trajectory:
         )
 
 
-#: A quaternion whose norm is farther than this from 1 is refused unless normalization is asked
-#: for (the same tolerance as the Rust core's ``dmp_core::cartesian::UNIT_TOLERANCE``).
-UNIT_TOLERANCE = 1e-6
-
 _CARTESIAN_FIELDS = (
     "t", "position", "quaternion", "velocity", "angular_velocity", "acceleration", "angular_acceleration",
 )
-
-
-def unit_quaternions(q: NDArray[np.float64], name: str, normalize: bool = False) -> NDArray[np.float64]:
-    """``q`` (T, 4), scalar first, checked to be unit quaternions: the zero quaternion is refused,
-    and so is a norm off by more than 1e-6 unless ``normalize`` (then every row is scaled to
-    unit norm). Raises naming the first offending sample."""
-    norms = np.linalg.norm(q, axis=1)
-    zero = norms == 0.0
-    off = zero if normalize else np.abs(norms - 1.0) > UNIT_TOLERANCE
-    if off.any():
-        j = int(np.argmax(off))
-        why = (
-            "the zero quaternion is not a rotation and cannot be normalized" if zero[j] else
-            "orientations must be unit quaternions (|norm - 1| <= 1e-6); pass normalize=True to scale them"
-        )
-        raise InvalidInputError(
-            f"{name}[{j}] has the quaternion (w, x, y, z) = {q[j].tolist()} of norm {norms[j]}: {why}"
-        )
-    return q / norms[:, None] if normalize else q
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,7 +155,7 @@ class CartesianTrajectory:
             fields[name] = arr
         quaternion = fields["quaternion"]
         assert quaternion is not None
-        unit_quaternions(quaternion, "quaternion")
+        quaternion_.check_unit(quaternion, "quaternion")
         for name, value in fields.items():
             owned = None if value is None else value.copy()  # never alias the caller's array
             if owned is not None:
@@ -196,8 +182,17 @@ class CartesianTrajectory:
                 f"pose has shape {p.shape}, expected (T, 7): x, y, z, qw, qx, qy, qz per sample"
             )
         check_finite(p, "pose")
-        q = unit_quaternions(p[:, 3:], "pose", normalize)
+        q = quaternion_.check_unit(p[:, 3:], "pose", normalize)
         return cls(t, p[:, :3], q, velocity, angular_velocity, acceleration, angular_acceleration)
+
+    @classmethod
+    def unchecked(cls, t: Any, pose: Any) -> CartesianTrajectory:
+        """A pose trajectory from ``t`` and ``pose`` (T, 7) built without any check, for testing
+        what its consumers refuse (a NaN, a non-unit quaternion, a start elsewhere); never for
+        data. Every consumer checks it with :func:`dmprs.adapters.spec.pose_problems`."""
+        t = np.asarray(t, dtype=np.float64)
+        pose = np.asarray(pose, dtype=np.float64)
+        return cls._trusted(t, pose[:, :3], pose[:, 3:], None, None, None, None)
 
     @classmethod
     def _trusted(cls, *arrays: Any) -> CartesianTrajectory:
@@ -230,6 +225,12 @@ class CartesianTrajectory:
     def __len__(self) -> int:
         return self.n_samples
 
+    def to_arrays(self, prefix: str = "") -> dict[str, NDArray[np.float64]]:
+        """Its arrays by field name (``t``, ``position``, ``quaternion`` and the known
+        derivatives), each name prefixed (see :meth:`Trajectory.to_arrays`)."""
+        return {f"{prefix}{name}": getattr(self, name) for name in _CARTESIAN_FIELDS
+                if getattr(self, name) is not None}
+
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, CartesianTrajectory):
             return NotImplemented
@@ -253,3 +254,24 @@ class CartesianTrajectory:
 
 #: What an adapter executes: joint-space samples, or poses of a Cartesian DMP's rollout.
 AnyTrajectory = Trajectory | CartesianTrajectory
+
+
+def from_arrays(arrays: Mapping[str, NDArray[np.float64]], prefix: str = "") -> AnyTrajectory | None:
+    """The trajectory :meth:`Trajectory.to_arrays` or :meth:`CartesianTrajectory.to_arrays` wrote
+    under ``prefix`` (a pose trajectory when there is a ``position``), validated as on
+    construction; None when there is no ``t``. Any other name under the prefix is an error."""
+    fields = {name[len(prefix):]: arr for name, arr in arrays.items() if name.startswith(prefix)}
+    if "t" not in fields:
+        return None
+    pose = "position" in fields
+    allowed, required = (_CARTESIAN_FIELDS, ("t", "position", "quaternion")) if pose else (_JOINT_FIELDS, ("t", "y"))
+    missing = [f"{prefix}{n}" for n in required if n not in fields]
+    extra = sorted(f"{prefix}{n}" for n in fields if n not in allowed)
+    if missing or extra:
+        raise InvalidInputError(
+            f"arrays {sorted(prefix + n for n in fields)} are not a {'pose ' if pose else ''}trajectory: "
+            + "; ".join(([f"missing {', '.join(missing)}"] if missing else [])
+                        + ([f"unknown {', '.join(extra)}"] if extra else [])))
+    if pose:
+        return CartesianTrajectory(**fields)
+    return Trajectory(**fields)

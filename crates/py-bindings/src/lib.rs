@@ -35,6 +35,8 @@ mod _core {
     #[pymodule_init]
     fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {
         use pyo3::types::PyModuleMethods;
-        m.add("__version__", env!("CARGO_PKG_VERSION"))
+        m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        // The one unit-norm tolerance of quaternions, which the Python side checks with too.
+        m.add("UNIT_TOLERANCE", dmp_core::cartesian::UNIT_TOLERANCE)
     }
 }

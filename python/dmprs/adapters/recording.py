@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -12,7 +11,7 @@ from dmprs._io import MiB, append_jsonl, load_npz, read_jsonl, write_npz_atomic
 from dmprs.adapters.base import Adapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, Status
 from dmprs.errors import AdapterError, DmprsError, InvalidInputError
-from dmprs.trajectory import AnyTrajectory, CartesianTrajectory, Trajectory
+from dmprs.trajectory import AnyTrajectory, CartesianTrajectory, Trajectory, from_arrays
 
 _INDEX = "recording.jsonl"
 _TRIAL_FILE = re.compile(r"^trial_\d{4,}\.npz$")
@@ -20,31 +19,9 @@ _TRIAL_FILE = re.compile(r"^trial_\d{4,}\.npz$")
 _TRIAL_MAX_BYTES = 1024 * MiB
 
 
-def _trajectory_arrays(prefix: str, tr: AnyTrajectory | None) -> dict[str, np.ndarray]:
-    if tr is None:
-        return {}
-    if isinstance(tr, CartesianTrajectory):
-        return {f"{prefix}t": tr.t, f"{prefix}pose": tr.pose}
-    out = {f"{prefix}t": tr.t, f"{prefix}y": tr.y}
-    for name in ("yd", "ydd"):
-        value = getattr(tr, name)
-        if value is not None:
-            out[f"{prefix}{name}"] = value
-    return out
-
-
 def _samples(tr: AnyTrajectory) -> np.ndarray:
     """The positions of a joint trajectory, the poses of a Cartesian one."""
     return tr.pose if isinstance(tr, CartesianTrajectory) else tr.y
-
-
-def _trajectory_from(arrays: Any, prefix: str) -> AnyTrajectory | None:
-    if f"{prefix}t" not in arrays:
-        return None
-    if f"{prefix}pose" in arrays:
-        return CartesianTrajectory.from_pose(arrays[f"{prefix}t"], arrays[f"{prefix}pose"])
-    return Trajectory(arrays[f"{prefix}t"], arrays[f"{prefix}y"], arrays.get(f"{prefix}yd"),
-                      arrays.get(f"{prefix}ydd"))
 
 
 class RecordingAdapter(Adapter):
@@ -83,7 +60,7 @@ class RecordingAdapter(Adapter):
     ) -> Outcome:
         outcome = self.inner.execute(trajectory, dry_run=dry_run, timeout_s=timeout_s)
         name = f"trial_{self._n:04d}.npz"
-        arrays = {**_trajectory_arrays("cmd_", trajectory), **_trajectory_arrays("exe_", outcome.executed)}
+        arrays = {**trajectory.to_arrays("cmd_"), **({} if outcome.executed is None else outcome.executed.to_arrays("exe_"))}
         arrays.update({f"sig_{k}": np.asarray(v) for k, v in outcome.signals.items()})
         write_npz_atomic(self.directory / name, arrays)
         append_jsonl(self.directory / _INDEX, {
@@ -159,8 +136,8 @@ class ReplayAdapter(Adapter):
         path = self.directory / name
         try:  # a regular file of bounded size, headers read before data (labels are strings)
             arrays = load_npz(path, str(path), limit=_TRIAL_MAX_BYTES, kinds="fiubU")
-            command = _trajectory_from(arrays, "cmd_")
-            executed = _trajectory_from(arrays, "exe_")
+            command = from_arrays(arrays, "cmd_")
+            executed = from_arrays(arrays, "exe_")
         except DmprsError as exc:
             return Outcome(Status.ERROR, message=f"cannot replay {path}: {exc}")
         signals = {k[4:]: (v.item() if v.ndim == 0 else v) for k, v in arrays.items() if k.startswith("sig_")}

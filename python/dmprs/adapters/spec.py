@@ -10,8 +10,9 @@ from typing import Any
 
 import numpy as np
 
+from dmprs import quaternion
 from dmprs.errors import InvalidInputError
-from dmprs.trajectory import UNIT_TOLERANCE, AnyTrajectory, CartesianTrajectory, Trajectory
+from dmprs.trajectory import AnyTrajectory, CartesianTrajectory, Trajectory
 
 
 @dataclass(frozen=True)
@@ -174,25 +175,10 @@ class AdapterSpec:
         return problems
 
     def _check_pose(self, tr: CartesianTrajectory) -> list[str]:
-        problems: list[str] = []
-        t = tr.t
-        if len(t) < self.min_samples:
-            return [f"trajectory has {len(t)} samples; at least {self.min_samples} are needed"]
-        fields = ("position", "quaternion", "velocity", "angular_velocity", "acceleration", "angular_acceleration")
-        for name in fields:
-            arr = getattr(tr, name)
-            if arr is not None and not np.isfinite(arr).all():
-                j, d = np.argwhere(~np.isfinite(arr))[0]
-                problems.append(f"{name}[{j}, {d}] is not finite")
+        problems = pose_problems(tr, min_samples=self.min_samples)
         if problems:
             return problems
-        norm_error = np.abs(np.linalg.norm(tr.quaternion, axis=1) - 1.0)
-        if norm_error.max() > UNIT_TOLERANCE:
-            j = int(np.argmax(norm_error))
-            problems.append(
-                f"quaternion at t = {t[j]:.4g} s has norm {1 + norm_error[j]:.9g}, not a unit quaternion "
-                f"(tolerance {UNIT_TOLERANCE:g})"
-            )
+        t = tr.t
         if self.max_duration is not None and tr.duration > self.max_duration + 1e-12:
             problems.append(f"duration {tr.duration:.4g} s exceeds the limit {self.max_duration:.4g} s")
         p = tr.position
@@ -217,18 +203,7 @@ class AdapterSpec:
             if speed[j] > limit:
                 problems.append(f"{what} is {speed[j]:.6g} {unit} at t = {t[j]:.4g} s, above the maximum {limit:.6g}")
         if self.start_pose is not None:
-            start = np.asarray(self.start_pose, dtype=float)
-            off = np.abs(p[0] - start[:3])
-            for d in np.flatnonzero(off > self.start_tolerance):
-                problems.append(
-                    f"{self.dof_names[d]} starts at {p[0, d]:.6g} m, {off[d]:.3g} from the start pose "
-                    f"{start[d]:.6g} (tolerance {self.start_tolerance:.3g})"
-                )
-            turn = _rotation_angle(tr.quaternion[0], start[3:] / np.linalg.norm(start[3:]))
-            if turn > self.start_tolerance:
-                problems.append(
-                    f"the orientation starts {turn:.3g} rad from the start pose's (tolerance {self.start_tolerance:.3g})"
-                )
+            problems += start_problems(tr, self.start_pose, self.start_tolerance)
         return problems
 
     def _check_bounds(self, problems, t, what, values, low, high) -> None:
@@ -256,28 +231,61 @@ def _derivative(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.gradient(y, t, axis=0, edge_order=2 if len(t) >= 3 else 1)
 
 
-def _rotation_angle(a: np.ndarray, b: np.ndarray) -> float:
-    """The angle (rad) of the rotation between unit quaternions a and b, either sign."""
-    return float(2.0 * np.arccos(min(1.0, abs(float(np.dot(a, b))))))
-
-
 def _angular_velocity(t: np.ndarray, q: np.ndarray) -> np.ndarray:
     """World-frame angular velocity (T, 3) of sampled unit quaternions, by finite differences of
     consecutive rotations: ``2 log(q_{j+1} conj(q_j)) / dt`` at the midpoints, interpolated."""
     if len(t) < 2:
         return np.zeros((len(t), 3))
-    w0, v0 = q[:-1, 0], -q[:-1, 1:]  # conj(q_j)
-    w1, v1 = q[1:, 0], q[1:, 1:]
-    # The vector part and scalar of q_{j+1} * conj(q_j), taken on the short side.
-    vec = w1[:, None] * v0 + w0[:, None] * v1 + np.cross(v1, v0)
-    sca = w1 * w0 - np.einsum("ij,ij->i", v1, v0)
-    sign = np.where(sca < 0, -1.0, 1.0)
-    s = np.linalg.norm(vec, axis=1)
-    half = np.arctan2(s, np.abs(sca))
-    k = np.divide(half, s, out=np.ones_like(s), where=s > 0) * sign
-    mid = 2.0 * k[:, None] * vec / np.diff(t)[:, None]
+    mid = quaternion.log(quaternion.product(q[1:], quaternion.conjugate(q[:-1]))) / np.diff(t)[:, None]
     tm = 0.5 * (t[1:] + t[:-1])
     return np.stack([np.interp(t, tm, mid[:, d]) for d in range(3)], axis=1)
+
+
+def pose_problems(tr: CartesianTrajectory, *, min_samples: int) -> list[str]:
+    """What makes a pose trajectory unusable, as every consumer checks it before anything else
+    (an adapter's spec, an adapter that turns poses into joints): too few samples, a value that
+    is not finite, times that do not increase, a quaternion that is not unit. A validated
+    :class:`~dmprs.CartesianTrajectory` can only have too few samples; one built
+    :meth:`~dmprs.CartesianTrajectory.unchecked` may break any. Empty when none."""
+    t = tr.t
+    if len(t) < min_samples:
+        return [f"trajectory has {len(t)} samples; at least {min_samples} are needed"]
+    problems = []
+    for name in ("t", *_POSE_FIELDS):
+        arr = getattr(tr, name)
+        if arr is not None and not np.isfinite(arr).all():
+            where = ", ".join(str(int(i)) for i in np.argwhere(~np.isfinite(arr))[0])
+            problems.append(f"{name}[{where}] is not finite")
+    if problems:
+        return problems
+    if (np.diff(t) <= 0).any():
+        j = int(np.argmax(np.diff(t) <= 0)) + 1
+        return [f"t must be strictly increasing; t[{j}] = {t[j]:.6g} s is not"]
+    norm_error = np.abs(np.linalg.norm(tr.quaternion, axis=1) - 1.0)
+    if norm_error.max() > quaternion.UNIT_TOLERANCE:
+        j = int(np.argmax(norm_error))
+        return [(f"the quaternion at t = {t[j]:.4g} s has norm {1 + norm_error[j]:.9g}, not a unit quaternion "
+                f"(tolerance {quaternion.UNIT_TOLERANCE:g})")]
+    return []
+
+
+def start_problems(tr: CartesianTrajectory, start_pose: tuple[float, ...], tolerance: float) -> list[str]:
+    """Where a usable pose trajectory (:func:`pose_problems`) starts away from ``start_pose``
+    (x, y, z, qw, qx, qy, qz): beyond ``tolerance`` m in position or ``tolerance`` rad in
+    orientation. Empty when it starts there."""
+    start = np.asarray(start_pose, dtype=float)
+    problems = []
+    off = float(np.linalg.norm(tr.position[0] - start[:3]))
+    if off > tolerance:
+        problems.append(f"the position starts {off * 1000:.3g} mm from the start pose's {start[:3].tolist()} m "
+                        f"(tolerance {tolerance * 1000:.3g} mm)")
+    turn = float(quaternion.angle(tr.quaternion[0], start[3:] / np.linalg.norm(start[3:])))
+    if turn > tolerance:
+        problems.append(f"the orientation starts {turn:.3g} rad from the start pose's (tolerance {tolerance:.3g} rad)")
+    return problems
+
+
+_POSE_FIELDS = ("position", "quaternion", "velocity", "angular_velocity", "acceleration", "angular_acceleration")
 
 
 class Status(str, enum.Enum):

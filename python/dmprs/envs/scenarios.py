@@ -12,10 +12,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmprs.database import Database
 from dmprs.errors import InvalidInputError
+from dmprs.experiments import arm_pouring, arm_throwing, matchbox, pouring
 from dmprs.generalize import Generalizer
+from dmprs.tasks import arm_throwing as throwing_task
+from dmprs.tasks.arm_pouring import ArmPouring
 from dmprs.tasks.base import Task
+from dmprs.tasks.pouring import DEMO_VOLUMES, SUCCESS_TOLERANCE, TARGET_VOLUME, Pouring
 
 __all__ = ["Scenario", "arm_pouring_scenario", "matchbox_scenario", "pouring_scenario", "throwing_scenario"]
 
@@ -48,9 +51,7 @@ def matchbox_scenario(demos: str = "default", **config: float) -> Scenario:
     angle pi/2; the query is the outcome angle the generalizer is asked for, between the
     demonstrations' labels. A measured trial scores ``-|eps|`` (rad) with eps = pi/2 - q_a, at
     most pi/2 in size, so a trial without a measurement scores -pi."""
-    from dmprs.experiments import matchbox_setup
-
-    setup = matchbox_setup(demos, **config)
+    setup = matchbox.setup(demos, noise=None, **config)
     task = setup.task
     desired = np.array([math.pi / 2])
     return Scenario(
@@ -62,25 +63,20 @@ def matchbox_scenario(demos: str = "default", **config: float) -> Scenario:
     )
 
 
-def pouring_scenario(volume_range: Sequence[float] = (0.3, 1.0), demo_volumes: Sequence[float] = (0.3, 1.0),
-                     target_volume: float = 0.2, tol: float = 0.010, liquid_seed: int = 0,
+def pouring_scenario(volume_range: Sequence[float] = (0.3, 1.0), demo_volumes: Sequence[float] = DEMO_VOLUMES,
+                     target_volume: float = TARGET_VOLUME, tol: float = SUCCESS_TOLERANCE, liquid_seed: int = 0,
                      cache_dir: str | None = None, **adapter_options: Any) -> Scenario:
     """Pour ``target_volume`` l from a bottle whose volume (the context) is drawn from
-    ``volume_range`` at each reset (``dmprs.tasks.pouring``). Demonstrations pour the target
-    from bottles of ``demo_volumes`` (calibrated in the simulation; cached on disk with
-    ``cache_dir`` or ``DMPRS_CACHE_DIR``), linear generalization with N = 40 kernels. The query is
-    the assumed bottle volume, between the demonstrations' volumes; a measured trial scores
-    ``-|V_poured - V*|`` (l), a trial without a measurement minus the largest volume."""
-    from dmprs.tasks.pouring import Pouring, demonstration
-
+    ``volume_range`` at each reset (``dmprs.tasks.pouring``). The experiment's demonstrations
+    (:func:`dmprs.experiments.pouring.setup`) pour the target from bottles of ``demo_volumes``
+    with the liquid of ``liquid_seed``. The query is the assumed bottle volume, between the
+    demonstrations' volumes; a measured trial scores ``-|V_poured - V*|`` (l), a trial without a
+    measurement minus the largest volume."""
     lo, hi = (float(v) for v in volume_range)
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
         raise InvalidInputError(f"volume_range = {tuple(volume_range)!r} must be 0 < low <= high (l)")
-    db = Database(query_names=Pouring.query_names, query_units=Pouring.query_units)
-    for v in demo_volumes:
-        q, traj, _ = demonstration(v, target_volume, liquid_seed=liquid_seed, cache_dir=cache_dir)
-        db.add(q, traj)
-    gen = Generalizer(db, method="linear", n_basis=40)
+    setup = pouring.setup((lo + hi) / 2, target_volume, tol, liquid_seed=liquid_seed, demo_seed=liquid_seed,
+                          cache_dir=cache_dir, demo_volumes=tuple(demo_volumes))
     tasks: dict[float, Pouring] = {}
 
     def make_task(context: NDArray[np.float64]) -> Task:
@@ -93,7 +89,7 @@ def pouring_scenario(volume_range: Sequence[float] = (0.3, 1.0), demo_volumes: S
         return tasks[v]
 
     return Scenario(
-        name="pouring", generalizer=gen,
+        name="pouring", generalizer=setup.generalizer,
         query_low=np.array([min(demo_volumes)]), query_high=np.array([max(demo_volumes)]),
         context_low=np.array([lo]), context_high=np.array([hi]), context_names=("bottle_volume",),
         make_task=make_task, desired_query=lambda context: context.copy(),
@@ -101,17 +97,15 @@ def pouring_scenario(volume_range: Sequence[float] = (0.3, 1.0), demo_volumes: S
     )
 
 
-def throwing_scenario(generalizer: str = "linear", tol: float | None = None) -> Scenario:
+def throwing_scenario(generalizer: str = "linear", tol: float = throwing_task.SUCCESS_TOLERANCE) -> Scenario:
     """Throw the ball into a basket with the 7-DOF arm (``dmprs.tasks.arm_throwing``, needs the
     ``robot`` extra): the context is the basket's position (x, y in m), drawn at each reset from
     the box the demonstrations landed in; the query is the landing point the generalizer is asked
     for, within that box. A measured trial scores ``-|eps|`` (m), a trial without a landing minus
     the box's diagonal."""
-    from dmprs.tasks.arm_throwing.experiment import arm_throwing_setup, demonstrations
-
-    labels = np.array([label for label, _ in demonstrations()])
+    labels = np.array([label for label, _ in arm_throwing.demonstrations()])
     lo, hi = labels.min(axis=0), labels.max(axis=0)
-    setup = arm_throwing_setup(tuple((lo + hi) / 2), generalizer, tol=tol)
+    setup = arm_throwing.setup(tuple((lo + hi) / 2), generalizer, tol=tol)
     return Scenario(
         name="throwing", generalizer=setup.generalizer, query_low=lo, query_high=hi,
         context_low=lo.copy(), context_high=hi.copy(), context_names=("basket_x", "basket_y"),
@@ -127,13 +121,10 @@ def arm_pouring_scenario(volume_range: Sequence[float] = (0.4, 0.9), cache_dir: 
     ``DMPRS_CACHE_DIR``), generalized linearly as Cartesian DMPs; the query is the assumed bottle
     volume. A measured trial scores ``-|V_poured - V*|`` (l), a trial without a measurement -1.
     One step is a few seconds of MuJoCo."""
-    from dmprs.tasks.arm_pouring import DEMO_VOLUMES, ArmPouring
-    from dmprs.tasks.arm_pouring.experiment import TOLERANCE, arm_pouring_setup
-
     lo, hi = (float(v) for v in volume_range)
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
         raise InvalidInputError(f"volume_range = {tuple(volume_range)!r} must be 0 < low <= high (l)")
-    setup = arm_pouring_setup((lo + hi) / 2, cache_dir=cache_dir)
+    setup = arm_pouring.setup((lo + hi) / 2, cache_dir=cache_dir)
     tasks: dict[float, ArmPouring] = {}
 
     def make_task(context: NDArray[np.float64]) -> Task:
@@ -141,12 +132,12 @@ def arm_pouring_scenario(volume_range: Sequence[float] = (0.4, 0.9), cache_dir: 
         if v not in tasks:
             if len(tasks) >= 8:  # each holds a settled liquid: keep the cache small
                 tasks.clear()
-            tasks[v] = ArmPouring(v, tol=TOLERANCE)
+            tasks[v] = ArmPouring(v)
         return tasks[v]
 
     return Scenario(
         name="arm-pouring", generalizer=setup.generalizer,
-        query_low=np.array([min(DEMO_VOLUMES)]), query_high=np.array([max(DEMO_VOLUMES)]),
+        query_low=np.array([setup.low]), query_high=np.array([setup.high]),
         context_low=np.array([lo]), context_high=np.array([hi]), context_names=("bottle_volume",),
         make_task=make_task, desired_query=lambda context: context.copy(), failure_reward=-1.0,
     )

@@ -60,7 +60,7 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
         ax[0].legend(fontsize=7)
         paths.append(save_figure(fig, out / fname))
     if any(r["kind"] == "learn" and r["part"] == "arm_pouring" for r in results):
-        from dmprs.tasks.arm_pouring.experiment import frame_strip
+        from dmprs.experiments.arm_pouring import frame_strip
 
         strip = frame_strip(out)  # None, with a one-line note, where no OpenGL backend is available
         if strip is not None:

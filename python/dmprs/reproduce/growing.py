@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from dmprs.reproduce.part import Part
+
 #: the sequence's bottle volumes (l): 12, inside the demos' 0.3-1.0 l, whole 2 ml discs
 VOLUMES = tuple(round(float(v) * 0.002, 3) for v in np.round(np.linspace(0.34, 0.94, 12) / 0.002))
 #: generalizer options for a growing database, chosen by measurement (docs/growing.md): lwr-gp
@@ -62,12 +64,12 @@ def plan_growing(quick: bool = False) -> list[GrowingSpec]:
 
 def run_growing(spec: GrowingSpec) -> dict[str, Any]:
     """Learns the volumes of ``spec`` in its random order, growing the database; plain data."""
-    from dmprs.experiments import pouring_setup
+    from dmprs.experiments import pouring
     from dmprs.generalize import Generalizer
     from dmprs.loop import learn
     from dmprs.tasks.pouring import Pouring
 
-    base = pouring_setup()
+    base = pouring.setup()
     db = base.database
     order = [spec.volumes[i] for i in np.random.default_rng(spec.order_seed).permutation(len(spec.volumes))]
     options = {"n_basis": 40, **GENERALIZERS[spec.generalizer], **dict(spec.options)}
@@ -77,7 +79,7 @@ def run_growing(spec: GrowingSpec) -> dict[str, Any]:
         q0 = task.validate_query(volume)
         n_demos = len(db)
         gen = Generalizer(db, **options)
-        learner = base.learners[spec.learner](q0)
+        learner = base.make_learner(spec.learner, q0)
         r = learn(task, gen, q0, learner, max_trials=spec.max_trials, tol=spec.tol, database=db)
         first = r.trials[0]
         runs.append({
@@ -187,3 +189,9 @@ def figure_growing(results: list[dict[str, Any]], out: str | Path) -> Path:
     ax[1].legend(fontsize=7)
     ax[1].xaxis.get_major_locator().set_params(integer=True)
     return save_figure(fig, out / "growing_pouring.png")
+
+
+PART = Part(
+    "growing", "Learning gets faster as the database grows (2-D pouring; docs/growing.md)",
+    plan=plan_growing, run=run_growing, summarize=summarize_growing, markdown_of=markdown_growing, figure=figure_growing, needs=None,
+)

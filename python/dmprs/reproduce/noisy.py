@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from dmprs.reproduce.part import Part
+
 #: noise levels per experiment: (execution, measurement, contact). Matchbox: 0.5 mm fingertip
 #: tracking, 1 deg on the measured angle, 5 % friction and restitution; pouring: 0.01 rad tilt
 #: tracking, 3 ml on the poured volume (a kitchen scale).
@@ -85,13 +87,13 @@ def plan_noisy(quick: bool = False) -> list[NoisySpec | BracketSpec]:
 def run_bracket(spec: BracketSpec) -> dict[str, Any]:
     """Per seed: how far the root q* of the noise-free map lies outside the final bracket, and
     whether the run stopped on a reading whose noise-free error is within the tolerance; plain data."""
-    from dmprs.experiments import analytic_setup
+    from dmprs.experiments import analytic
     from dmprs.learners import GoldenSection
     from dmprs.loop import learn
     from dmprs.tasks.noise import Noise
 
     def golden(noise: Noise, guard: float | None, max_trials: int, tol: float, seed: int) -> tuple[Any, Any]:
-        setup = analytic_setup(noise=noise)
+        setup = analytic.setup(noise=noise)
         lrn = GoldenSection(setup.desired_query, low=setup.low, high=setup.high, mode="robust",
                             tol=tol, max_trials=max_trials, noise=guard)
         return lrn, learn(setup.task, setup.generalizer, setup.desired_query, lrn, max_trials=max_trials,
@@ -105,7 +107,7 @@ def run_bracket(spec: BracketSpec) -> dict[str, Any]:
     delta = 2.0 * BRACKET_SIGMA * abs((qb - qa) / (eb - ea))
     noise = Noise(measurement=BRACKET_SIGMA, outliers=spec.outliers, outlier_scale=OUTLIER_SCALE * (spec.outliers > 0))
     guard = BRACKET_SIGMA if spec.guard else None
-    exact_setup = analytic_setup()
+    exact_setup = analytic.setup()
     runs = []
     for k in range(spec.seeds):
         lrn, _ = golden(noise, guard, spec.max_trials, 1e-12, 1000 * k)
@@ -248,3 +250,9 @@ def figure_noisy(results: list[dict[str, Any]], out: str | Path) -> Path:
         ax.legend(fontsize=7)
     axes[-1, 0].set(xlabel="trial")
     return save_figure(fig, out / "noisy_robot.png")
+
+
+PART = Part(
+    "noisy", "A noisy robot (matchbox and 2-D pouring; docs/growing.md)",
+    plan=plan_noisy, run=run_noisy, summarize=summarize_noisy, markdown_of=markdown_noisy, figure=figure_noisy, needs=None,
+)

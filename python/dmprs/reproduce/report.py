@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import statistics
 from pathlib import Path
 from typing import Any
 
 from dmprs.baselines import METHODS
 from dmprs.reproduce.parts import PARTS
+from dmprs.reproduce.stats import trial_stats
 
 PAPER = {
     "matchbox": "Fig. 4: 4 trials in simulation (eq. 16, K = I); 5 on the real robot",
@@ -19,14 +19,6 @@ PAPER = {
 
 
 
-def _stats(values: list[int | None], budget: int | None = None) -> dict[str, Any]:
-    ok = [v for v in values if v is not None]
-    return {"runs": len(values), "successes": len(ok),
-            "median": statistics.median(ok) if len(ok) == len(values) and ok else
-            (statistics.median(ok + [float("inf")] * (len(values) - len(ok))) if ok else None),
-            "min": min(ok) if ok else None, "max": max(ok) if ok else None, "budget": budget}
-
-
 def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
     """The table: per experiment and learner, trials to success (median and range)."""
     rows = []
@@ -35,7 +27,7 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
             continue
         setup = ", ".join(f"{k} {v}" for k, v in r["setup"].items())
         rows.append({"part": r["part"], "experiment": f"{r['experiment']} ({setup})", "learner": r["learner"],
-                     **_stats([r["trials_to_success"]]), "paper": PAPER[r["part"]],
+                     **trial_stats([r["trials_to_success"]]), "paper": PAPER[r["part"]],
                      "stop_reason": None if r["converged"] else r["stop_reason"]})
     groups: dict[tuple, list[dict[str, Any]]] = {}
     for r in results:
@@ -45,7 +37,7 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
         name = METHODS[method].name
         rows.append({"part": "baselines", "experiment": f"matchbox (demos {demos})",
                      "learner": f"{name}, sigma {sf} x max abs(w), {len(runs)} seeds",
-                     **_stats([r["trials_to_success"] for r in runs], runs[0]["budget"]),
+                     **trial_stats([r["trials_to_success"] for r in runs], runs[0]["budget"]),
                      "paper": PAPER["baselines"]})
     sections = [{"kind": part.kind, "title": part.title, "markdown": part.markdown(results)}
                 for part in PARTS if any(r.get("kind") == part.kind for r in results)]

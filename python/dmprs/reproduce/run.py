@@ -55,6 +55,6 @@ def _prepare_pouring(specs: list[Any], cache_dir: Path) -> None:
         for v in DEMO_VOLUMES:
             demonstration(v, cache_dir=str(cache_dir))
     if "arm-pouring" in experiments:
-        from dmprs.tasks.arm_pouring.experiment import demonstrations
+        from dmprs.experiments.arm_pouring import demonstrations
 
         demonstrations(cache_dir=str(cache_dir))

@@ -22,7 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from dmprs.reproduce.report import _stats
+from dmprs.reproduce.part import Part
+from dmprs.reproduce.stats import trial_stats
 
 MAX_TRIALS = 15
 #: the issue's floors: median trials to success for baskets inside / up to 20 % outside the demos
@@ -38,7 +39,7 @@ class ThrowingSpec:
 
     target: tuple[float, float]
     region: str  # "inside" | "outside"
-    generalizer: str  # a key of dmprs.tasks.arm_throwing.experiment.GENERALIZERS
+    generalizer: str  # a key of dmprs.experiments.arm_throwing.GENERALIZERS
     learner: str
     noise_seed: int | None = None  # None: the exact robot
     tol: float = 0.05  # the basket's radius (m)
@@ -53,7 +54,7 @@ class ThrowingSpec:
 
 def baskets(n: int, seed: int = 0) -> dict[str, list[tuple[float, float]]]:
     """``n`` unseen baskets inside the demos' landing box and ``n`` up to 20 % outside it."""
-    from dmprs.tasks.arm_throwing.experiment import demonstrations
+    from dmprs.experiments.arm_throwing import demonstrations
 
     labels = np.array([label for label, _ in demonstrations()])
     lo, hi = labels.min(axis=0), labels.max(axis=0)
@@ -96,12 +97,12 @@ def plan_throwing(quick: bool = False) -> list[ThrowingSpec]:
 
 def run_throwing(spec: ThrowingSpec) -> dict[str, Any]:
     """Learns ``spec``; plain data (every trial's query, landing and error)."""
+    from dmprs.experiments import arm_throwing
     from dmprs.loop import learn
-    from dmprs.tasks.arm_throwing.experiment import arm_throwing_setup, demonstrations
     from dmprs.tasks.noise import Noise
 
     noise = None if spec.noise_seed is None else Noise(execution=NOISE[0], measurement=NOISE[1])
-    setup = arm_throwing_setup(spec.target, spec.generalizer, tol=spec.tol, noise=noise)
+    setup = arm_throwing.setup(spec.target, spec.generalizer, tol=spec.tol, noise=noise)
     r = learn(setup.task, setup.generalizer, setup.desired_query, setup.make_learner(spec.learner),
               max_trials=spec.max_trials, seed=0 if spec.noise_seed is None else 1000 * spec.noise_seed)
     trials = [{"query": t.query.tolist(), "status": t.status, "success": t.success,
@@ -111,7 +112,7 @@ def run_throwing(spec: ThrowingSpec) -> dict[str, Any]:
             "generalizer": spec.generalizer, "learner": spec.learner, "noise_seed": spec.noise_seed,
             "noise": None if noise is None else list(NOISE), "tol": spec.tol, "max_trials": spec.max_trials,
             "converged": r.converged, "trials_to_success": r.trials_to_success, "stop_reason": r.stop_reason,
-            "demos": [label.tolist() for label, _ in demonstrations()], "trials": trials}
+            "demos": [label.tolist() for label, _ in arm_throwing.demonstrations()], "trials": trials}
 
 
 def summarize_throwing(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -126,7 +127,7 @@ def summarize_throwing(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
         group = [r for r in runs if key(r) == k]
         tol, region, gen, lrn, noisy = -k[0], *k[1:]
         floor = FLOORS[region] if tol == 0.05 else None
-        stats = _stats([r["trials_to_success"] for r in group], group[0]["max_trials"])
+        stats = trial_stats([r["trials_to_success"] for r in group], group[0]["max_trials"])
         robot = f"noisy robot ({NOISE[0]:g} rad tracking, {NOISE[1]:g} m measurement), " \
                 f"{len({r['noise_seed'] for r in group})} seeds" if noisy else "exact robot"
         failed = [r["stop_reason"] for r in group if not r["converged"]]
@@ -183,3 +184,8 @@ def figure_throwing(results: list[dict[str, Any]], out: str | Path) -> Path:
         ax.legend(fontsize=7, loc="upper left")
     return save_figure(fig, out / "throwing.png")
 
+
+PART = Part(
+    "throwing", "Throwing into a basket with the 7-DOF arm, a 2-D query (docs/throwing.md)",
+    plan=plan_throwing, run=run_throwing, summarize=summarize_throwing, markdown_of=markdown_throwing, figure=figure_throwing, needs="mujoco",
+)

@@ -111,7 +111,7 @@ POLYDISPERSITY = 0.1
 CONDIM = 1
 SOLVER = "CG"
 ITERATIONS = 10
-TOLERANCE = 1e-8
+SOLVER_TOLERANCE = 1e-8
 
 #: contact stiffness: the time constant (s) of MuJoCo's soft contacts, 2 timesteps (the smallest
 #: MuJoCo recommends), critically damped; 5 ms let falling spheres sink up to 5.9 mm into each
@@ -225,7 +225,7 @@ def particle_bodies(positions: NDArray[np.float64], radii: NDArray[np.float64] |
 
 def scene_xml(particle_positions: NDArray[np.float64] | None = None, *,
               particle_radii: NDArray[np.float64] | None = None, solver: str = SOLVER,
-              iterations: int = ITERATIONS, condim: int = CONDIM, tolerance: float = TOLERANCE,
+              iterations: int = ITERATIONS, condim: int = CONDIM, tolerance: float = SOLVER_TOLERANCE,
               with_glass: bool = True) -> str:
     """The whole scene as an MJCF string: table, floor, arm with bottle, glass and one sphere per
     row of ``particle_positions`` with ``particle_radii`` (none: the kinematic model used by the IK

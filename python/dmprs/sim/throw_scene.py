@@ -85,7 +85,7 @@ def throw_xml() -> str:
     return f"""<mujoco model="dmprs arm throwing">
 <compiler angle="radian" autolimits="true"/>
 <option timestep="{am.TIMESTEP}" integrator="implicitfast" solver="{am.SOLVER}" iterations="{am.ITERATIONS}"
-        tolerance="{am.TOLERANCE}" cone="pyramidal"/>
+        tolerance="{am.SOLVER_TOLERANCE}" cone="pyramidal"/>
 <visual><global offwidth="640" offheight="480"/></visual>
 <default>
   <geom condim="1" solref="{am.SOLREF_TIME} 1"/>

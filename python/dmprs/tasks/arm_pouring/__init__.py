@@ -3,9 +3,8 @@ successor) holds a bottle of granular "liquid" and must pour **0.2 l** into a gl
 bottle holds (:mod:`dmprs.sim.arm_scene`, model in :mod:`dmprs.sim.arm_model`, docs/arm.md).
 
 * :class:`ArmPouringAdapter` executes either a joint-space :class:`~dmprs.Trajectory` (7 DOFs,
-  rad) or a Cartesian pose trajectory of the bottle's mouth (any object with ``.t`` (T,) and
-  ``.pose`` (T, 7) = x, y, z, qw, qx, qy, qz, such as a ``CartesianDMP`` rollout), which it turns
-  into joints by damped-least-squares differential IK (:mod:`dmprs.sim.arm_ik`). ``check`` does
+  rad) or a :class:`~dmprs.CartesianTrajectory` of the bottle's mouth (such as a ``CartesianDMP``
+  rollout), which it turns into joints by damped-least-squares differential IK (:mod:`dmprs.sim.arm_ik`). ``check`` does
   that IK pass dry and lists every reason to refuse: non-finite or non-unit poses, a start away
   from the home pose, unreachable poses, joint position and velocity limits, the arm or bottle
   touching the table or the glass; each names the time. A simulation that diverges becomes an
@@ -32,8 +31,8 @@ from dmprs.tasks.arm_pouring.demonstrator import (
     demonstration_tangent,
     pour_poses,
 )
-from dmprs.tasks.arm_pouring.poses import PoseTrajectory, PoseTrajectoryLike, pose_to_tangent, tangent_to_pose
-from dmprs.tasks.arm_pouring.task import ArmPouring
+from dmprs.tasks.arm_pouring.poses import pose_to_tangent, tangent_to_pose
+from dmprs.tasks.arm_pouring.task import SUCCESS_TOLERANCE, ArmPouring
 
 __all__ = [
     "CAPACITY",
@@ -42,12 +41,11 @@ __all__ = [
     "DEMO_VOLUMES",
     "PARTICLE_VOLUME",
     "POUR_POSITION",
+    "SUCCESS_TOLERANCE",
     "TARGET_VOLUME",
     "ArmPouring",
     "ArmPouringAdapter",
     "Calibration",
-    "PoseTrajectory",
-    "PoseTrajectoryLike",
     "calibrate_peak_tilt",
     "demonstration_tangent",
     "pose_to_tangent",

@@ -4,7 +4,6 @@ IK pass, limits, collisions, and the outcome signals."""
 from __future__ import annotations
 
 import functools
-import math
 from typing import Any
 
 import numpy as np
@@ -12,10 +11,10 @@ from numpy.typing import NDArray
 
 from dmprs._arrays import as_flag, as_scalar, short
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
+from dmprs.adapters.spec import pose_problems, start_problems
 from dmprs.errors import InvalidInputError
-from dmprs.tasks.arm_pouring.poses import is_pose_trajectory
 from dmprs.tasks.pouring.adapter import _check_volume as _check_litres
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 #: litres per sphere (the same 2 ml as the 2-D scene)
 PARTICLE_VOLUME = 0.002
@@ -26,14 +25,11 @@ TARGET_VOLUME = 0.2  #: l, the paper's task
 CONTROL_PERIOD = 0.002
 MAX_DURATION = 8.0  #: s
 MAX_HOLD = 10.0  #: s the arm may hold still after a trajectory before the spheres are counted
-#: a pose trajectory must start at the home pose within these (m, rad)
-START_POSITION_TOL = 1e-3
-START_ORIENTATION_TOL = 1e-3
+#: a pose trajectory must start at the home pose within this, in m and in rad
+START_TOLERANCE = 1e-3
 #: an IK residual above these at any sample makes the pose unreachable (m, rad)
 REACH_POSITION_TOL = 1e-3
 REACH_ORIENTATION_TOL = 5e-3
-#: quaternions must be unit to this (a CartesianDMP rollout is to 1e-12)
-UNIT_TOL = 1e-6
 #: s between the samples the collision check looks at
 COLLISION_CHECK_PERIOD = 0.01
 
@@ -136,37 +132,18 @@ class ArmPouringAdapter(BaseAdapter):
         """The joint trajectory that executes ``trajectory`` (itself if it is a joint trajectory;
         the IK's solution for a pose trajectory), its largest IK residuals (m, rad), and every
         problem found before the limit and collision checks."""
-        if not is_pose_trajectory(trajectory):
+        if not isinstance(trajectory, CartesianTrajectory):
             return (trajectory if isinstance(trajectory, Trajectory) else None), 0.0, 0.0, []
         from dmprs.sim.arm_scene import HOME_POSE
 
-        t = np.asarray(trajectory.t, dtype=float)
-        pose = np.asarray(trajectory.pose, dtype=float)
-        if t.ndim != 1 or pose.shape != (len(t), 7):
-            return None, 0.0, 0.0, [f"a pose trajectory needs t (T,) and pose (T, 7); got {t.shape} and {pose.shape}"]
-        if len(t) < 3:
-            return None, 0.0, 0.0, [f"trajectory has {len(t)} samples; at least 3 are needed"]
-        for name, arr in (("t", t), ("pose", pose)):
-            if not np.isfinite(arr).all():
-                idx = tuple(int(i) for i in np.argwhere(~np.isfinite(arr))[0])
-                return None, 0.0, 0.0, [f"{name}{list(idx)} is not finite"]
-        if (np.diff(t) <= 0).any():
-            j = int(np.argmax(np.diff(t) <= 0)) + 1
-            return None, 0.0, 0.0, [f"t must be strictly increasing; t[{j}] = {t[j]:.6g} s is not"]
-        norm = np.linalg.norm(pose[:, 3:], axis=1)
-        off = np.abs(norm - 1)
-        if (off > UNIT_TOL).any():
-            j = int(np.argmax(off))
-            return None, 0.0, 0.0, [(f"the quaternion at t = {t[j]:.4g} s has norm {norm[j]:.9g}, not 1 "
-                                    f"(tolerance {UNIT_TOL:g})")]
-        home = np.asarray(HOME_POSE)
-        problems = []
-        dp = float(np.linalg.norm(pose[0, :3] - home[:3]))
-        dr = 2 * math.acos(min(1.0, abs(float(np.dot(pose[0, 3:] / norm[0], home[3:])))))
-        if dp > START_POSITION_TOL or dr > START_ORIENTATION_TOL:
-            problems.append(f"the pose trajectory starts {dp * 1000:.3g} mm and {dr:.3g} rad from the home pose "
-                            f"{HOME_POSE} (tolerances {START_POSITION_TOL * 1000:g} mm, {START_ORIENTATION_TOL:g} rad)")
+        problems = pose_problems(trajectory, min_samples=self.spec.min_samples) or start_problems(
+            trajectory, HOME_POSE, START_TOLERANCE)
+        if problems:
             return None, 0.0, 0.0, problems
+        t, pose = trajectory.t, trajectory.pose
+        # Unit to rounding; the whole pose is divided by the norms as it was when the arm's numbers
+        # were measured (the granular outcome turns any change of rounding into another pour).
+        norm = np.linalg.norm(pose[:, 3:], axis=1)
         if trajectory is not None and self._planned is not None and self._planned[0] is trajectory:
             _, joints, pe, re = self._planned
             return joints, pe, re, []
@@ -191,10 +168,10 @@ class ArmPouringAdapter(BaseAdapter):
         if problems:
             return problems
         if joints is None:
-            return [(f"expected a dmprs.Trajectory (7 joints) or a pose trajectory (.t, .pose), got "
-                    f"{type(trajectory).__name__}")]
+            return [(f"expected a dmprs.Trajectory (7 joints) or a dmprs.CartesianTrajectory (the mouth's poses), "
+                    f"got {type(trajectory).__name__}")]
         problems = self.spec.check(joints)
-        if is_pose_trajectory(trajectory):
+        if isinstance(trajectory, CartesianTrajectory):
             problems = [f"the IK solution: {p}" for p in problems]
         return problems or self._collisions(joints)
 

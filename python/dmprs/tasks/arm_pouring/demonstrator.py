@@ -10,8 +10,8 @@ import numpy as np
 from dmprs.errors import InvalidInputError
 from dmprs.profiles import min_jerk
 from dmprs.tasks.arm_pouring.adapter import CONTROL_PERIOD
-from dmprs.tasks.arm_pouring.poses import PoseTrajectory, pose_to_tangent
-from dmprs.trajectory import Trajectory
+from dmprs.tasks.arm_pouring.poses import pose_to_tangent
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 DEMO_VOLUMES = (0.3, 1.0)  #: l, the demonstrations' bottles (docs/method.md §9.1)
 #: the scripted demonstration (s): reach over the glass, tilt up, hold, tilt back (docs/method.md §9.3)
@@ -21,7 +21,7 @@ POUR_POSITION = (0.75, -0.175, 0.34)
 
 
 def pour_poses(peak_tilt: float, timing: tuple[float, float, float, float] = DEMO_TIMING,
-               dt: float = CONTROL_PERIOD) -> PoseTrajectory:
+               dt: float = CONTROL_PERIOD) -> CartesianTrajectory:
     """The scripted demonstration as poses of the mouth: minimum-jerk reach from the home pose to
     :data:`POUR_POSITION` (upright), minimum-jerk tilt about the mouth by ``peak_tilt`` rad toward
     the glass (a rotation about the world's x axis, which turns the mouth toward -y), hold, and
@@ -40,8 +40,7 @@ def pour_poses(peak_tilt: float, timing: tuple[float, float, float, float] = DEM
     position = start + min_jerk(t / reach)[0][:, None] * (goal - start)
     angle = peak * (min_jerk((t - reach) / up)[0] - min_jerk((t - reach - up - hold) / down)[0])
     quat = np.stack([np.cos(angle / 2), np.sin(angle / 2), np.zeros_like(t), np.zeros_like(t)], axis=1)
-    return PoseTrajectory(t, np.hstack([position, quat]))
-
+    return CartesianTrajectory.from_pose(t, np.hstack([position, quat]))
 
 
 def demonstration_tangent(peak_tilt: float) -> Trajectory:

@@ -1,4 +1,4 @@
-"""Throwing a ball into a basket with the 7-DOF arm in MuJoCo (issue 16 item 4; the paper's own
+"""Throwing a ball into a basket with the 7-DOF arm in MuJoCo (the paper's own
 example of a query: "the relationship between the basket positions and the DMP parameters"). The
 arm of :mod:`dmprs.sim.arm_model` holds a cup with a ball at its flange; the query is where the
 ball lands on the floor (x, y), m (:mod:`dmprs.sim.throw_scene`, docs/throwing.md).
@@ -12,14 +12,14 @@ ball lands on the floor (x, y), m (:mod:`dmprs.sim.throw_scene`, docs/throwing.m
 
 from dmprs.tasks.arm_throwing.adapter import CONTROL_PERIOD, ArmThrowingAdapter
 from dmprs.tasks.arm_throwing.demonstrator import DEMOS, SWING, SWING_TIME, TURN_TIME, throw_trajectory
-from dmprs.tasks.arm_throwing.task import TOLERANCE, ArmThrowing
+from dmprs.tasks.arm_throwing.task import SUCCESS_TOLERANCE, ArmThrowing
 
 __all__ = [
     "CONTROL_PERIOD",
     "DEMOS",
+    "SUCCESS_TOLERANCE",
     "SWING",
     "SWING_TIME",
-    "TOLERANCE",
     "TURN_TIME",
     "ArmThrowing",
     "ArmThrowingAdapter",

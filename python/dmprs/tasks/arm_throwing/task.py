@@ -14,7 +14,7 @@ from dmprs.tasks.base import Task
 from dmprs.tasks.noise import Noise
 
 #: m: a throw hits the basket when it lands within this of the target (a basket 10 cm across)
-TOLERANCE = 0.05
+SUCCESS_TOLERANCE = 0.05
 
 
 class ArmThrowing(Task):
@@ -31,7 +31,7 @@ class ArmThrowing(Task):
     query_units = ("m", "m")
     sign = 1.0
 
-    def __init__(self, tol: float = TOLERANCE, noise: Noise | None = None) -> None:
+    def __init__(self, tol: float = SUCCESS_TOLERANCE, noise: Noise | None = None) -> None:
         super().__init__(ArmThrowingAdapter(noise))
         self.tol = as_scalar(tol, "tol", positive=True)
 

@@ -21,7 +21,7 @@ CAPACITY = scene.MAX_PARTICLES * PARTICLE_VOLUME
 #: the paper's task: pour 0.2 l (docs/method.md §9.1)
 TARGET_VOLUME = 0.2
 #: success when |V_poured - V*| < 10 ml (docs/method.md §9.2, deterministic simulator)
-TOLERANCE = 0.010
+SUCCESS_TOLERANCE = 0.010
 
 CONTROL_PERIOD = 0.005  #: s; the physics runs at 600 Hz and interpolates the command
 MIN_TILT = -0.1  #: rad; a DMP's return may undershoot upright by a little

@@ -14,7 +14,7 @@ from dmprs.adapters import Outcome
 from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError
 from dmprs.tasks.base import Task
-from dmprs.tasks.pouring.adapter import TARGET_VOLUME, TOLERANCE, PouringAdapter, _check_volume
+from dmprs.tasks.pouring.adapter import SUCCESS_TOLERANCE, TARGET_VOLUME, PouringAdapter, _check_volume
 from dmprs.tasks.pouring.demonstrator import demonstration
 from dmprs.trajectory import Trajectory
 
@@ -44,7 +44,7 @@ class Pouring(Task):
     sign = -1.0
 
     def __init__(self, bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME,
-                 tol: float = TOLERANCE, *, rollout_substeps: int = 1, **adapter_options: Any) -> None:
+                 tol: float = SUCCESS_TOLERANCE, *, rollout_substeps: int = 1, **adapter_options: Any) -> None:
         adapter = PouringAdapter(bottle_volume, **adapter_options)
         super().__init__(adapter)
         self.bottle_volume = adapter.bottle_volume

@@ -1,0 +1,33 @@
+"""What a part of the reproduction beyond the paper's three experiments is: its plan, its runner,
+its Markdown section and its figure, and the optional package it may need."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from dmprs._extras import available
+
+
+@dataclass(frozen=True)
+class Part:
+    """One part of the reproduction. Its specs carry ``kind``, which
+    :func:`dmprs.reproduce.run.dispatch` sends to :attr:`run`."""
+
+    kind: str
+    title: str
+    plan: Callable[[bool], list[Any]]
+    run: Callable[[Any], dict[str, Any]]
+    summarize: Callable[[list[dict[str, Any]]], Any]
+    markdown_of: Callable[[Any], str]
+    figure: Callable[[list[dict[str, Any]], Path], Path | None]
+    #: an importable module the part needs (from an optional extra), or None
+    needs: str | None = None
+
+    def available(self) -> bool:
+        return self.needs is None or available(self.needs)
+
+    def markdown(self, results: list[dict[str, Any]]) -> str:
+        return self.markdown_of(self.summarize(results))
