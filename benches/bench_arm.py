@@ -48,7 +48,7 @@ def physics_only(adapter: ArmPouringAdapter, trajectory) -> float:
     d.qpos[:] = liquid.qpos
     d.qvel[:] = liquid.qvel
     mujoco.mj_forward(m, d)
-    n_steps = round(joints.duration / am.TIMESTEP) + round(adapter.hold / am.TIMESTEP)
+    n_steps = round(joints.duration / am.TIMESTEP) + round(adapter.liquid.hold / am.TIMESTEP)
     times = np.arange(n_steps + 1) * am.TIMESTEP
     ref = np.stack([np.interp(times, joints.t, joints.y[:, j]) for j in range(7)], axis=1)
     t0 = time.process_time()

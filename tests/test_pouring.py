@@ -132,10 +132,10 @@ def test_same_seed_gives_identical_signals():
 def test_reseeding_changes_the_liquid_only_when_asked():
     fixed = PouringAdapter(0.1)
     fixed.reset(seed=5)
-    assert fixed._seed == 0
+    assert fixed.liquid.seed == 0
     noisy = PouringAdapter(0.1, reseed_liquid=True)
     noisy.reset(seed=5)
-    assert noisy._seed == 5
+    assert noisy.liquid.seed == 5
     assert not np.array_equal(scene.settled_liquid(50, 5).radii, scene.settled_liquid(50, 0).radii)
     with noisy:
         noisy.reset(seed=5)
@@ -264,8 +264,8 @@ def test_stop_from_another_thread_ends_the_pour():
 
 @pytest.mark.parametrize("volume, words", [
     (0.0, "must be > 0"), (-0.2, "must be > 0"), (1.5, "exceeds the simulated bottle's capacity of 1.1 l"),
-    (float("nan"), "finite"), (float("inf"), "finite"), (0.0004, "less than one simulated disc"),
-    ("half", "must be a number"), (None, "must be a number"),
+    (float("nan"), "finite"), (float("inf"), "finite"), (0.0004, "less than one particle"),
+    ("half", "must be a real number"), (None, "must be a real number"),
 ])
 def test_bad_bottle_volumes_raise(volume, words):
     with pytest.raises(dmprs.InvalidInputError, match="bottle_volume") as info:

@@ -116,7 +116,7 @@ def frame_strip(out: str | Path, bottle_volume: float = 0.6, learner_query: floa
     joints, _, _, problems = task.adapter.plan(task.trajectory(experiment.generalizer.predict(q)))
     if problems or joints is None or joints.yd is None:
         raise DmprsError(f"the pour to render was refused: {'; '.join(problems)}")
-    liquid = arm_scene.settled_liquid(task.adapter.n_particles, task.adapter.liquid_seed)
+    liquid = arm_scene.settled_liquid(task.adapter.n_particles, task.adapter.liquid.liquid_seed)
     try:
         return arm_render.frame_strip(joints.t, joints.y, joints.yd, liquid,
                                       (0.0, 0.5, 1.4, 2.2, 2.8, 3.6, 4.6), Path(out) / "arm_pouring_strip.png")

@@ -128,7 +128,7 @@ def _fmt(v: Sequence[float] | NDArray[np.float64]) -> str:
     return " ".join(f"{float(x):.9g}" for x in v)
 
 
-def _wall(name: str, r0: float, z0: float, r1: float, z1: float, *, n: int = STAVES,
+def wall(name: str, r0: float, z0: float, r1: float, z1: float, *, n: int = STAVES,
           rgba: str = "0.7 0.85 1 0.35", cls: str = "container") -> list[str]:
     """Box staves forming the surface of revolution of the segment (r0, z0)-(r1, z1) of a
     container's inner wall (a cylinder when r0 = r1, a cone frustum otherwise), in the frame of
@@ -157,9 +157,9 @@ def bottle_geoms() -> list[str]:
     z_neck = -NECK_LENGTH
     z_shoulder = z_neck - BOTTLE_SHOULDER
     z_bottom = -BOTTLE_LENGTH
-    geoms = _wall("neck", NECK_RADIUS, z_neck, NECK_RADIUS, 0.0, n=12)
-    geoms += _wall("shoulder", BOTTLE_RADIUS, z_shoulder, NECK_RADIUS, z_neck)
-    geoms += _wall("body", BOTTLE_RADIUS, z_bottom, BOTTLE_RADIUS, z_shoulder)
+    geoms = wall("neck", NECK_RADIUS, z_neck, NECK_RADIUS, 0.0, n=12)
+    geoms += wall("shoulder", BOTTLE_RADIUS, z_shoulder, NECK_RADIUS, z_neck)
+    geoms += wall("body", BOTTLE_RADIUS, z_bottom, BOTTLE_RADIUS, z_shoulder)
     geoms.append(f'<geom name="bottom" class="container" type="cylinder" '
                  f'size="{BOTTLE_RADIUS + 2 * WALL:.9g} {WALL}" pos="0 0 {z_bottom - WALL:.9g}" '
                  'rgba="0.7 0.85 1 0.35"/>')
@@ -169,7 +169,7 @@ def bottle_geoms() -> list[str]:
 def glass_geoms() -> list[str]:
     """The glass in the world frame, standing on the table at GLASS_CENTER."""
     x, y = GLASS_CENTER
-    inner = _wall("glass", GLASS_RADIUS, 2 * WALL, GLASS_RADIUS, GLASS_HEIGHT, rgba="0.6 0.8 0.6 0.4",
+    inner = wall("glass", GLASS_RADIUS, 2 * WALL, GLASS_RADIUS, GLASS_HEIGHT, rgba="0.6 0.8 0.6 0.4",
                   cls="glassware")
     body = "\n".join(inner)
     return [f'<body name="glass" pos="{x} {y} 0">',
@@ -178,9 +178,9 @@ def glass_geoms() -> list[str]:
             body, "</body>"]
 
 
-def _arm_bodies(bottle: list[str]) -> str:
-    """Links 1..7 as nested bodies, each a capsule from its joint to the next, with the bottle
-    in link 7."""
+def arm_bodies(tool: list[str]) -> str:
+    """Links 1..7 as nested bodies, each a capsule from its joint to the next, with the ``tool``'s
+    geoms (the bottle, or the throwing scene's cup) in a body held at link 7's flange."""
     open_tags, z = [], 0.0
     for i in range(7):
         z_joint = sum(LINK_OFFSETS[: i + 1])
@@ -209,7 +209,7 @@ def _arm_bodies(bottle: list[str]) -> str:
                    f'<site name="mouth" pos="0 0 0" size="0.005"/>\n'
                    f'<geom name="bottle_mass" type="sphere" size="0.01" pos="0 0 {-mid:.9g}" '
                    f'mass="{BOTTLE_MASS}" contype="0" conaffinity="0" group="3"/>\n'
-                   + "\n".join(bottle) + "\n</body>")
+                   + "\n".join(tool) + "\n</body>")
     return "\n".join(open_tags) + "\n" + bracket + "\n" + bottle_body + "\n" + "</body>\n" * 7
 
 
@@ -223,6 +223,43 @@ def particle_bodies(positions: NDArray[np.float64], radii: NDArray[np.float64] |
         for i, (x, ri) in enumerate(zip(p, r, strict=True)))
 
 
+def header(model: str, *, solver: str = SOLVER, iterations: int = ITERATIONS, tolerance: float = SOLVER_TOLERANCE,
+           condim: int = CONDIM, classes: Sequence[str] = ()) -> str:
+    """The MJCF of a scene with this arm up to its world body: the compiler, the physics options,
+    the offscreen buffer and the default classes of the arm's links and of containers, then
+    ``classes`` (more default classes, one MJCF line each)."""
+    lines = [
+        f'<mujoco model="{model}">',
+        '<compiler angle="radian" autolimits="true"/>',
+        f'<option timestep="{TIMESTEP}" integrator="implicitfast" solver="{solver}" iterations="{iterations}"',
+        f'        tolerance="{tolerance}" cone="pyramidal"/>',
+        '<visual><global offwidth="640" offheight="480"/></visual>',
+        "<default>",
+        f'  <geom condim="{condim}" solref="{SOLREF_TIME} 1"/>',
+        f'  <default class="link"><geom contype="{_ARM}" conaffinity="0" rgba="0.9 0.9 0.9 1"/></default>',
+        f'  <default class="container"><geom contype="{_LIQUID}" conaffinity="{_LIQUID}" mass="0"/></default>',
+        *classes,
+        "</default>",
+    ]
+    return "\n".join(lines)
+
+
+def servo_actuators() -> str:
+    """The arm's joint servos as MJCF position actuators: the PD gains and the torque limits."""
+    return "\n".join(
+        f'<position name="servo_{j}" joint="{j}" kp="{kp}" kv="{kv}" '
+        f'forcerange="{-tau} {tau}" forcelimited="true"/>'
+        for j, kp, kv, tau in zip(JOINT_NAMES, KP, KV, TORQUE_LIMITS, strict=True))
+
+
+#: The end of a scene with this arm: its servos.
+FOOTER = f"""<actuator>
+{servo_actuators()}
+</actuator>
+</mujoco>
+"""
+
+
 def scene_xml(particle_positions: NDArray[np.float64] | None = None, *,
               particle_radii: NDArray[np.float64] | None = None, solver: str = SOLVER,
               iterations: int = ITERATIONS, condim: int = CONDIM, tolerance: float = SOLVER_TOLERANCE,
@@ -233,23 +270,13 @@ def scene_xml(particle_positions: NDArray[np.float64] | None = None, *,
     parts = np.zeros((0, 3)) if particle_positions is None else np.asarray(particle_positions, dtype=float)
     tx, ty = TABLE_CENTER
     glass = "\n".join(glass_geoms()) if with_glass else ""
-    actuators = "\n".join(
-        f'<position name="servo_{j}" joint="{j}" kp="{kp}" kv="{kv}" '
-        f'forcerange="{-tau} {tau}" forcelimited="true"/>'
-        for j, kp, kv, tau in zip(JOINT_NAMES, KP, KV, TORQUE_LIMITS, strict=True))
-    return f"""<mujoco model="dmprs arm pouring">
-<compiler angle="radian" autolimits="true"/>
-<option timestep="{TIMESTEP}" integrator="implicitfast" solver="{solver}" iterations="{iterations}"
-        tolerance="{tolerance}" cone="pyramidal"/>
-<visual><global offwidth="640" offheight="480"/></visual>
-<default>
-  <geom condim="{condim}" solref="{SOLREF_TIME} 1"/>
-  <default class="link"><geom contype="{_ARM}" conaffinity="0" rgba="0.9 0.9 0.9 1"/></default>
-  <default class="container"><geom contype="{_LIQUID}" conaffinity="{_LIQUID}" mass="0"/></default>
-  <default class="glassware"><geom contype="{_LIQUID}" conaffinity="{_LIQUID | _ARM}" mass="0"/></default>
-  <default class="particle"><geom type="sphere" size="{PARTICLE_RADIUS:.9g}" mass="{PARTICLE_MASS}"
-      contype="{_LIQUID}" conaffinity="{_LIQUID}" rgba="0.2 0.4 0.9 1"/></default>
-</default>
+    classes = (
+        f'  <default class="glassware"><geom contype="{_LIQUID}" conaffinity="{_LIQUID | _ARM}" mass="0"/></default>',
+        (f'  <default class="particle"><geom type="sphere" size="{PARTICLE_RADIUS:.9g}" mass="{PARTICLE_MASS}"\n'
+        f'      contype="{_LIQUID}" conaffinity="{_LIQUID}" rgba="0.2 0.4 0.9 1"/></default>'),
+    )
+    return f"""{header("dmprs arm pouring", solver=solver, iterations=iterations, tolerance=tolerance, condim=condim,
+                   classes=classes)}
 <worldbody>
 <light pos="0.4 -0.6 2" dir="0 0.3 -1"/>
 <geom name="floor" type="plane" size="3 3 0.1" pos="0 0 {FLOOR_Z}" contype="{_LIQUID}"
@@ -258,15 +285,11 @@ def scene_xml(particle_positions: NDArray[np.float64] | None = None, *,
       contype="{_LIQUID}" conaffinity="{_LIQUID | _ARM}" rgba="0.55 0.4 0.3 1"/>
 <geom name="base" type="cylinder" size="0.09 {LINK_OFFSETS[0] / 2:.9g}" pos="0 0 {LINK_OFFSETS[0] / 2:.9g}"
       contype="0" conaffinity="0" rgba="0.9 0.9 0.9 1"/>
-{_arm_bodies(bottle_geoms())}
+{arm_bodies(bottle_geoms())}
 {glass}
 {particle_bodies(parts, particle_radii)}
 </worldbody>
-<actuator>
-{actuators}
-</actuator>
-</mujoco>
-"""
+{FOOTER}"""
 
 
 def load(particle_positions: NDArray[np.float64] | None = None, **options: Any) -> Any:

@@ -1,7 +1,7 @@
 """Throwing a ball into a basket with the arm of :mod:`dmprs.sim.arm_model` (issue 16 item 4).
 
 The scene is composed from the arm model's pieces: the same KUKA LBR iiwa 14 links, joints,
-limits, masses and joint servo at 1 kHz (``arm_model._arm_bodies``, ``KP``, ``KV``,
+limits, masses and joint servo at 1 kHz (``arm_model.arm_bodies``, ``KP``, ``KV``,
 ``TORQUE_LIMITS``), standing on a pedestal ``PEDESTAL_HEIGHT`` above the floor (z = 0) and turned
 by pi about z, so that the swing of A2, A4 and A6 that throws toward the arm's -x throws toward
 the world's +x. Where the pouring scene holds a bottle, the flange holds a tight **cup** (a short
@@ -68,7 +68,7 @@ def cup_geoms() -> list[str]:
     """The cup in the frame of ``arm_model``'s tool body: bottom on the flange axis ``BRACKET``
     beyond the flange (the tool body's z = -BOTTLE_LENGTH / 2), opening along the body's +z."""
     z0 = -am.BOTTLE_LENGTH / 2
-    geoms = am._wall("cup", CUP_RADIUS, z0, CUP_RADIUS, z0 + CUP_DEPTH, rgba="0.8 0.3 0.2 1")
+    geoms = am.wall("cup", CUP_RADIUS, z0, CUP_RADIUS, z0 + CUP_DEPTH, rgba="0.8 0.3 0.2 1")
     geoms.append(f'<geom name="cup_bottom" class="container" type="cylinder" '
                  f'size="{CUP_RADIUS + 2 * am.WALL:.9g} {am.WALL}" pos="0 0 {z0 - am.WALL:.9g}" rgba="0.8 0.3 0.2 1"/>')
     return geoms
@@ -77,21 +77,8 @@ def cup_geoms() -> list[str]:
 def throw_xml() -> str:
     """The throwing scene as an MJCF string: floor, pedestal, arm with cup, ball (placed at the
     origin: :func:`settled_ball` puts it in the cup)."""
-    actuators = "\n".join(
-        f'<position name="servo_{j}" joint="{j}" kp="{kp}" kv="{kv}" '
-        f'forcerange="{-tau} {tau}" forcelimited="true"/>'
-        for j, kp, kv, tau in zip(am.JOINT_NAMES, am.KP, am.KV, am.TORQUE_LIMITS, strict=True))
     h, p = PEDESTAL_HEIGHT, PEDESTAL_HALF
-    return f"""<mujoco model="dmprs arm throwing">
-<compiler angle="radian" autolimits="true"/>
-<option timestep="{am.TIMESTEP}" integrator="implicitfast" solver="{am.SOLVER}" iterations="{am.ITERATIONS}"
-        tolerance="{am.SOLVER_TOLERANCE}" cone="pyramidal"/>
-<visual><global offwidth="640" offheight="480"/></visual>
-<default>
-  <geom condim="1" solref="{am.SOLREF_TIME} 1"/>
-  <default class="link"><geom contype="2" conaffinity="0" rgba="0.9 0.9 0.9 1"/></default>
-  <default class="container"><geom contype="1" conaffinity="1" mass="0"/></default>
-</default>
+    return f"""{am.header("dmprs arm throwing", condim=1)}
 <worldbody>
 <light pos="1 -1 3" dir="0 0.3 -1"/>
 <geom name="floor" type="plane" size="5 5 0.1" contype="1" conaffinity="1" rgba="0.3 0.3 0.3 1"/>
@@ -100,7 +87,7 @@ def throw_xml() -> str:
 <body name="mount" pos="0 0 {h:.9g}" quat="0 0 0 1">
 <geom name="base" type="cylinder" size="0.09 {am.LINK_OFFSETS[0] / 2:.9g}" pos="0 0 {am.LINK_OFFSETS[0] / 2:.9g}"
       contype="0" conaffinity="0" rgba="0.9 0.9 0.9 1"/>
-{am._arm_bodies(cup_geoms())}
+{am.arm_bodies(cup_geoms())}
 </body>
 <body name="ball" pos="0 0 {BALL_RADIUS}">
 <freejoint name="ball"/>
@@ -108,11 +95,7 @@ def throw_xml() -> str:
       rgba="0.95 0.8 0.1 1"/>
 </body>
 </worldbody>
-<actuator>
-{actuators}
-</actuator>
-</mujoco>
-"""
+{am.FOOTER}"""
 
 
 @functools.lru_cache(maxsize=1)

@@ -6,6 +6,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
+from numpy.typing import NDArray
+
 from dmprs.adapters import AdapterSpec, SignalSpec
 from dmprs.sim import arm_model
 
@@ -17,7 +20,7 @@ MIN_SAMPLES = 3
 TRACKING_ERROR = SignalSpec("tracking_error", "rad", "largest joint tracking error while moving")
 
 
-def spec(name: str, *, home: Sequence[float], control_period: float, max_duration: float,
+def spec(name: str, *, home: Sequence[float] | NDArray[np.float64], control_period: float, max_duration: float,
          signals: Sequence[SignalSpec]) -> AdapterSpec:
     """The adapter spec of a task on the iiwa: its joints ``a1..a7`` (rad) with their limits,
     starting at ``home`` (rad), and the task's ``signals``."""

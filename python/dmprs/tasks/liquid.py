@@ -50,6 +50,13 @@ def signals(particle: str) -> tuple[SignalSpec, ...]:
     )
 
 
+#: the poured volume over a pour, and its sample times
+CURVE_SIGNALS = (
+    SignalSpec("poured_volume_curve", "l", "liquid in the glass over time"),
+    SignalSpec("poured_volume_time", "s", "sample times of poured_volume_curve"),
+)
+
+
 def counts(n_glass: int, n_bottle: int, n_spilled: int, n: int, poured_volume: float) -> dict[str, Any]:
     """The eight signals of :func:`signals` from the particle counts; ``poured_volume`` is the
     reading of the glass (the exact count times the particle volume, or a noisy reading of it)."""

@@ -19,8 +19,6 @@ bottle holds (:mod:`dmprs.sim.arm_scene`, model in :mod:`dmprs.sim.arm_model`, d
 from dmprs.tasks.arm_pouring.adapter import (
     CAPACITY,
     CONTROL_PERIOD,
-    PARTICLE_VOLUME,
-    TARGET_VOLUME,
     ArmPouringAdapter,
 )
 from dmprs.tasks.arm_pouring.calibration import Calibration, calibrate_peak_tilt, poured_volume
@@ -33,6 +31,7 @@ from dmprs.tasks.arm_pouring.demonstrator import (
 )
 from dmprs.tasks.arm_pouring.poses import pose_to_tangent, tangent_to_pose
 from dmprs.tasks.arm_pouring.task import SUCCESS_TOLERANCE, ArmPouring
+from dmprs.tasks.liquid import PARTICLE_VOLUME, TARGET_VOLUME
 
 __all__ = [
     "CAPACITY",

@@ -9,22 +9,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmprs._arrays import as_flag, as_scalar, short
-from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
+from dmprs.adapters import BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.adapters.spec import pose_problems, start_problems
-from dmprs.errors import InvalidInputError
-from dmprs.tasks.pouring.adapter import _check_volume as _check_litres
+from dmprs.tasks import iiwa
+from dmprs.tasks.liquid import CURVE_SIGNALS, PARTICLE_VOLUME, Liquid, check_volume, counts
+from dmprs.tasks.liquid import signals as liquid_signals
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
-#: litres per sphere (the same 2 ml as the 2-D scene)
-PARTICLE_VOLUME = 0.002
-#: the most the simulated bottle holds (l): 500 spheres
+#: the most the simulated bottle holds (l): 500 spheres of 2 ml
 CAPACITY = 1.0
-TARGET_VOLUME = 0.2  #: l, the paper's task
 #: s: command sample period of a trajectory (the servo interpolates it to 1 kHz)
 CONTROL_PERIOD = 0.002
 MAX_DURATION = 8.0  #: s
-MAX_HOLD = 10.0  #: s the arm may hold still after a trajectory before the spheres are counted
 #: a pose trajectory must start at the home pose within this, in m and in rad
 START_TOLERANCE = 1e-3
 #: an IK residual above these at any sample makes the pose unreachable (m, rad)
@@ -32,12 +28,6 @@ REACH_POSITION_TOL = 1e-3
 REACH_ORIENTATION_TOL = 5e-3
 #: s between the samples the collision check looks at
 COLLISION_CHECK_PERIOD = 0.01
-
-
-def _check_volume(value: Any, name: str, capacity: float = CAPACITY) -> float:
-    """A volume in litres: finite, > 0, within ``capacity``, at least one 2 ml sphere (the 2-D
-    scene's rule, whose particles are the same 2 ml)."""
-    return _check_litres(value, name, capacity=capacity)
 
 
 def _tilt(quat: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -73,58 +63,28 @@ class ArmPouringAdapter(BaseAdapter):
 
     def __init__(self, bottle_volume: float = 0.5, *, liquid_seed: int = 0, reseed_liquid: bool = False,
                  hold: float = 0.5) -> None:
-        from dmprs.sim import arm_model as am
         from dmprs.sim.arm_scene import home_configuration
 
-        v = _check_volume(bottle_volume, "bottle_volume")
+        v = check_volume(bottle_volume, "bottle_volume", capacity=CAPACITY)
         self.n_particles = round(v / PARTICLE_VOLUME)
         self.bottle_volume = self.n_particles * PARTICLE_VOLUME
-        if not (isinstance(liquid_seed, (int, np.integer)) and not isinstance(liquid_seed, (bool, np.bool_))
-                and liquid_seed >= 0):
-            raise InvalidInputError(f"liquid_seed = {short(liquid_seed)} must be a non-negative integer")
-        hold_s = as_scalar(hold, "hold")
-        if not 0 <= hold_s <= MAX_HOLD:
-            raise InvalidInputError(f"hold = {hold_s:g} s must be between 0 and {MAX_HOLD:g}")
-        reseed = as_flag(reseed_liquid, "reseed_liquid")
+        self.liquid = Liquid(liquid_seed, reseed_liquid, hold)
         self.home = home_configuration()
-        super().__init__(AdapterSpec(
-            name="arm-pouring",
-            dof_names=am.JOINT_NAMES,
-            dof_units=("rad",) * 7,
-            control_period=CONTROL_PERIOD,
+        super().__init__(iiwa.spec(
+            "arm-pouring", home=self.home, control_period=CONTROL_PERIOD, max_duration=MAX_DURATION,
             signals=(
-                SignalSpec("poured_volume", "l", "liquid in the glass, counted `hold` s after the trajectory ends"),
-                SignalSpec("remaining_volume", "l", "liquid still in the bottle at the end"),
-                SignalSpec("spilled_volume", "l", "liquid neither in the bottle nor in the glass"),
-                SignalSpec("initial_volume", "l", "liquid in the bottle before the trial"),
-                SignalSpec("poured_particles", "1", "spheres in the glass (2 ml each)"),
-                SignalSpec("remaining_particles", "1", "spheres in the bottle"),
-                SignalSpec("spilled_particles", "1", "spheres elsewhere"),
-                SignalSpec("particles", "1", "spheres in the scene (constant)"),
-                SignalSpec("tracking_error", "rad", "largest joint tracking error while moving"),
+                *liquid_signals("spheres"),
+                iiwa.TRACKING_ERROR,
                 SignalSpec("ik_position_error", "m", "largest IK position residual (0 for joint trajectories)"),
                 SignalSpec("ik_orientation_error", "rad", "largest IK orientation residual"),
                 SignalSpec("max_tilt", "rad", "largest executed tilt of the bottle from upright"),
-                SignalSpec("poured_volume_curve", "l", "liquid in the glass over time"),
-                SignalSpec("poured_volume_time", "s", "sample times of poured_volume_curve"),
+                *CURVE_SIGNALS,
             ),
-            position_min=tuple(-x for x in am.JOINT_LIMITS),
-            position_max=am.JOINT_LIMITS,
-            velocity_max=am.VELOCITY_LIMITS,
-            start_pose=tuple(float(x) for x in self.home),
-            start_tolerance=1e-3,
-            max_duration=MAX_DURATION,
-            min_samples=3,
         ))
-        self.liquid_seed = int(liquid_seed)
-        self.reseed_liquid = reseed
-        self.hold = hold_s
-        self._seed = self.liquid_seed
         self._planned: tuple[Any, Trajectory, float, float] | None = None
 
     def _reset(self, seed: int | None) -> None:
-        if self.reseed_liquid:
-            self._seed = self.liquid_seed if seed is None else int(seed)
+        self.liquid.reset(seed)
 
     # --- the dry pass: IK, limits, collisions ----------------------------------------------------
 
@@ -206,11 +166,11 @@ class ArmPouringAdapter(BaseAdapter):
         joints, pe, re, problems = self.plan(trajectory)
         if problems or joints is None:  # execute() checked already; a changed trajectory is refused
             return Outcome(Status.REJECTED, message="; ".join(problems) or "not a trajectory")
-        liquid = scene.settle_liquid(self.n_particles, self._seed, should_stop=self._interrupted)
+        liquid = scene.settle_liquid(self.n_particles, self.liquid.seed, should_stop=self._interrupted)
         if liquid is None:  # stopped or timed out while the liquid settled
             return self._interrupted_outcome()
         qd = joints.yd if joints.yd is not None else np.gradient(joints.y, joints.t, axis=0)
-        result = scene.simulate_pour(joints.t, joints.y, qd, liquid, hold=self.hold,
+        result = scene.simulate_pour(joints.t, joints.y, qd, liquid, hold=self.liquid.hold,
                                      should_stop=self._interrupted)
         t_rel = joints.t - joints.t[0]
         reached = t_rel <= result.times[-1] + 1e-12
@@ -223,16 +183,9 @@ class ArmPouringAdapter(BaseAdapter):
         moving = result.times <= t_rel[-1] + 1e-12
         tracking = float(np.abs(result.q[moving] - result.q_ref[moving]).max())
         tilt = float(_tilt(self._mouth_quaternions(result.q[::10])).max())
-        n = result.n_particles
         signals = {
-            "poured_volume": result.n_glass * PARTICLE_VOLUME,
-            "remaining_volume": result.n_bottle * PARTICLE_VOLUME,
-            "spilled_volume": result.n_spilled * PARTICLE_VOLUME,
-            "initial_volume": n * PARTICLE_VOLUME,
-            "poured_particles": result.n_glass,
-            "remaining_particles": result.n_bottle,
-            "spilled_particles": result.n_spilled,
-            "particles": n,
+            **counts(result.n_glass, result.n_bottle, result.n_spilled, result.n_particles,
+                     result.n_glass * PARTICLE_VOLUME),
             "tracking_error": tracking,
             "ik_position_error": pe,
             "ik_orientation_error": re,

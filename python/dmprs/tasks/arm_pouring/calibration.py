@@ -13,8 +13,9 @@ from typing import Any
 import numpy as np
 
 from dmprs.errors import NumericalError
-from dmprs.tasks.arm_pouring.adapter import CONTROL_PERIOD, TARGET_VOLUME, ArmPouringAdapter, _check_volume
+from dmprs.tasks.arm_pouring.adapter import CAPACITY, CONTROL_PERIOD, ArmPouringAdapter
 from dmprs.tasks.arm_pouring.demonstrator import DEMO_TIMING, POUR_POSITION, pour_poses
+from dmprs.tasks.liquid import TARGET_VOLUME, check_volume
 from dmprs.tasks.pouring.calibration import Calibration  # the same record as the 2-D pouring's
 
 
@@ -65,8 +66,8 @@ def _calibrate(bottle_volume: float, target_volume: float, liquid_seed: int, tol
                bracket: tuple[float, float], cache_dir: str | None) -> Calibration:
     from dmprs.learners import IllinoisRootFinder
 
-    v = _check_volume(bottle_volume, "bottle_volume")
-    target = _check_volume(target_volume, "target_volume", capacity=v)
+    v = check_volume(bottle_volume, "bottle_volume", capacity=CAPACITY)
+    target = check_volume(target_volume, "target_volume", capacity=v)
     lo, hi = bracket
     path = None
     if cache_dir is not None:

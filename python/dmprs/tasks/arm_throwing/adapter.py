@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
+from dmprs.adapters import BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
+from dmprs.tasks import iiwa
 from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
@@ -35,7 +36,6 @@ class ArmThrowingAdapter(BaseAdapter):
     """
 
     def __init__(self, noise: Noise | None = None) -> None:
-        from dmprs.sim import arm_model as am
         from dmprs.sim.throw_scene import HOME
 
         if noise is not None and not isinstance(noise, Noise):
@@ -46,26 +46,16 @@ class ArmThrowingAdapter(BaseAdapter):
         self.noise = noise or Noise()
         self._rng = Noise.rng(0)
         self.home = np.asarray(HOME, dtype=float)
-        super().__init__(AdapterSpec(
-            name="arm-throwing",
-            dof_names=am.JOINT_NAMES,
-            dof_units=("rad",) * 7,
-            control_period=CONTROL_PERIOD,
+        super().__init__(iiwa.spec(
+            "arm-throwing", home=HOME, control_period=CONTROL_PERIOD, max_duration=MAX_DURATION,
             signals=(
                 SignalSpec("landing_x", "m", "x where the ball first touched the floor"),
                 SignalSpec("landing_y", "m", "y where the ball first touched the floor"),
                 SignalSpec("landing_time", "s", "when it touched the floor, from the start"),
                 SignalSpec("release_time", "s", "when the ball left the cup, from the start"),
                 SignalSpec("release_speed", "m/s", "the ball's speed when it left the cup"),
-                SignalSpec("tracking_error", "rad", "largest joint tracking error while moving"),
+                iiwa.TRACKING_ERROR,
             ),
-            position_min=tuple(-x for x in am.JOINT_LIMITS),
-            position_max=am.JOINT_LIMITS,
-            velocity_max=am.VELOCITY_LIMITS,
-            start_pose=HOME,
-            start_tolerance=1e-3,
-            max_duration=MAX_DURATION,
-            min_samples=3,
         ))
 
     def _reset(self, seed: int | None) -> None:

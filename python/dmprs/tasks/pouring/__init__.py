@@ -25,6 +25,7 @@ same movement poured 212-226 ml from 0.5 l and 188-216 ml from 1.0 l over liquid
 use a tolerance of 15-20 ml then.
 """
 
+from dmprs.tasks.liquid import PARTICLE_VOLUME, TARGET_VOLUME
 from dmprs.tasks.pouring.adapter import (
     CAPACITY,
     CONTROL_PERIOD,
@@ -34,9 +35,7 @@ from dmprs.tasks.pouring.adapter import (
     MAX_TILT_ACCELERATION,
     MAX_TILT_RATE,
     MIN_TILT,
-    PARTICLE_VOLUME,
     SUCCESS_TOLERANCE,
-    TARGET_VOLUME,
     PouringAdapter,
     n_particles,
 )

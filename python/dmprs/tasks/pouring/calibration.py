@@ -14,13 +14,8 @@ from typing import Any
 
 from dmprs._io import write_atomic
 from dmprs.errors import InvalidInputError, NumericalError
-from dmprs.tasks.pouring.adapter import (
-    CONTROL_PERIOD,
-    MAX_TILT,
-    TARGET_VOLUME,
-    PouringAdapter,
-    _check_volume,
-)
+from dmprs.tasks.liquid import TARGET_VOLUME, check_volume
+from dmprs.tasks.pouring.adapter import CAPACITY, CONTROL_PERIOD, MAX_TILT, PouringAdapter
 from dmprs.tasks.pouring.profile import DEMO_TIMING, tilt_profile
 
 
@@ -91,8 +86,8 @@ def calibrate_peak_tilt(bottle_volume: float, target_volume: float = TARGET_VOLU
     Cached per process; with ``cache_dir`` (default: ``$DMPRS_CACHE_DIR`` if set) also on disk,
     keyed by a hash of the parameters, the scene's constants and the pymunk version.
     """
-    v = _check_volume(bottle_volume, "bottle_volume")
-    target = _check_volume(target_volume, "target_volume", capacity=v)
+    v = check_volume(bottle_volume, "bottle_volume", capacity=CAPACITY)
+    target = check_volume(target_volume, "target_volume", capacity=v)
     if not (isinstance(max_evaluations, int) and max_evaluations >= 2):
         raise InvalidInputError(f"max_evaluations = {max_evaluations!r} must be an integer >= 2")
     lo, hi = (float(b) for b in bracket)

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmprs.tasks.pouring.adapter import TARGET_VOLUME
+from dmprs.tasks.liquid import TARGET_VOLUME
 from dmprs.tasks.pouring.calibration import Calibration, calibrate_peak_tilt
 from dmprs.tasks.pouring.profile import tilt_profile
 from dmprs.trajectory import Trajectory
