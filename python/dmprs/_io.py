@@ -252,7 +252,7 @@ def open_inflated(source: IO[bytes], codec: str) -> tuple[IO[bytes], tuple[type[
     if codec == "bz2":
         import bz2
 
-        return bz2.BZ2File(source, "rb"), (OSError, EOFError)  # type: ignore[return-value]
+        return bz2.BZ2File(source, "rb"), (OSError, EOFError)
     if codec == "lz4":
         import lz4.frame  # type: ignore[import-untyped]
 
@@ -261,11 +261,12 @@ def open_inflated(source: IO[bytes], codec: str) -> tuple[IO[bytes], tuple[type[
 
 
 def inflate_bounded(source: IO[bytes] | bytes, codec: str, *, limit: int, where: str,
-                    error: ErrorClass = InvalidInputError, keep: bool = False) -> tuple[int, bytes]:
+                    error: ErrorClass = InvalidInputError, keep: bool = False, why: str = "") -> tuple[int, bytes]:
     """Inflates ``source`` (compressed with ``codec``: ``zstd``, ``bz2`` or ``lz4``) a piece at a
     time and refuses it as soon as it passes ``limit`` bytes, so a compression bomb costs at most
     ``limit`` bytes of work and no memory beyond one piece (unless ``keep``). Returns the inflated
-    size and, with ``keep``, the inflated bytes. Corrupt data is an error naming ``where``."""
+    size and, with ``keep``, the inflated bytes. Corrupt data is an error naming ``where``; ``why``
+    follows the limit in the error (where it comes from)."""
     stream = io.BytesIO(source) if isinstance(source, bytes) else source
     pieces: list[bytes] = []
     total = 0
@@ -275,8 +276,7 @@ def inflate_bounded(source: IO[bytes] | bytes, codec: str, *, limit: int, where:
             while piece := inflated.read(min(_INFLATE_PIECE, limit + 1 - total)):
                 total += len(piece)
                 if total > limit:
-                    raise error(f"{where}: {codec} data inflates to more than {limit} bytes, the limit "
-                                "(a compression bomb, or a recording too large to read whole)")
+                    raise error(f"{where}: {codec} data inflates to more than {limit} bytes, the limit{why}")
                 if keep:
                     pieces.append(piece)
     except DmprsError:

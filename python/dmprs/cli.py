@@ -185,6 +185,36 @@ def _names(text: str | None) -> list[str] | None:
     return None if text is None else [n.strip() for n in text.split(",") if n.strip()]
 
 
+class _ImportProgress:
+    """``with _ImportProgress(show) as progress``: a rich progress bar on stderr fed by
+    load_demos' progress callback, or None when not shown."""
+
+    def __init__(self, show: bool) -> None:
+        self.bar: Any = None
+        self.tasks: dict[Path, Any] = {}
+        if show:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+            self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                TimeRemainingColumn(), console=Console(stderr=True))
+
+    def __enter__(self) -> Any:
+        if self.bar is None:
+            return None
+        self.bar.start()
+        return self.update
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+    def update(self, source: Path, done: int, total: int) -> None:
+        if source not in self.tasks:
+            self.tasks[source] = self.bar.add_task(f"reading {source.name}", total=total)
+        self.bar.update(self.tasks[source], completed=done, total=total)
+
+
 @demos_group.command("import")
 @click.argument("sources", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="database directory to write")
@@ -207,11 +237,13 @@ def _names(text: str | None) -> list[str] | None:
 @click.option("--rest-angular-speed", type=float, default=0.05, show_default=True,
               help="rad/s; with poses, a rest also needs the angular speed below this")
 @click.option("--rate", type=float, default=None, help="resample every demonstration at this rate (Hz)")
+@click.option("--progress/--no-progress", "show_progress", default=None,
+              help="show a progress bar on stderr (default: when stderr is a terminal)")
 def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None, query_fields: str | None,
                      units: str | None, fmt: str, topic: str, joints: str | None, pose_topic: str | None,
                      tf_frames: str | None, column: str, dims: str | None, time_column: str,
                      ranges: str | None, rest_speed: float | None, rest_angular_speed: float,
-                     rate: float | None) -> None:
+                     rate: float | None, show_progress: bool | None) -> None:
     """Build a database from SOURCES: ROS bags, LeRobot datasets, CSV or npz files."""
     from dmprs.io.importer import build_database, load_demos
 
@@ -221,15 +253,18 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
         if not frame or not child:
             raise click.BadParameter(f"{tf_frames!r}: expected FRAME:CHILD", param_hint="--tf")
         tf = (frame, child)
+    if show_progress is None:
+        show_progress = sys.stderr.isatty()
     try:
-        demos = load_demos(sources, format=fmt, topic=topic, joints=_names(joints), column=column,
-                           dims=_names(dims), time_column=time_column, ranges=_ranges(ranges),
-                           rest_speed=rest_speed, rest_angular_speed=rest_angular_speed, rate=rate,
-                           pose_topic=pose_topic, tf=tf)
+        with _ImportProgress(show_progress) as progress:
+            demos = load_demos(sources, format=fmt, topic=topic, joints=_names(joints), column=column,
+                               dims=_names(dims), time_column=time_column, ranges=_ranges(ranges),
+                               rest_speed=rest_speed, rest_angular_speed=rest_angular_speed, rate=rate,
+                               pose_topic=pose_topic, tf=tf, progress=progress)
         db = build_database(demos, queries=queries, query_fields=_names(query_fields), query_units=_names(units))
         db.save(out)
     except DmprsError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise click.ClickException(" ".join(str(exc).split("\n"))) from None  # one line
     labels = [d.label or "" for d in db]
     shown = ", ".join(labels[:8]) + (f", ... {labels[-1]}" if len(labels) > 8 else "")
     click.echo(f"{len(db)} demonstrations ({shown}) written to {out}")

@@ -25,7 +25,6 @@ import shutil
 import sqlite3
 import struct
 import tempfile
-from collections.abc import Iterator
 from pathlib import Path, PurePath
 from typing import IO, Any
 
@@ -57,9 +56,12 @@ def inflate_limit(compressed: int, cap: int = INFLATE_MAX_BYTES) -> int:
 def _inflate(data: bytes | IO[bytes], size: int, codec: str, where: str, *, cap: int = INFLATE_MAX_BYTES,
              keep: bool = False) -> tuple[int, bytes]:
     limit = inflate_limit(size, cap)
-    return inflate_bounded(data, codec, limit=limit, where=f"{where} (at most {limit} bytes from {size} "
-                           f"compressed: {INFLATE_MAX_RATIO} x + {INFLATE_FLOOR_BYTES // MiB} MiB, "
-                           f"at most {cap // MiB} MiB)", keep=keep)
+    return inflate_bounded(data, codec, limit=limit, where=where, keep=keep, why=_why(size, cap))
+
+
+def _why(size: int, cap: int) -> str:
+    return (f" for {size} compressed bytes ({INFLATE_MAX_RATIO} x that + {INFLATE_FLOOR_BYTES // MiB} MiB, at most "
+            f"{cap} bytes: dmprs.io.bagcheck); a compression bomb?")
 
 
 def check_bag(path: Path) -> None:
@@ -305,23 +307,23 @@ def _ros2(directory: Path) -> None:
 def _inflated_file(path: Path, size: int, storage: str) -> int:
     """The inflated size of a zstd-compressed storage file (an MCAP one's chunks checked too)."""
     limit = inflate_limit(size, cap=2**63 - 1)
-    where = f"{path} (a zstd-compressed bag file: at most {limit} bytes from {size} compressed)"
+    where = f"{path} (a zstd-compressed bag file, which rosbags inflates into the temporary directory)"
     f, _ = open_regular(path, what="bag storage file")
     with f:
         if storage == "mcap":  # read the inflated MCAP as it streams, counting what it inflates to
-            counted = _Counted(f, limit, where)
+            counted = _Counted(f, limit, where, _why(size, limit))
             _mcap(counted.reader, str(path), messages=False, limit=limit)
             counted.drain()
             return counted.total
-        return inflate_bounded(f, "zstd", limit=limit, where=where)[0]
+        return inflate_bounded(f, "zstd", limit=limit, where=where, why=_why(size, limit))[0]
 
 
 class _Counted:
     """A zstd stream read forward, refused as soon as more than ``limit`` bytes came out of it."""
 
-    def __init__(self, f: IO[bytes], limit: int, where: str) -> None:
+    def __init__(self, f: IO[bytes], limit: int, where: str, why: str) -> None:
         self.inner, self.corrupt = open_inflated(f, "zstd")
-        self.limit, self.where, self.total = limit, where, 0
+        self.limit, self.where, self.why, self.total = limit, where, why, 0
         self.reader: IO[bytes] = self  # type: ignore[assignment]
 
     def read(self, n: int = -1) -> bytes:
@@ -331,7 +333,8 @@ class _Counted:
             raise InvalidInputError(f"{self.where}: corrupt zstd data ({exc})") from None
         self.total += len(data)
         if self.total > self.limit:
-            raise InvalidInputError(f"{self.where}: inflates to more than {self.limit} bytes, the limit")
+            raise InvalidInputError(f"{self.where}: zstd data inflates to more than {self.limit} bytes, the "
+                                    f"limit{self.why}")
         return data
 
     def seekable(self) -> bool:

@@ -377,11 +377,11 @@ def read_tf(path: str | Path, frame: str, child_frame: str,
     steps = _frame_path(edges, frame.lstrip("/"), child_frame.lstrip("/"), path)
     series = []
     for p, c, forward in steps:
-        edge = edges[(p, c)]
+        recorded = edges[(p, c)]
         where = f"{path}, TF {p!r} -> {c!r}"
-        t = _times(edge, start, where)
-        keep = _increasing(t, edge.index, where)
-        series.append((t[keep], np.asarray(edge.rows)[keep], forward))
+        t = _times(recorded, start, where)
+        keep = _increasing(t, recorded.index, where)
+        series.append((t[keep], np.asarray(recorded.rows)[keep], forward))
     moving = [s for s in series if len(s[0]) > 1]
     if moving:
         lo, hi = max(s[0][0] for s in moving), min(s[0][-1] for s in moving)
