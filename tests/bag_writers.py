@@ -130,7 +130,7 @@ def zstd_bomb(payload: bytes, zeros: int) -> bytes:
     piece = bytes(2**20)
     for _ in range(zeros // 2**20):
         out += c.compress(piece)
-    return out + c.flush()
+    return out + c.compress(bytes(zeros % 2**20)) + c.flush()
 
 
 def file_bomb(bag: Path, zeros: int) -> None:
@@ -143,14 +143,16 @@ def file_bomb(bag: Path, zeros: int) -> None:
 
 
 def message_bomb(bag: Path, zeros: int) -> None:
-    """Replaces the first message of a message-compressed sqlite3 bag by ``zeros`` zero bytes."""
+    """Pads the first message of a message-compressed sqlite3 bag with ``zeros`` zero bytes."""
     import sqlite3
+
+    from backports import zstd
 
     (f,) = [p for p in bag.iterdir() if p.suffix == ".db3"]
     db = sqlite3.connect(f)
     with db:
-        db.execute("UPDATE messages SET data = ? WHERE id = (SELECT MIN(id) FROM messages)",
-                   (zstd_bomb(b"", zeros),))
+        (first, data), = db.execute("SELECT id, data FROM messages ORDER BY id LIMIT 1")
+        db.execute("UPDATE messages SET data = ? WHERE id = ?", (zstd_bomb(zstd.decompress(data), zeros), first))
     db.close()
 
 

@@ -15,6 +15,7 @@ import pytest
 from dmprs._io import (
     append_jsonl,
     directory_lock,
+    inflate_bounded,
     load_npz,
     parse_json,
     read_bytes,
@@ -172,3 +173,22 @@ def test_read_jsonl_names_the_line_and_tolerates_only_a_cut_last_line(tmp_path):
     f.write_text('{"a": 1}\n{"b": ')
     records, cut = read_jsonl(f)
     assert records == [{"a": 1}] and "line 2" in cut
+
+
+@pytest.mark.parametrize("codec", ["zstd", "bz2", "lz4"])
+def test_inflation_is_bounded_piece_by_piece(codec):
+    import bz2
+
+    import lz4.frame
+    from backports import zstd
+
+    compress = {"zstd": zstd.compress, "bz2": bz2.compress, "lz4": lz4.frame.compress}[codec]
+    data = bytes(range(256)) * 4096  # 1 MiB
+    packed = compress(data)
+    assert inflate_bounded(packed, codec, limit=len(data), where="x") == (len(data), b"")
+    assert inflate_bounded(packed, codec, limit=len(data), where="x", keep=True)[1] == data
+    bomb = compress(bytes(8 * 2**20))
+    with pytest.raises(InvalidInputError, match=rf"bomb: {codec} data inflates to more than 1048576 bytes, the limit; why"):
+        inflate_bounded(bomb, codec, limit=2**20, where="bomb", why="; why")
+    with pytest.raises(InvalidInputError, match=rf"cut: corrupt {codec} data"):
+        inflate_bounded(packed[: len(packed) // 2], codec, limit=2**30, where="cut")

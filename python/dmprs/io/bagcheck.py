@@ -267,7 +267,8 @@ def _metadata(directory: Path) -> dict[str, Any]:
     try:
         doc = YAML(typ="safe", pure=True).load(text)
     except (YAMLError, RecursionError, ValueError, TypeError) as exc:
-        raise InvalidInputError(f"{meta}: not readable YAML ({type(exc).__name__}: {str(exc)[:200]})") from None
+        said = " ".join(str(exc).split())[:200]
+        raise InvalidInputError(f"{meta}: not readable YAML ({type(exc).__name__}: {said})") from None
     info = doc.get("rosbag2_bagfile_information") if isinstance(doc, dict) else None
     if not isinstance(info, dict):
         raise InvalidInputError(f"{meta}: no 'rosbag2_bagfile_information' mapping; not a ROS 2 bag's metadata")

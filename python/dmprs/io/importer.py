@@ -147,7 +147,7 @@ def load_demos(
             raise InvalidInputError(f"{p}: {exc}") from None
         for k, piece in enumerate(pieces):
             name = stem if len(pieces) == 1 and ranges is None and rest_speed is None else f"{stem}#{k}"
-            out.append(ImportedDemo(name, _resampled(piece, rate, f"{p} ({name})"), labels, {**meta, "labels": labels}))
+            out.append(ImportedDemo(name, _resampled(piece, rate, str(p) if name == stem else f"{p} ({name})"), labels, {**meta, "labels": labels}))
         if progress is not None:
             progress(p, 1, 1)
     names_seen: dict[str, str] = {}
@@ -166,7 +166,9 @@ def _pieces(traj: Trajectory | CartesianTrajectory, ranges: Sequence[tuple[float
     if isinstance(traj, CartesianTrajectory):
         if rest_speed is not None:
             return split_poses_at_rest(traj, speed_tol=rest_speed, angular_speed_tol=rest_angular_speed)
-        return [poses_between(traj, a, b) for a, b in (ranges or [(traj.t[0], traj.t[-1])])]
+        if ranges is None:  # all of it, from t = 0 (a single pose is refused by the caller)
+            return [traj if traj.n_samples < 2 else poses_between(traj, traj.t[0], traj.t[-1])]
+        return [poses_between(traj, a, b) for a, b in ranges]
     if rest_speed is not None:
         return split_at_rest(traj, speed_tol=rest_speed)
     return [from_zero(traj)] if ranges is None else cut(traj, ranges)

@@ -273,12 +273,14 @@ def _episodes_of(path: Path, f: Any, column: str, index: list[int] | None) -> It
         bad = ~np.isfinite(y)
         if bad.any():
             j, d = (int(i) for i in np.argwhere(bad)[0])
-            raise InvalidInputError(f"{where}, frame {frames[j]}: {column}[{d}] is {y[j, d]}; every value must be finite")
+            raise InvalidInputError(f"{where}, frame {frames[j]}: {column}[{d}] is {float(y[j, d])}; every value must be "
+                                    "finite")
         back = np.flatnonzero(~(np.diff(t) > 0))
         if not np.isfinite(t).all() or len(back):
             j = int(np.argmin(np.isfinite(t))) if not np.isfinite(t).all() else int(back[0]) + 1
-            raise InvalidInputError(f"{where}, frame {frames[j]}: timestamp {t[j]!r} (previous {t[j - 1] if j else None!r}); "
-                                    "timestamps must be finite and increase with the frame index")
+            after = f" after {float(t[j - 1])!r}" if j else ""
+            raise InvalidInputError(f"{where}, frame {frames[j]}: timestamp {float(t[j])!r}{after}; timestamps must be "
+                                    "finite and increase with the frame index")
         yield ep, Trajectory(t - t[0], y), int(task_of[a])
 
 

@@ -172,7 +172,7 @@ def _times(samples: _Samples, start: int, where: str) -> NDArray[np.float64]:
         j, set_ = int(np.argmin(stamps != 0)), int(np.argmax(stamps != 0))
         raise InvalidInputError(
             f"{where}, message {samples.index[j]}: its header stamp is zero while message "
-            f"{samples.index[set_]} is stamped {stamps[set_] * 1e-9:.9g} s; a publisher that does not "
+            f"{samples.index[set_]} is stamped {stamps[set_] * 1e-9:.12g} s; a publisher that does not "
             "stamp its messages shares the topic (drop its messages or stamp them)")
     return (stamps - start).astype(np.float64) * 1e-9
 

@@ -111,7 +111,7 @@ def read_csv_trajectory(path: str | Path, time_column: str = "t",
     back = np.flatnonzero(np.diff(t) <= 0)
     if len(back):
         j = int(back[0]) + 1
-        raise InvalidInputError(f"{p}, line {lines[j]}: time {t[j]!r} does not exceed {t[j - 1]!r} on line "
+        raise InvalidInputError(f"{p}, line {lines[j]}: time {float(t[j])!r} does not exceed {float(t[j - 1])!r} on line "
                                 f"{lines[j - 1]}; times must increase")
     return Trajectory(t, data[:n, 1:]), names
 
