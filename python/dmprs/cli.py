@@ -178,7 +178,7 @@ def _ranges(text: str | None) -> list[tuple[float, float]] | None:
     try:
         return [(float(a), float(b)) for a, b in (part.split(":") for part in text.split(","))]
     except ValueError:
-        raise click.BadParameter(f"{text!r}: expected START:STOP[,START:STOP...] in seconds") from None
+        raise click.ClickException(f"--ranges {text!r}: expected START:STOP[,START:STOP...] in seconds") from None
 
 
 def _names(text: str | None) -> list[str] | None:
@@ -251,7 +251,7 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
     if tf_frames is not None:
         frame, _, child = tf_frames.partition(":")
         if not frame or not child:
-            raise click.BadParameter(f"{tf_frames!r}: expected FRAME:CHILD", param_hint="--tf")
+            raise click.ClickException(f"--tf {tf_frames!r}: expected FRAME:CHILD")
         tf = (frame, child)
     if show_progress is None:
         show_progress = sys.stderr.isatty()

@@ -314,8 +314,10 @@ def read_lerobot(root: str | Path, column: str = "observation.state", *,
     index: list[int] | None = None
     if dims is not None:
         dims = [str(d) for d in dims]
+        if not dims or len(set(dims)) != len(dims):
+            raise InvalidInputError(f"dims = {dims}: give distinct component names of {column!r}, at least one")
         missing = [d for d in dims if d not in names]
-        if missing or not dims:
+        if missing:
             raise InvalidInputError(
                 f"{base}: {column!r} has no component {', '.join(map(repr, missing))}; its components are "
                 f"{', '.join(names) or '(unnamed in meta/info.json)'}")

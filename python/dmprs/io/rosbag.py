@@ -392,6 +392,7 @@ def read_tf(path: str | Path, frame: str, child_frame: str,
         times = times[(times >= lo) & (times <= hi)]
     else:
         times = np.array([max(s[0][-1] for s in series)])
+    _enough(len(times), f"{path}, TF {frame!r} -> {child_frame!r}", "poses (a chain of static transforms is one pose)")
     pose = np.tile(np.array([0.0, 0, 0, 1, 0, 0, 0]), (len(times), 1))
     for t, poses, forward in series:
         edge = interpolate_poses(t, poses, times) if len(t) > 1 else np.tile(poses[-1], (len(times), 1))
