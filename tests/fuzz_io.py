@@ -168,7 +168,7 @@ def _stamp_list(a: dict[str, Any]) -> list[int]:
     elif kind == "reversed":
         stamps = stamps[::-1]
     elif kind == "huge":
-        top = (2**31 - 1 if a["fmt"] != "ros1" else 2**32 - 1) * 10**9
+        top = (2**31 - 100) * 10**9  # rosbags writes ROS 1 stamps as int32 too
         stamps = [top + k * 10_000_000 for k in range(n)]
     return stamps
 
@@ -650,7 +650,7 @@ def _cli_source(a: dict[str, Any], tmp: Path) -> tuple[Path, list[str], str | No
     root = (write_v2 if inner["version"] == "v2.1" else write_v3)(tmp / "ds", 3)
     refuse = None
     if inner["damage"] == "column":
-        refuse = _edit_column(sorted((root / "data").glob("**/*.parquet"))[0], inner)
+        refuse = _edit_column(min((root / "data").glob("**/*.parquet")), inner)
     elif inner["damage"] == "meta-file":
         refuse = _replace_file(root / _META_FILES[inner["version"]][inner["meta"]], inner["file_damage"], inner["frac"],
                                inner["seed"], inner["nflip"])
@@ -730,8 +730,8 @@ def _child(name: str, args: Any, conn: Any) -> None:
     except GarbageAccepted as exc:
         conn.send(("garbage accepted", str(exc)[:300]))
     except BaseException as exc:  # noqa: BLE001 - classifying is the point
-        conn.send(("leaked types", f"{type(exc).__module__}.{type(exc).__name__}: {str(exc)[:160]} @ "
-                                   f"{traceback.format_exc(limit=-1)[-200:]}"))
+        where = traceback.format_exc(limit=-1)[-200:]
+        conn.send(("leaked types", f"{type(exc).__module__}.{type(exc).__name__}: {str(exc)[:160]} @ {where}"))
 
 
 def _one(name: str, args: Any) -> tuple[str, str]:
@@ -784,7 +784,112 @@ def main(examples: int) -> None:
     print("\n".join(notes), file=sys.stderr)
 
 
+# --- what each bomb costs (python -m tests.fuzz_io --bombs) --------------------------------------
+
+def _bomb_cases() -> dict[str, tuple[Callable[[Path], Path], Callable[[Path], Any]]]:
+    """name -> (build it in a directory, read it): built in the parent, read in the child."""
+    from dmprs.io import load_demos, read_joint_states, read_npz_trajectory
+
+    def bag(fmt: str, compression: str) -> Callable[[Path], Path]:
+        def build(tmp: Path) -> Path:
+            a = {"fmt": fmt, "compression": compression, "n": 20, "stamps": "ok", "values": "ok"}
+            path = tmp / ("demo.bag" if fmt == "ros1" else "demo")
+            _write_bag(path, a)
+            _bomb(path, a)
+            return path
+        return build
+
+    def npz(tmp: Path) -> Path:
+        (tmp / "bomb.npz").write_bytes(_npz_bomb())
+        return tmp / "bomb.npz"
+
+    def csv(tmp: Path) -> Path:
+        (tmp / "a.csv").write_text("t,x\n0,0\n1,1\n2,4\n3.7,9\n")
+        return tmp / "a.csv"
+
+    def zero(tmp: Path) -> Path:
+        (tmp / "z.csv").symlink_to("/dev/zero")
+        return tmp / "z.csv"
+
+    joints = read_joint_states
+    return {"ROS 2 bag, file-compressed (zstd)": (bag("ros2-sqlite3", "file"), joints),
+            "ROS 2 bag, message-compressed (zstd)": (bag("ros2-sqlite3", "message"), joints),
+            "MCAP chunk (zstd)": (bag("ros2-mcap", "storage"), joints),
+            "ROS 1 chunk (lz4)": (bag("ros1", "lz4"), joints),
+            "npz deflate bomb (1.1 GiB declared)": (npz, read_npz_trajectory),
+            "CSV with --rate 1e9": (csv, lambda p: load_demos([p], rate=1e9)),
+            "a link to /dev/zero as a CSV": (zero, lambda p: load_demos([p]))}
+
+
+def _poll_size(directory: Path, peak: list[int], done: Any) -> None:
+    """Keeps in ``peak[0]`` the largest total size of the files under ``directory`` until ``done``."""
+    import time
+
+    while not done.is_set():
+        try:
+            size = sum(f.stat().st_size for f in directory.rglob("*") if f.is_file())
+        except OSError:  # a file removed while it was listed
+            continue
+        peak[0] = max(peak[0], size)
+        time.sleep(0.02)
+
+
+def bombs(timeout: float = 120.0) -> None:
+    """Each bomb in a forked child with its own temporary directory: wall time, the child's peak
+    RSS (wait4) and the peak size of its temporary directory (polled), and how it ended."""
+    import shutil
+    import threading
+    import time
+
+    print("| input | outcome | time (s) | peak RSS (MB) | peak temporary files (MB) |")
+    print("|---|---|---:|---:|---:|")
+    for name, (build, case) in _bomb_cases().items():
+        with tempfile.TemporaryDirectory() as top:
+            work, scratch = Path(top) / "work", Path(top) / "tmp"
+            work.mkdir()
+            scratch.mkdir()
+            path = build(work)
+            read, write = os.pipe()
+            t0 = time.monotonic()
+            pid = os.fork()
+            if pid == 0:  # the child: run it, report how it ended
+                os.close(read)
+                tempfile.tempdir = str(scratch)
+                try:
+                    case(path)
+                    said = "accepted"
+                except DmprsError as exc:
+                    said = f"refused: {str(exc).split(': ', 1)[-1][:90]}"
+                except BaseException as exc:  # noqa: BLE001
+                    said = f"{type(exc).__name__}: {str(exc)[:80]}"
+                os.write(write, said.encode())
+                os._exit(0)
+            os.close(write)
+            peak, done = [0], threading.Event()
+            watcher = threading.Thread(target=_poll_size, args=(scratch, peak, done))
+            watcher.start()
+            deadline = time.monotonic() + timeout
+            while (status := os.wait4(pid, os.WNOHANG))[0] == 0 and time.monotonic() < deadline:
+                time.sleep(0.02)
+            if status[0] == 0:
+                os.kill(pid, 9)
+                status = os.wait4(pid, 0)
+                said = f"killed after {timeout:g} s"
+            else:
+                said = os.read(read, 4096).decode() or f"died (status {status[1]})"
+            os.close(read)
+            done.set()
+            watcher.join()
+            seconds = time.monotonic() - t0
+            print(f"| {name} | {said} | {seconds:.2f} | {status[2].ru_maxrss / 1024:.0f} | {peak[0] / 2**20:.0f} |",
+                  flush=True)
+            shutil.rmtree(scratch, ignore_errors=True)
+
+
 if __name__ == "__main__":
     import sys
 
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 200)
+    if sys.argv[1:] == ["--bombs"]:
+        bombs()
+    else:
+        main(int(sys.argv[1]) if len(sys.argv) > 1 else 200)

@@ -21,6 +21,7 @@ of work and nothing is written. Real recordings compress a few times, far below 
 from __future__ import annotations
 
 import io
+import os
 import shutil
 import sqlite3
 import struct
@@ -91,6 +92,9 @@ def _read(f: IO[bytes], n: int, where: str) -> bytes:
 
 def _skip(f: IO[bytes], n: int, where: str) -> None:
     if f.seekable():
+        here, end = f.tell(), os.fstat(f.fileno()).st_size
+        if here + n > end:
+            raise InvalidInputError(f"{where}: cut short ({n} bytes declared, {end - here} present)")
         f.seek(n, io.SEEK_CUR)
     else:
         while n > 0:
