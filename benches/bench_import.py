@@ -72,7 +72,7 @@ def measure(kind: str, root: Path, tmp: Path) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-def main(sizes: list[int], repeats: int = 3) -> None:
+def main(sizes: list[int], repeats: int = 2) -> None:
     sys.path[:0] = [str(ROOT / "python"), str(ROOT)]
     from tests.lerobot_writer import episode_states, write_v3
 

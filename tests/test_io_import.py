@@ -245,14 +245,20 @@ def test_a_static_tf_chain_is_not_a_demonstration(tmp_path):
         load_demos([bag], tf=("world", "tool"))
 
 
-def test_the_progress_bar_shows_on_request_and_the_callback_counts_frames(tmp_path):
-    root = write_v3(tmp_path / "ds", n_episodes=6, per_file=2)
+def test_fifty_episodes_in_five_files_import_exactly_with_a_progress_bar(tmp_path):
+    root = write_v3(tmp_path / "ds", n_episodes=50, per_file=10, period=7)
     seen = []
     demos = load_demos([root], progress=lambda src, done, total: seen.append((src.name, done, total)))
-    assert len(demos) == 6 and [s[1] for s in seen] == sorted(s[1] for s in seen) and seen[-1][1] == seen[-1][2]
+    assert len(demos) == 50 and [s[1] for s in seen] == sorted(s[1] for s in seen) and seen[-1][1] == seen[-1][2]
+    assert len(seen) == 5
     res = CliRunner().invoke(main, ["demos", "import", str(root), "--out", str(tmp_path / "db"), "--query-field",
                                     "bottle_volume", "--progress"])
-    assert res.exit_code == 0 and "reading ds" in res.output and "6 demonstrations" in res.output
+    assert res.exit_code == 0 and "reading ds" in res.output and "50 demonstrations" in res.output
+    db = dmprs.Database.load(tmp_path / "db")
+    assert [d.label for d in db] == [str(k) for k in range(50)]
+    for k, d in enumerate(db):
+        np.testing.assert_array_equal(d.trajectory.y, episode_states(k, 7).astype(np.float64))
+    np.testing.assert_allclose(db.queries[:, 0], [volume(k) for k in range(50)])
     res = CliRunner().invoke(main, ["demos", "import", str(root), "--out", str(tmp_path / "db2"), "--query-field",
                                     "bottle_volume"])
     assert res.exit_code == 0 and "reading" not in res.output  # not a terminal: no bar

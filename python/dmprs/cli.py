@@ -186,8 +186,9 @@ def _names(text: str | None) -> list[str] | None:
 
 
 class _ImportProgress:
-    """``with _ImportProgress(show) as progress``: a rich progress bar on stderr fed by
-    load_demos' progress callback, or None when not shown."""
+    """A rich progress bar on stderr while ``dmprs demos import`` reads (fed by load_demos'
+    progress callback, :attr:`callback`) and while it writes the database (between :meth:`start`
+    and :meth:`stop`); nothing when not shown."""
 
     def __init__(self, show: bool) -> None:
         self.bar: Any = None
@@ -199,20 +200,32 @@ class _ImportProgress:
             self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                                 TimeRemainingColumn(), console=Console(stderr=True))
 
-    def __enter__(self) -> Any:
-        if self.bar is None:
-            return None
-        self.bar.start()
-        return self.update
+    def start(self) -> None:
+        if self.bar is not None:
+            self.bar.start()
 
-    def __exit__(self, *exc: object) -> None:
+    def stop(self) -> None:
         if self.bar is not None:
             self.bar.stop()
 
-    def update(self, source: Path, done: int, total: int) -> None:
+    @property
+    def callback(self) -> Any:
+        return None if self.bar is None else self._update
+
+    def _update(self, source: Path, done: int, total: int) -> None:
         if source not in self.tasks:
             self.tasks[source] = self.bar.add_task(f"reading {source.name}", total=total)
         self.bar.update(self.tasks[source], completed=done, total=total)
+
+    def stage(self, text: str) -> None:
+        """A step of unknown length (building and writing the database), until :meth:`done`."""
+        if self.bar is not None:
+            self.tasks[Path(text)] = self.bar.add_task(text, total=None)
+
+    def done(self) -> None:
+        if self.bar is not None:
+            for task in self.tasks.values():
+                self.bar.update(task, total=1, completed=1)
 
 
 @demos_group.command("import")
@@ -256,13 +269,20 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
     if show_progress is None:
         show_progress = sys.stderr.isatty()
     try:
-        with _ImportProgress(show_progress) as progress:
+        progress = _ImportProgress(show_progress)
+        progress.start()
+        try:
             demos = load_demos(sources, format=fmt, topic=topic, joints=_names(joints), column=column,
                                dims=_names(dims), time_column=time_column, ranges=_ranges(ranges),
                                rest_speed=rest_speed, rest_angular_speed=rest_angular_speed, rate=rate,
-                               pose_topic=pose_topic, tf=tf, progress=progress)
-        db = build_database(demos, queries=queries, query_fields=_names(query_fields), query_units=_names(units))
-        db.save(out)
+                               pose_topic=pose_topic, tf=tf, progress=progress.callback)
+            progress.stage(f"writing {len(demos)} demonstrations to {out}")
+            db = build_database(demos, queries=queries, query_fields=_names(query_fields),
+                                query_units=_names(units))
+            db.save(out)
+            progress.done()
+        finally:
+            progress.stop()
     except DmprsError as exc:
         raise click.ClickException(" ".join(str(exc).split("\n"))) from None  # one line
     labels = [d.label or "" for d in db]

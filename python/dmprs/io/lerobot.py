@@ -334,12 +334,15 @@ def read_lerobot(root: str | Path, column: str = "observation.state", *,
     seen: dict[int, Path] = {}
     done = 0
     for p, f in opened:
-        for ep, traj, task in _episodes_of(p, f, column, index):
-            if ep in seen:
-                raise InvalidInputError(f"{base}: episode {ep} has frames in {seen[ep]} and in {p}")
-            seen[ep] = p
-            if wanted is None or ep in wanted:
-                found[ep] = (traj, task)
+        try:
+            for ep, traj, task in _episodes_of(p, f, column, index):
+                if ep in seen:
+                    raise InvalidInputError(f"{base}: episode {ep} has frames in {seen[ep]} and in {p}")
+                seen[ep] = p
+                if wanted is None or ep in wanted:
+                    found[ep] = (traj, task)
+        except _arrow_errors() as exc:  # converting a column pyarrow read but cannot hand over
+            raise InvalidInputError(f"{p}: cannot convert its columns ({type(exc).__name__}: {str(exc)[:200]})") from None
         done += f.metadata.num_rows
         if progress is not None:
             progress(done, total)
