@@ -193,6 +193,7 @@ class _ImportProgress:
     def __init__(self, show: bool) -> None:
         self.bar: Any = None
         self.tasks: dict[Path, Any] = {}
+        self.stages: list[Any] = []
         if show:
             from rich.console import Console
             from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -220,12 +221,11 @@ class _ImportProgress:
     def stage(self, text: str) -> None:
         """A step of unknown length (building and writing the database), until :meth:`done`."""
         if self.bar is not None:
-            self.tasks[Path(text)] = self.bar.add_task(text, total=None)
+            self.stages.append(self.bar.add_task(text, total=None))
 
     def done(self) -> None:
-        if self.bar is not None:
-            for task in self.tasks.values():
-                self.bar.update(task, total=1, completed=1)
+        for task in self.stages:
+            self.bar.update(task, total=1, completed=1)
 
 
 @demos_group.command("import")
