@@ -155,3 +155,12 @@ def test_truncated_and_flipped_bags_are_clear_errors(tmp_path, fmt, compression)
             assert str(f.name) in str(exc) or str(path) in str(exc)
         else:  # flipped bytes in a value, a name or padding: still a valid recording
             assert np.isfinite(rec.trajectory.y).all()
+
+
+def test_a_lone_mcap_file_is_checked_too(tmp_path, small_limits):
+    path = bag(tmp_path, "ros2-mcap", "storage")
+    mcap_chunk_bomb(path, ZEROS)
+    (f,) = path.glob("*.mcap")
+    with pytest.raises(InvalidInputError, match=r"b\.mcap, record at byte \d+ \(a chunk declaring \d+ bytes\): zstd data "
+                                                "inflates to more than"):
+        read_joint_states(f)

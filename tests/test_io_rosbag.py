@@ -103,7 +103,7 @@ def test_missing_topic_and_joint_name_what_exists(tmp_path):
     with pytest.raises(InvalidInputError, match="no such bag"):
         read_joint_states(tmp_path / "nothing")
     (tmp_path / "junk.bag").write_bytes(b"not a bag at all")
-    with pytest.raises(InvalidInputError, match="not a readable ROS bag"):
+    with pytest.raises(InvalidInputError, match=r"junk\.bag: not a ROS 1 bag \(it does not start with .#ROSBAG V2\.0.\)"):
         read_joint_states(tmp_path / "junk.bag")
     with pytest.raises(InvalidInputError, match="carries sensor_msgs/msg/JointState, expected geometry_msgs"):
         read_poses(path, "/joint_states")

@@ -71,6 +71,12 @@ def check_bag(path: Path) -> None:
     device and without inflating a compressed piece beyond :func:`inflate_limit`."""
     if path.is_dir():
         _ros2(path)
+    elif path.suffix == ".mcap":  # rosbags also reads a ROS 2 storage file on its own
+        f, size = open_regular(path, what="MCAP file")
+        with f:
+            _mcap(f, str(path), messages=False, limit=size)
+    elif path.suffix == ".db3":
+        check_regular(path, what="sqlite3 bag file")
     else:
         _ros1(path)
 
@@ -141,8 +147,8 @@ def _ros1(path: Path) -> None:
     f, size = open_regular(path, what="ROS 1 bag")
     where = str(path)
     with f:
-        if f.read(len(_ROS1_MAGIC)) != _ROS1_MAGIC:
-            return  # rosbags refuses it before reading anything else
+        if f.read(len(_ROS1_MAGIC)) != _ROS1_MAGIC:  # (rosbags would read its first line, however long)
+            raise InvalidInputError(f"{where}: not a ROS 1 bag (it does not start with '#ROSBAG V2.0')")
         header = _ros1_header(f, size, f"{where}, bag header")
         index_pos = _field(header, "index_pos", "<Q", where)
         conn_count = _field(header, "conn_count", "<I", where)
@@ -191,7 +197,7 @@ def _mcap(f: IO[bytes], where: str, *, messages: bool, limit: int) -> None:
     at the end, the summary it points at, the chunk index there) points at those chunks only.
     Records are read forward, so the stream may be an inflating one."""
     if f.read(len(_MCAP_MAGIC)) != _MCAP_MAGIC:
-        return  # rosbags refuses it
+        raise InvalidInputError(f"{where}: not an MCAP file (no MCAP magic at its start)")
     chunks: dict[int, tuple[str, int, int]] = {}
     indexed: list[tuple[int, str, int, int]] = []
     summary_starts = {0}  # where a summary may start: after a DataEnd record (0 = no summary)
