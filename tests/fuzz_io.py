@@ -43,7 +43,8 @@ import dmprs
 from dmprs.errors import DmprsError
 
 T0 = 1_700_000_000 * 10**9
-BOMB_ZEROS = 96 * 2**20  # beyond the 64 MiB + 100 x floor of every bag piece
+BOMB_ZEROS = 96 * 2**20  # beyond the 64 MiB + 100 x compressed limit of every zstd or bz2 bag piece
+BOMB_ZEROS_LZ4 = 256 * 2**20  # lz4 compresses at most 255 x: a bomb needs more zeros to pass the limit
 
 
 class GarbageAccepted(AssertionError):
@@ -219,7 +220,7 @@ def _bomb(path: Path, a: dict[str, Any]) -> str | None:
     elif kind == ("ros2-mcap", "storage"):
         mcap_chunk_bomb(path, BOMB_ZEROS)
     elif kind == ("ros1", "lz4"):
-        ros1_chunk_bomb(path, BOMB_ZEROS)
+        ros1_chunk_bomb(path, BOMB_ZEROS_LZ4)
     else:
         return None
     return f"a compression bomb ({a['fmt']}, {a['compression']})"
