@@ -15,39 +15,38 @@ TASKS = ("pour into the glass", "pour into the bowl")
 NAMES = ["shoulder", "elbow", "gripper"]
 
 
-def episode_states(k: int) -> np.ndarray:
-    """Episode k: a min-jerk reach of amplitude 0.2 (k + 1), 1 + 0.2 k s long, float32 like LeRobot."""
-    n = round((1.0 + 0.2 * k) * FPS) + 1
+def episode_states(k: int, period: int | None = None, base_s: float = 1.0) -> np.ndarray:
+    """Episode k: a min-jerk reach of amplitude 0.2 (k + 1), base_s + 0.2 j s long (j = k, or
+    k % period to keep the lengths of many episodes bounded), float32 like LeRobot."""
+    j = k if period is None else k % period
+    n = round((base_s + 0.2 * j) * FPS) + 1
     s = np.linspace(0.0, 1.0, n)
     m = 10 * s**3 - 15 * s**4 + 6 * s**5
     a = 0.2 * (k + 1)
     return np.stack([a * m, -0.5 * a * m, 0.04 + 0 * m], axis=1).astype(np.float32)
 
 
-def frames_table(episodes: list[int], start_index: int = 0) -> pa.Table:
-    cols: dict[str, list] = {k: [] for k in ("observation.state", "action", "timestamp", "frame_index",
-                                              "episode_index", "index", "task_index")}
-    index = start_index
-    for k in episodes:
-        y = episode_states(k)
-        for j, row in enumerate(y):
-            cols["observation.state"].append(row.tolist())
-            cols["action"].append((row + 0.01).tolist())
-            cols["timestamp"].append(j / FPS)
-            cols["frame_index"].append(j)
-            cols["episode_index"].append(k)
-            cols["index"].append(index)
-            cols["task_index"].append(k % 2)
-            index += 1
+def frames_table(episodes: list[int], start_index: int = 0, period: int | None = None,
+                 base_s: float = 1.0) -> pa.Table:
+    states = [episode_states(k, period, base_s) for k in episodes]
+    lengths = [len(y) for y in states]
+    y = np.concatenate(states) if states else np.zeros((0, 3), np.float32)
+    frame = np.concatenate([np.arange(n) for n in lengths]) if states else np.zeros(0, int)
+    ep = np.repeat(np.asarray(episodes, dtype=np.int64), lengths)
     vec = pa.list_(pa.float32())
+
+    def lists(v: np.ndarray) -> pa.Array:
+        return pa.ListArray.from_arrays(pa.array(np.arange(0, v.size + 1, 3, dtype=np.int32)),
+                                        pa.array(v.ravel()), type=vec)
+
     return pa.table({
-        "observation.state": pa.array(cols["observation.state"], type=vec),
-        "action": pa.array(cols["action"], type=vec),
-        "timestamp": pa.array(cols["timestamp"], type=pa.float32()),
-        "frame_index": pa.array(cols["frame_index"], type=pa.int64()),
-        "episode_index": pa.array(cols["episode_index"], type=pa.int64()),
-        "index": pa.array(cols["index"], type=pa.int64()),
-        "task_index": pa.array(cols["task_index"], type=pa.int64()),
+        "observation.state": lists(y),
+        "action": lists(y + np.float32(0.01)),
+        "timestamp": pa.array((frame / FPS).astype(np.float32)),
+        "frame_index": pa.array(frame.astype(np.int64)),
+        "episode_index": pa.array(ep),
+        "index": pa.array(np.arange(start_index, start_index + len(y), dtype=np.int64)),
+        "task_index": pa.array(ep % 2),
     })
 
 
@@ -86,28 +85,35 @@ def write_v2(root: Path, n_episodes: int = 3) -> Path:
     return root
 
 
-def write_v3(root: Path, n_episodes: int = 3) -> Path:
+def write_v3(root: Path, n_episodes: int = 3, per_file: int | None = None, period: int | None = None,
+             base_s: float = 1.0) -> Path:
+    """A v3.0 dataset: ``per_file`` episodes per data file (default: episodes 0-1 in the first
+    file, the rest in the second), their metadata in one episodes parquet file per 1000 episodes."""
     for d in ("meta/episodes/chunk-000", "data/chunk-000"):
         (root / d).mkdir(parents=True)
     tmpl = "data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet"
     (root / "meta" / "info.json").write_text(json.dumps(info("v3.0", n_episodes, tmpl)))
-    # two data files: episodes 0-1 in the first, the rest in the second
-    split = [list(range(min(2, n_episodes))), list(range(2, n_episodes))]
+    if per_file is None:
+        split = [list(range(min(2, n_episodes))), list(range(2, n_episodes))]
+    else:
+        split = [list(range(a, min(a + per_file, n_episodes))) for a in range(0, n_episodes, per_file)]
     rows, index = [], 0
     for f, eps in enumerate(split):
         if not eps:
             continue
-        table = frames_table(eps, index)
+        table = frames_table(eps, index, period, base_s)
         pq.write_table(table, root / tmpl.format(chunk_index=0, file_index=f))
         for k in eps:
-            n = len(episode_states(k))
-            rows.append({"episode_index": k, "tasks": [TASKS[k % 2]], "length": n,
+            y = episode_states(k, period, base_s)
+            rows.append({"episode_index": k, "tasks": [TASKS[k % 2]], "length": len(y),
                          "data/chunk_index": 0, "data/file_index": f,
-                         "dataset_from_index": index, "dataset_to_index": index + n,
-                         "stats/observation.state/mean": episode_states(k).mean(0).tolist(),
+                         "dataset_from_index": index, "dataset_to_index": index + len(y),
+                         "stats/observation.state/mean": y.mean(0).tolist(),
                          "bottle_volume": volume(k)})
-            index += n
-    pq.write_table(pa.Table.from_pylist(rows), root / "meta" / "episodes" / "chunk-000" / "file-000.parquet")
+            index += len(y)
+    for m in range(0, len(rows), 1000):
+        pq.write_table(pa.Table.from_pylist(rows[m:m + 1000]),
+                       root / "meta" / "episodes" / "chunk-000" / f"file-{m // 1000:03d}.parquet")
     pq.write_table(pa.table({"task_index": pa.array(range(len(TASKS)), type=pa.int64()),
                              "task": list(TASKS)}), root / "meta" / "tasks.parquet")
     return root

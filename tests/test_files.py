@@ -17,6 +17,7 @@ from dmprs._io import (
     atomic_temp_target,
     create_empty,
     directory_lock,
+    inflate_bounded,
     load_npz,
     parse_json,
     read_bytes,
@@ -238,3 +239,22 @@ def test_stale_temp_files_are_removed_only_for_the_targets_named(tmp_path):
     assert removed == [".manifest.json.abcd_123.tmp"]
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         ".manifest.json.tmp", ".manifest.json.zzzz_999.tmp", ".notes.txt.abcd_123.tmp", "x.tmp"]
+
+
+@pytest.mark.parametrize("codec", ["zstd", "bz2", "lz4"])
+def test_inflation_is_bounded_piece_by_piece(codec):
+    import bz2
+
+    import lz4.frame
+    from backports import zstd
+
+    compress = {"zstd": zstd.compress, "bz2": bz2.compress, "lz4": lz4.frame.compress}[codec]
+    data = bytes(range(256)) * 4096  # 1 MiB
+    packed = compress(data)
+    assert inflate_bounded(packed, codec, limit=len(data), where="x") == (len(data), b"")
+    assert inflate_bounded(packed, codec, limit=len(data), where="x", keep=True)[1] == data
+    bomb = compress(bytes(8 * 2**20))
+    with pytest.raises(InvalidInputError, match=rf"bomb: {codec} data inflates to more than 1048576 bytes, the limit; why"):
+        inflate_bounded(bomb, codec, limit=2**20, where="bomb", why="; why")
+    with pytest.raises(InvalidInputError, match=rf"cut: corrupt {codec} data"):
+        inflate_bounded(packed[: len(packed) // 2], codec, limit=2**30, where="cut")

@@ -4,6 +4,7 @@ rolled-out trajectory to a ROS 2 bag and CSV."""
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -161,3 +162,103 @@ def test_import_poses_from_tf_into_a_database_of_pose_demonstrations(tmp_path):
     np.testing.assert_allclose(dmp.goal, db[0].trajectory.pose[-1], atol=1e-9)
     res = run("demos", "import", bag, "--tf", "world", "--queries", table, "--out", tmp_path / "x")
     assert res.exit_code != 0 and "FRAME:CHILD" in res.output
+
+
+def _err(res):
+    """The CLI failed with exactly one line, 'Error: ...', and no traceback."""
+    assert res.exit_code != 0 and res.exception is None or isinstance(res.exception, SystemExit), res.output
+    lines = [line for line in res.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("Error: "), res.output
+    return lines[0]
+
+
+def test_the_rate_is_bounded_before_anything_is_allocated(tmp_path):
+    (tmp_path / "a.csv").write_text("t,x\n0,0\n1,1\n2,4\n3.7,9\n")
+    line = _err(CliRunner().invoke(main, ["demos", "import", str(tmp_path / "a.csv"), "--out", str(tmp_path / "db"),
+                                          "--query-field", "x", "--rate", "1e9"]))
+    assert "a.csv" in line and "resampling 3.7 s at 1e+09 Hz gives 3.7e+09 samples x 1 DOF" in line
+    for rate in ("nan", "-5", "0", "inf"):
+        line = _err(CliRunner().invoke(main, ["demos", "import", str(tmp_path / "a.csv"), "--out",
+                                              str(tmp_path / "db"), "--query-field", "x", "--rate", rate]))
+        assert "rate" in line
+
+
+def test_files_that_are_not_regular_or_not_text_are_one_line_errors_naming_them(tmp_path):
+    os.mkfifo(tmp_path / "pipe.csv")
+    (tmp_path / "zero.npz").symlink_to("/dev/zero")
+    (tmp_path / "latin.csv").write_bytes(b"t,x\n0,\xe9\n")
+    (tmp_path / "nul.csv").write_bytes(b"t,x\n0,1\x00\n1,2\n")
+    (tmp_path / "nan.csv").write_text("t,x\n0,1\n1,nan\n2,3\n")
+    (tmp_path / "back.csv").write_text("t,x\n0,1\n\n2,2\n1,3\n")
+    (tmp_path / "two.csv").write_text("t,x\n0,1\n1,2\n")
+    (tmp_path / "huge.csv").write_text("t,x\n0," + "9" * 200_000 + "\n")
+    expected = {
+        "pipe.csv": "pipe.csv: is a FIFO (named pipe); a CSV file must be a regular file",
+        "zero.npz": "zero.npz: is a character device",
+        "latin.csv": "latin.csv: not utf-8 text (byte 6 is b'\\xe9')",
+        "nul.csv": "nul.csv, line 2, column 'x': '1\\x00' is not a number",
+        "nan.csv": "nan.csv, line 3, column 'x': 'nan'; every value must be finite",
+        "back.csv": "back.csv, line 5: time 1.0 does not exceed 2.0 on line 4; times must increase",
+        "two.csv": "two.csv: 2 data rows; a demonstration needs at least 3",
+        "huge.csv": "huge.csv, line 2: not valid CSV (field larger than field limit",
+    }
+    for name, want in expected.items():
+        line = _err(CliRunner().invoke(main, ["demos", "import", str(tmp_path / name), "--out", str(tmp_path / "db"),
+                                              "--query-field", "x"]))
+        assert want in line, line
+
+
+def test_npz_bombs_and_query_tables_are_refused_naming_the_file(tmp_path):
+    import io
+    import zipfile
+
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as z:
+        z.writestr("t.npy", bytes(40 * 2**20))
+    (tmp_path / "bomb.npz").write_bytes(buf.getvalue())
+    with pytest.raises(InvalidInputError, match=r"bomb\.npz: not a readable npz file \(ValueError: .*magic string"):
+        load_demos([tmp_path / "bomb.npz"])
+    t = np.linspace(0, 1, 5)
+    np.savez(tmp_path / "ok.npz", t=t, y=t**2, amplitude=np.float64("nan"))
+    with pytest.raises(InvalidInputError, match=r"ok\.npz: label 'amplitude' is nan"):
+        load_demos([tmp_path / "ok.npz"])
+    for text, why in [("demo,v\nok,1\nok,2\n", r"q\.csv, line 3: demonstration 'ok' appears twice"),
+                      ("demo,v\n,1\n", r"q\.csv, line 2: the demonstration's name is empty"),
+                      ("demo,v\nok,inf\n", r"q\.csv, line 2, column 'v': 'inf'; every value must be finite"),
+                      ("demo,v,v\nok,1,2\n", r"q\.csv, line 1: column 'v' appears twice")]:
+        (tmp_path / "q.csv").write_text(text)
+        with pytest.raises(InvalidInputError, match=why):
+            read_query_table(tmp_path / "q.csv")
+    (tmp_path / "q.json").write_text('{"units": 3, "demos": []}')
+    with pytest.raises(InvalidInputError, match=r"q\.json: 'units' must map"):
+        read_query_table(tmp_path / "q.json")
+
+
+def test_a_static_tf_chain_is_not_a_demonstration(tmp_path):
+    from tests.bag_writers import BagWriter, bag_path
+    from tests.test_io_rosbag import T0
+
+    bag = bag_path(tmp_path, "ros2-mcap", "static")
+    with BagWriter(bag, "ros2-mcap") as w:
+        w.write("/tf_static", w.tf_message(T0, [("world", "tool", [0, 0, 0, 1, 0, 0, 0])]), T0)
+    with pytest.raises(InvalidInputError, match=r"static, TF 'world' -> 'tool' has 1 distinct samples of poses \(a chain of static transforms is one pose\)"):
+        load_demos([bag], tf=("world", "tool"))
+
+
+def test_fifty_episodes_in_five_files_import_exactly_with_a_progress_bar(tmp_path):
+    root = write_v3(tmp_path / "ds", n_episodes=50, per_file=10, period=7)
+    seen = []
+    demos = load_demos([root], progress=lambda src, done, total: seen.append((src.name, done, total)))
+    assert len(demos) == 50 and [s[1] for s in seen] == sorted(s[1] for s in seen) and seen[-1][1] == seen[-1][2]
+    assert len(seen) == 5
+    res = CliRunner().invoke(main, ["demos", "import", str(root), "--out", str(tmp_path / "db"), "--query-field",
+                                    "bottle_volume", "--progress"])
+    assert res.exit_code == 0 and "reading ds" in res.output and "50 demonstrations" in res.output
+    db = dmprs.Database.load(tmp_path / "db")
+    assert [d.label for d in db] == [str(k) for k in range(50)]
+    for k, d in enumerate(db):
+        np.testing.assert_array_equal(d.trajectory.y, episode_states(k, 7).astype(np.float64))
+    np.testing.assert_allclose(db.queries[:, 0], [volume(k) for k in range(50)])
+    res = CliRunner().invoke(main, ["demos", "import", str(root), "--out", str(tmp_path / "db2"), "--query-field",
+                                    "bottle_volume"])
+    assert res.exit_code == 0 and "reading" not in res.output  # not a terminal: no bar

@@ -103,7 +103,7 @@ def test_missing_topic_and_joint_name_what_exists(tmp_path):
     with pytest.raises(InvalidInputError, match="no such bag"):
         read_joint_states(tmp_path / "nothing")
     (tmp_path / "junk.bag").write_bytes(b"not a bag at all")
-    with pytest.raises(InvalidInputError, match="not a readable ROS bag"):
+    with pytest.raises(InvalidInputError, match=r"junk\.bag: not a ROS 1 bag \(it does not start with .#ROSBAG V2\.0.\)"):
         read_joint_states(tmp_path / "junk.bag")
     with pytest.raises(InvalidInputError, match="carries sensor_msgs/msg/JointState, expected geometry_msgs"):
         read_poses(path, "/joint_states")
@@ -191,3 +191,61 @@ def test_a_tf_recording_fitted_by_a_cartesian_dmp(tmp_path):
     goal[:3] += [0.05, 0.0, 0.02]
     moved = dmp.with_goal(goal).rollout(dt=0.001, until_rest=True)
     np.testing.assert_allclose(moved.position[-1], goal[:3], atol=1e-3)
+
+
+def write_stamped(tmp_path, fmt, stamps_ns, positions, names=("a",), name="odd"):
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    path = bag_path(tmp_path, fmt, name)
+    with BagWriter(path, fmt) as w:
+        for k, (ns, p) in enumerate(zip(stamps_ns, positions)):
+            w.write("/joint_states", w.joint_state(ns, names, p), T0 + k * 10_000_000)
+    return path
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_recordings_that_cannot_be_meant_are_refused_naming_bag_topic_and_message(tmp_path, fmt):
+    n = 20
+    stamps = [T0 + k * 10_000_000 for k in range(n)]
+    good = [[float(np.sin(k / 5))] for k in range(n)]
+    zero = stamps.copy()
+    zero[5] = 0  # a publisher that does not stamp, among one that does
+    with pytest.raises(InvalidInputError, match=r"odd.*, topic '/joint_states', message 5: its header stamp is zero "
+                                                r"while message 0 is stamped 1700000000 s"):
+        read_joint_states(write_stamped(tmp_path / "zero", fmt, zero, good))
+    years = stamps.copy()
+    years[-1] = T0 + 3 * 365 * 86400 * 10**9
+    with pytest.raises(InvalidInputError, match=r"the stamps jump by 9.46\d+e\+07 s between message 18 .* and message 19"):
+        read_joint_states(write_stamped(tmp_path / "years", fmt, years, good))
+    nan = [row.copy() for row in good]
+    nan[7] = [float("nan")]
+    with pytest.raises(InvalidInputError, match=r"topic '/joint_states', message 7: the position of 'a' is nan"):
+        read_joint_states(write_stamped(tmp_path / "nan", fmt, stamps, nan))
+    with pytest.raises(InvalidInputError, match=r"message 0: joint 'a' is named twice in one message"):
+        read_joint_states(write_stamped(tmp_path / "dup", fmt, stamps, [[1.0, 2.0]] * n, names=("a", "a")))
+    with pytest.raises(InvalidInputError, match=r"has 2 distinct samples of \('a',\); a demonstration needs at least 3"):
+        read_joint_states(write_stamped(tmp_path / "two", fmt, stamps[:2], good[:2]))
+    with pytest.raises(InvalidInputError, match=r"joints = \['a', 'a'\]: give distinct joint names"):
+        read_joint_states(write_stamped(tmp_path / "ok", fmt, stamps, good), joints=["a", "a"])
+
+
+def test_out_of_order_and_repeated_stamps_are_sorted_and_deduplicated(tmp_path):
+    """Repaired, not refused: two publishers interleave, so bag order is not stamp order, and a
+    repeated stamp keeps its first message."""
+    stamps = [T0 + k * 10_000_000 for k in (0, 2, 1, 3, 3, 4)]
+    rec = read_joint_states(write_stamped(tmp_path, "ros2-mcap", stamps, [[float(k)] for k in range(6)]))
+    np.testing.assert_allclose(rec.trajectory.t, [0.0, 0.01, 0.02, 0.03, 0.04], atol=1e-12)
+    np.testing.assert_array_equal(rec.trajectory.y[:, 0], [0.0, 2.0, 1.0, 3.0, 5.0])
+
+
+def test_a_pose_topic_with_a_nan_or_a_zero_quaternion_names_the_message(tmp_path):
+    path = bag_path(tmp_path, "ros2-sqlite3")
+    with BagWriter(path, "ros2-sqlite3") as w:
+        for k in range(10):
+            pose = [0.1 * k, 0, 0, 1, 0, 0, 0] if k != 4 else [0.0, 0, 0, 0, 0, 0, 0]
+            w.write("/pose", w.pose_stamped(T0 + k * 10**7, "world", pose), T0 + k * 10**7)
+            w.write("/tf", w.tf_message(T0 + k * 10**7, [("world", "tool", [float("nan") if k == 6 else 0.0,
+                                                                          0, 0, 1, 0, 0, 0])]), T0 + k * 10**7)
+    with pytest.raises(InvalidInputError, match=r"topic '/pose', message 4: its quaternion is zero"):
+        read_poses(path, "/pose")
+    with pytest.raises(InvalidInputError, match=r"TF message 6, transform 'world' -> 'tool': x is nan"):
+        read_tf(path, "world", "tool")

@@ -234,6 +234,59 @@ def load_npz(source: str | os.PathLike[str] | bytes, where: str, *, limit: int,
     return out
 
 
+#: Inflated pieces are produced and counted this many bytes at a time.
+_INFLATE_PIECE = MiB
+
+
+def open_inflated(source: IO[bytes], codec: str) -> tuple[IO[bytes], tuple[type[Exception], ...]]:
+    """A file object inflating ``source`` (zstd frames, bz2 streams or lz4 frames, several
+    concatenated as the one-shot decompressors of these formats accept) and the exceptions it
+    raises on corrupt or cut data."""
+    if codec == "zstd":
+        import sys
+
+        if sys.version_info >= (3, 14):
+            from compression import zstd
+        else:
+            from backports import zstd
+        return zstd.ZstdFile(source, "rb"), (zstd.ZstdError, EOFError)  # type: ignore[return-value]
+    if codec == "bz2":
+        import bz2
+
+        return bz2.BZ2File(source, "rb"), (OSError, EOFError)
+    if codec == "lz4":
+        import lz4.frame  # type: ignore[import-untyped]
+
+        return lz4.frame.LZ4FrameFile(source, "rb"), (RuntimeError, EOFError)
+    raise ValueError(f"unknown codec {codec!r}")
+
+
+def inflate_bounded(source: IO[bytes] | bytes, codec: str, *, limit: int, where: str,
+                    error: ErrorClass = InvalidInputError, keep: bool = False, why: str = "") -> tuple[int, bytes]:
+    """Inflates ``source`` (compressed with ``codec``: ``zstd``, ``bz2`` or ``lz4``) a piece at a
+    time and refuses it as soon as it passes ``limit`` bytes, so a compression bomb costs at most
+    ``limit`` bytes of work and no memory beyond one piece (unless ``keep``). Returns the inflated
+    size and, with ``keep``, the inflated bytes. Corrupt data is an error naming ``where``; ``why``
+    follows the limit in the error (where it comes from)."""
+    stream = io.BytesIO(source) if isinstance(source, bytes) else source
+    pieces: list[bytes] = []
+    total = 0
+    inflated, corrupt = open_inflated(stream, codec)
+    try:
+        with inflated:
+            while piece := inflated.read(min(_INFLATE_PIECE, limit + 1 - total)):
+                total += len(piece)
+                if total > limit:
+                    raise error(f"{where}: {codec} data inflates to more than {limit} bytes, the limit{why}")
+                if keep:
+                    pieces.append(piece)
+    except DmprsError:
+        raise
+    except corrupt as exc:
+        raise error(f"{where}: corrupt {codec} data ({type(exc).__name__}: {exc})") from None
+    return total, b"".join(pieces)
+
+
 # --- writing ------------------------------------------------------------------------------------
 
 

@@ -176,11 +176,54 @@ def _ranges(text: str | None) -> list[tuple[float, float]] | None:
     try:
         return [(float(a), float(b)) for a, b in (part.split(":") for part in text.split(","))]
     except ValueError:
-        raise click.BadParameter(f"{text!r}: expected START:STOP[,START:STOP...] in seconds") from None
+        raise click.ClickException(f"--ranges {text!r}: expected START:STOP[,START:STOP...] in seconds") from None
 
 
 def _names(text: str | None) -> list[str] | None:
     return None if text is None else [n.strip() for n in text.split(",") if n.strip()]
+
+
+class _ImportProgress:
+    """A rich progress bar on stderr while ``dmprs demos import`` reads (fed by load_demos'
+    progress callback, :attr:`callback`) and while it writes the database (between :meth:`start`
+    and :meth:`stop`); nothing when not shown."""
+
+    def __init__(self, show: bool) -> None:
+        self.bar: Any = None
+        self.tasks: dict[Path, Any] = {}
+        self.stages: list[Any] = []
+        if show:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+            self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                TimeRemainingColumn(), console=Console(stderr=True))
+
+    def start(self) -> None:
+        if self.bar is not None:
+            self.bar.start()
+
+    def stop(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+    @property
+    def callback(self) -> Any:
+        return None if self.bar is None else self._update
+
+    def _update(self, source: Path, done: int, total: int) -> None:
+        if source not in self.tasks:
+            self.tasks[source] = self.bar.add_task(f"reading {source.name}", total=total)
+        self.bar.update(self.tasks[source], completed=done, total=total)
+
+    def stage(self, text: str) -> None:
+        """A step of unknown length (building and writing the database), until :meth:`done`."""
+        if self.bar is not None:
+            self.stages.append(self.bar.add_task(text, total=None))
+
+    def done(self) -> None:
+        for task in self.stages:
+            self.bar.update(task, total=1, completed=1)
 
 
 @demos_group.command("import")
@@ -205,11 +248,13 @@ def _names(text: str | None) -> list[str] | None:
 @click.option("--rest-angular-speed", type=float, default=0.05, show_default=True,
               help="rad/s; with poses, a rest also needs the angular speed below this")
 @click.option("--rate", type=float, default=None, help="resample every demonstration at this rate (Hz)")
+@click.option("--progress/--no-progress", "show_progress", default=None,
+              help="show a progress bar on stderr (default: when stderr is a terminal)")
 def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None, query_fields: str | None,
                      units: str | None, fmt: str, topic: str, joints: str | None, pose_topic: str | None,
                      tf_frames: str | None, column: str, dims: str | None, time_column: str,
                      ranges: str | None, rest_speed: float | None, rest_angular_speed: float,
-                     rate: float | None) -> None:
+                     rate: float | None, show_progress: bool | None) -> None:
     """Build a database from SOURCES: ROS bags, LeRobot datasets, CSV or npz files."""
     from dmprs.io.importer import build_database, load_demos
 
@@ -217,17 +262,27 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
     if tf_frames is not None:
         frame, _, child = tf_frames.partition(":")
         if not frame or not child:
-            raise click.BadParameter(f"{tf_frames!r}: expected FRAME:CHILD", param_hint="--tf")
+            raise click.ClickException(f"--tf {tf_frames!r}: expected FRAME:CHILD")
         tf = (frame, child)
+    if show_progress is None:
+        show_progress = sys.stderr.isatty()
     try:
-        demos = load_demos(sources, format=fmt, topic=topic, joints=_names(joints), column=column,
-                           dims=_names(dims), time_column=time_column, ranges=_ranges(ranges),
-                           rest_speed=rest_speed, rest_angular_speed=rest_angular_speed, rate=rate,
-                           pose_topic=pose_topic, tf=tf)
-        db = build_database(demos, queries=queries, query_fields=_names(query_fields), query_units=_names(units))
-        db.save(out)
+        progress = _ImportProgress(show_progress)
+        progress.start()
+        try:
+            demos = load_demos(sources, format=fmt, topic=topic, joints=_names(joints), column=column,
+                               dims=_names(dims), time_column=time_column, ranges=_ranges(ranges),
+                               rest_speed=rest_speed, rest_angular_speed=rest_angular_speed, rate=rate,
+                               pose_topic=pose_topic, tf=tf, progress=progress.callback)
+            progress.stage(f"writing {len(demos)} demonstrations to {out}")
+            db = build_database(demos, queries=queries, query_fields=_names(query_fields),
+                                query_units=_names(units))
+            db.save(out)
+            progress.done()
+        finally:
+            progress.stop()
     except DmprsError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise click.ClickException(" ".join(str(exc).split("\n"))) from None  # one line
     labels = [d.label or "" for d in db]
     shown = ", ".join(labels[:8]) + (f", ... {labels[-1]}" if len(labels) > 8 else "")
     click.echo(f"{len(db)} demonstrations ({shown}) written to {out}")

@@ -15,7 +15,8 @@ fields such as ``task_index``, scalar arrays of an npz file).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import os
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,11 +26,15 @@ from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.io.lerobot import read_lerobot
 from dmprs.io.poses import poses_between, resample_poses, split_poses_at_rest
 from dmprs.io.rosbag import read_joint_states, read_poses, read_tf
-from dmprs.io.segment import cut, from_zero, resample, split_at_rest
+from dmprs.io.segment import MIN_SAMPLES, cut, from_zero, resample, split_at_rest
 from dmprs.io.tables import QueryTable, read_csv_trajectory, read_npz_trajectory, read_query_table
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
-__all__ = ["FORMATS", "ImportedDemo", "build_database", "detect_format", "load_demos"]
+__all__ = ["FORMATS", "ImportedDemo", "Progress", "build_database", "detect_format", "load_demos"]
+
+#: Called as ``progress(source, done, total)``: LeRobot datasets after each data file (in
+#: frames), other sources once they are read (1 of 1).
+Progress = Callable[[Path, int, int], None]
 
 FORMATS = ("rosbag", "lerobot", "csv", "npz")
 POSE_NAMES = ("x", "y", "z", "qw", "qx", "qy", "qz")
@@ -49,10 +54,10 @@ class ImportedDemo:
 def detect_format(path: str | Path) -> str:
     """``rosbag``, ``lerobot``, ``csv`` or ``npz``, from what ``path`` is."""
     p = Path(path)
-    if p.is_dir():
-        if (p / "meta" / "info.json").is_file():
+    if p.is_dir():  # what is inside is checked by the reader (a FIFO metadata.yaml is refused there)
+        if os.path.lexists(p / "meta" / "info.json"):
             return "lerobot"
-        if (p / "metadata.yaml").is_file():
+        if os.path.lexists(p / "metadata.yaml"):
             return "rosbag"
         raise InvalidInputError(
             f"{p}: a directory that is neither a ROS 2 bag (metadata.yaml) nor a LeRobot dataset (meta/info.json)")
@@ -81,6 +86,7 @@ def load_demos(
     rate: float | None = None,
     pose_topic: str | None = None,
     tf: tuple[str, str] | None = None,
+    progress: Progress | None = None,
 ) -> list[ImportedDemo]:
     """The demonstrations in ``sources``.
 
@@ -91,7 +97,9 @@ def load_demos(
     their angular speed below ``rest_angular_speed`` (rad/s). A recording is cut into pieces by ``ranges``
     (``(start, stop)`` in s of the recording's own clock; bags: since the bag's start) or where it
     rests (speed below ``rest_speed``, in units of y per s). ``rate`` (Hz) resamples every
-    demonstration onto a uniform grid; by default the recorded times are kept.
+    demonstration onto a uniform grid (its size is checked before it is allocated); by default
+    the recorded times are kept. Every demonstration has at least
+    :data:`~dmprs.io.segment.MIN_SAMPLES` samples. ``progress`` is told how far the reading is.
     """
     if format != "auto" and format not in FORMATS:
         raise InvalidInputError(f"format = {format!r}; use auto or one of {', '.join(FORMATS)}")
@@ -105,10 +113,11 @@ def load_demos(
         if kind == "lerobot":
             if ranges is not None or rest_speed is not None:
                 raise InvalidInputError(f"{p}: LeRobot episodes are already cut; drop the ranges / rest speed")
-            for ep in read_lerobot(p, column, dims=dims):
-                out.append(ImportedDemo(str(ep.index), _resampled(ep.trajectory, rate), dict(ep.labels),
-                                        {**meta, "column": column, "names": list(ep.names),
-                                         "labels": dict(ep.labels)}))
+            report = None if progress is None else (lambda done, total, p=p: progress(p, done, total))
+            for ep in read_lerobot(p, column, dims=dims, progress=report):
+                out.append(ImportedDemo(str(ep.index), _resampled(ep.trajectory, rate, f"{p}, episode {ep.index}"),
+                                        dict(ep.labels), {**meta, "column": column, "names": list(ep.names),
+                                                          "labels": dict(ep.labels)}))
             continue
         labels: dict[str, Any] = {}
         traj: Trajectory | CartesianTrajectory
@@ -132,10 +141,15 @@ def load_demos(
             names = ()
         meta["names"] = list(names)
         stem = p.name[: -len(p.suffix)] if p.suffix else p.name
-        pieces = _pieces(traj, ranges, rest_speed, rest_angular_speed)
+        try:
+            pieces = _pieces(traj, ranges, rest_speed, rest_angular_speed)
+        except DmprsError as exc:
+            raise InvalidInputError(f"{p}: {exc}") from None
         for k, piece in enumerate(pieces):
             name = stem if len(pieces) == 1 and ranges is None and rest_speed is None else f"{stem}#{k}"
-            out.append(ImportedDemo(name, _resampled(piece, rate), labels, {**meta, "labels": labels}))
+            out.append(ImportedDemo(name, _resampled(piece, rate, str(p) if name == stem else f"{p} ({name})"), labels, {**meta, "labels": labels}))
+        if progress is not None:
+            progress(p, 1, 1)
     names_seen: dict[str, str] = {}
     for d in out:
         if d.name in names_seen:
@@ -152,16 +166,26 @@ def _pieces(traj: Trajectory | CartesianTrajectory, ranges: Sequence[tuple[float
     if isinstance(traj, CartesianTrajectory):
         if rest_speed is not None:
             return split_poses_at_rest(traj, speed_tol=rest_speed, angular_speed_tol=rest_angular_speed)
-        return [poses_between(traj, a, b) for a, b in (ranges or [(traj.t[0], traj.t[-1])])]
+        if ranges is None:  # all of it, from t = 0 (a single pose is refused by the caller)
+            return [traj if traj.n_samples < 2 else poses_between(traj, traj.t[0], traj.t[-1])]
+        return [poses_between(traj, a, b) for a, b in ranges]
     if rest_speed is not None:
         return split_at_rest(traj, speed_tol=rest_speed)
     return [from_zero(traj)] if ranges is None else cut(traj, ranges)
 
 
-def _resampled(traj: Any, rate: float | None) -> Any:
-    if rate is None:
-        return traj
-    return resample_poses(traj, rate) if isinstance(traj, CartesianTrajectory) else resample(traj, rate)
+def _resampled(traj: Any, rate: float | None, where: str) -> Any:
+    """The demonstration, resampled at ``rate`` if given; one of fewer than MIN_SAMPLES samples
+    is refused (DMP.fit differentiates twice)."""
+    try:
+        if rate is not None:
+            traj = resample_poses(traj, rate) if isinstance(traj, CartesianTrajectory) else resample(traj, rate)
+    except DmprsError as exc:
+        raise InvalidInputError(f"{where}: {exc}") from None
+    if traj.n_samples < MIN_SAMPLES:
+        raise InvalidInputError(f"{where}: {traj.n_samples} samples; a demonstration needs at least {MIN_SAMPLES} "
+                                "(DMP.fit differentiates twice)")
+    return traj
 
 
 def build_database(

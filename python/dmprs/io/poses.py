@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_float_array, as_scalar, check_finite, check_increasing
 from dmprs.errors import InvalidInputError
-from dmprs.io.segment import moving_ranges
+from dmprs.io.segment import moving_ranges, uniform_count
 from dmprs.trajectory import CartesianTrajectory
 
 __all__ = [
@@ -99,9 +99,9 @@ def pose_trajectory(t: ArrayLike, poses: ArrayLike) -> CartesianTrajectory:
 def resample_poses(trajectory: CartesianTrajectory, rate: float) -> CartesianTrajectory:
     """Uniform samples at ``rate`` Hz from the first one (positions linearly, orientations by
     slerp), times from 0; recorded velocities are dropped."""
-    dt = 1.0 / as_scalar(rate, "rate", positive=True)
+    n = uniform_count(trajectory.duration, rate, 7)
     t = trajectory.t
-    t_new = t[0] + np.arange(int(np.floor(trajectory.duration / dt + 1e-9)) + 1) * dt
+    t_new = t[0] + np.arange(n) * (1.0 / float(rate))
     return pose_trajectory(t_new - t[0], interpolate_poses(t, trajectory.pose, t_new))
 
 

@@ -8,8 +8,15 @@ installation needed). ROS 2 bags may be sqlite3 or mcap; ROS 1 bags are ``.bag``
 
 Times are in seconds since the bag's first message (so they keep nanosecond precision and match
 the offsets ``ros2 bag info`` shows). Header stamps are used when the messages have them, the
-bag's receive times otherwise. Messages are put in time order; a message whose time does not
-exceed the previous one's is dropped (duplicates happen when two nodes publish).
+bag's receive times when a topic's stamps are all zero; a zero stamp among set ones is refused.
+Messages are put in time order; a message whose time does not exceed the previous one's is
+dropped (duplicates happen when two nodes publish). A gap longer than :data:`MAX_STAMP_GAP_S`
+between consecutive samples, a non-finite value, a message with a joint named twice and fewer
+than :data:`~dmprs.io.segment.MIN_SAMPLES` samples are refused, naming the bag, topic and message.
+
+Before rosbags opens a bag, :func:`dmprs.io.bagcheck.check_bag` makes sure every file it will
+open is a regular file and nothing it will inflate is a compression bomb; whatever rosbags
+raises on a damaged bag becomes an :class:`~dmprs.errors.InvalidInputError` naming the bag.
 """
 
 from __future__ import annotations
@@ -24,15 +31,22 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmprs.errors import InvalidInputError
+from dmprs.errors import DmprsError, InvalidInputError
+from dmprs.io.bagcheck import check_bag
 from dmprs.io.poses import interpolate_poses, pose_trajectory, quat_conjugate, quat_multiply, quat_rotate
+from dmprs.io.segment import MIN_SAMPLES
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
-__all__ = ["JointRecording", "bag_topics", "read_joint_states", "read_poses", "read_tf"]
+__all__ = ["MAX_STAMP_GAP_S", "JointRecording", "bag_topics", "read_joint_states", "read_poses", "read_tf"]
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+#: Consecutive samples of one recording further apart than this (s) are refused: a clock that
+#: jumped (a stamp of another epoch), not a pause in a demonstration.
+MAX_STAMP_GAP_S = 3600.0
+# Bag times are int64 ns; a start time within +-2**62 keeps every stamp minus it within int64.
+_MAX_START_NS = 2**62
 
 
 @dataclass(frozen=True)
@@ -45,23 +59,53 @@ class JointRecording:
     topic: str = ""
 
 
+def _rosbags_errors() -> tuple[type[BaseException], ...]:
+    """What rosbags and the libraries under it raise for a bag they cannot read."""
+    import apsw
+    from rosbags.highlevel import AnyReaderError
+    from rosbags.rosbag1 import ReaderError as ReaderError1
+    from rosbags.rosbag2 import ReaderError as ReaderError2
+    from rosbags.serde import SerdeError
+    from rosbags.typesys import TypesysError
+
+    return (AnyReaderError, ReaderError1, ReaderError2, SerdeError, TypesysError, apsw.Error, OSError,
+            UnicodeDecodeError, OverflowError)
+
+
 @contextmanager
 def _reader(path: str | Path) -> Iterator[Any]:
+    """An open AnyReader; whatever rosbags raises in the ``with`` block (opening, listing,
+    iterating, deserializing) becomes an InvalidInputError naming the bag."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
     p = Path(path)
     if not p.exists():
         raise InvalidInputError(f"{p}: no such bag (a ROS 2 bag is a directory, a ROS 1 bag a .bag file)")
-    reader = AnyReader([p], default_typestore=get_typestore(Stores.LATEST))
+    check_bag(p)
+    known = _rosbags_errors()
+    reader = None
     try:
+        reader = AnyReader([p], default_typestore=get_typestore(Stores.LATEST))
         reader.open()
-    except Exception as exc:  # noqa: BLE001 - rosbags raises its own classes for each kind of bad file
-        raise InvalidInputError(f"{p}: not a readable ROS bag ({type(exc).__name__}: {exc})") from None
-    try:
         yield reader
+    except DmprsError:
+        raise
+    except known as exc:
+        raise InvalidInputError(f"{p}: not a readable ROS bag ({type(exc).__name__}: {str(exc)[:300]})") from None
+    # The boundary with rosbags: it parses hostile bytes with asserts, struct.unpack, ord(),
+    # dict and list lookups, so a damaged bag can raise anything (AssertionError, KeyError,
+    # IndexError, struct.error, TypeError, ...). The block holds only rosbags calls and field
+    # reads; the arrays are built after it.
+    except Exception as exc:  # noqa: BLE001
+        raise InvalidInputError(f"{p}: not a readable ROS bag (rosbags failed: {type(exc).__name__}: "
+                                f"{str(exc)[:300]})") from None
     finally:
-        reader.close()
+        if reader is not None and reader.stack is not None:
+            try:
+                reader.close()
+            except known:
+                pass
 
 
 def bag_topics(path: str | Path) -> dict[str, str]:
@@ -81,30 +125,96 @@ def _connections(reader: Any, path: str | Path, topic: str, msgtypes: Sequence[s
     return conns
 
 
-def _stamp_ns(msg: Any) -> int:
-    s = msg.header.stamp
-    return int(s.sec) * 1_000_000_000 + int(s.nanosec)
+def _start_ns(reader: Any, path: str | Path) -> int:
+    start = int(reader.start_time)
+    if not -_MAX_START_NS <= start <= _MAX_START_NS:
+        raise InvalidInputError(f"{path}: the bag's start time {start} ns is out of range (a damaged index or "
+                                "metadata.yaml)")
+    return start
 
 
-def _messages(reader: Any, conns: list[Any]) -> list[tuple[int, Any]]:
-    """(receive time in ns, message) in bag order."""
-    return [(ts, reader.deserialize(raw, c.msgtype)) for c, ts, raw in reader.messages(connections=conns)]
+def _stamp_ns(stamp: Any) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
-def _times(reader: Any, msgs: list[tuple[int, Any]]) -> NDArray[np.float64]:
-    """Header stamps if any is set, else receive times, in s since the bag's start."""
-    stamps = np.array([_stamp_ns(m) for _, m in msgs], dtype=np.int64)
+def _messages(reader: Any, conns: list[Any]) -> Iterator[tuple[int, int, Any]]:
+    """(index on the topics, receive time in ns, message) in bag order."""
+    for k, (c, ts, raw) in enumerate(reader.messages(connections=conns)):
+        yield k, int(ts), reader.deserialize(raw, c.msgtype)
+
+
+class _Samples:
+    """What a reader keeps of each message: its header stamp, receive time, index and values."""
+
+    def __init__(self) -> None:
+        self.stamps: list[int] = []
+        self.received: list[int] = []
+        self.index: list[int] = []
+        self.rows: list[NDArray[np.float64]] = []
+
+    def add(self, stamp: int, received: int, k: int, row: NDArray[np.float64]) -> None:
+        self.stamps.append(stamp)
+        self.received.append(received)
+        self.index.append(k)
+        self.rows.append(row)
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+
+def _times(samples: _Samples, start: int, where: str) -> NDArray[np.float64]:
+    """Header stamps if any is set, else receive times, in s since the bag's start. A zero stamp
+    among set ones is refused (a publisher that does not stamp, mixed with one that does)."""
+    stamps = np.array(samples.stamps, dtype=np.int64)
     if not stamps.any():
-        stamps = np.array([ts for ts, _ in msgs], dtype=np.int64)
-    return (stamps - int(reader.start_time)).astype(np.float64) * 1e-9
+        stamps = np.array(samples.received, dtype=np.int64)
+    elif not stamps.all():
+        j, set_ = int(np.argmin(stamps != 0)), int(np.argmax(stamps != 0))
+        raise InvalidInputError(
+            f"{where}, message {samples.index[j]}: its header stamp is zero while message "
+            f"{samples.index[set_]} is stamped {stamps[set_] * 1e-9:.12g} s; a publisher that does not "
+            "stamp its messages shares the topic (drop its messages or stamp them)")
+    return (stamps - start).astype(np.float64) * 1e-9
 
 
-def _increasing(t: NDArray[np.float64]) -> NDArray[np.intp]:
-    """Indices that sort ``t`` and drop samples not later than the one kept before them."""
+def _increasing(t: NDArray[np.float64], index: Sequence[int], where: str) -> NDArray[np.intp]:
+    """Indices that sort ``t`` and drop samples not later than the one kept before them; a gap
+    longer than MAX_STAMP_GAP_S between kept samples is refused."""
     order = np.argsort(t, kind="stable")
     ts = t[order]
     keep = np.concatenate([[True], np.diff(ts) > 0])
-    return order[keep]
+    order = order[keep]
+    gaps = np.diff(t[order])
+    if len(gaps) and gaps.max() > MAX_STAMP_GAP_S:
+        j = int(np.argmax(gaps))
+        a, b = int(order[j]), int(order[j + 1])
+        raise InvalidInputError(
+            f"{where}: the stamps jump by {gaps[j]:.6g} s between message {index[a]} ({t[a]:.9g} s) and "
+            f"message {index[b]} ({t[b]:.9g} s), more than the {MAX_STAMP_GAP_S:g} s a recording may pause; "
+            "a clock that jumped (a stamp of another epoch)")
+    return order
+
+
+def _enough(n: int, where: str, what: str) -> None:
+    if n < MIN_SAMPLES:
+        raise InvalidInputError(
+            f"{where} has {n} distinct samples of {what}; a demonstration needs at least {MIN_SAMPLES} "
+            "(DMP.fit differentiates twice)")
+
+
+def _finite(row: NDArray[np.float64], where: str, names: Sequence[str]) -> None:
+    bad = ~np.isfinite(row)
+    if bad.any():
+        j = int(np.argmax(bad))
+        raise InvalidInputError(f"{where}: {names[j]} is {row[j]}; every value must be finite")
+
+
+def _joint_names(m: Any, where: str) -> list[str]:
+    names = [str(n) for n in m.name]
+    if len(set(names)) != len(names):
+        dup = next(n for n in names if names.count(n) > 1)
+        raise InvalidInputError(f"{where}: joint {dup!r} is named twice in one message")
+    return names
 
 
 def read_joint_states(path: str | Path, topic: str = "/joint_states", joints: Sequence[str] | None = None,
@@ -116,60 +226,87 @@ def read_joint_states(path: str | Path, topic: str = "/joint_states", joints: Se
     ``velocities=True`` the recorded velocities become the trajectory's ``yd`` (every kept
     message must have them); by default the fit differentiates the positions instead.
     """
+    names: tuple[str, ...] | None = None
+    if joints is not None:
+        names = tuple(str(j) for j in joints)
+        if not names or len(set(names)) != len(names):
+            raise InvalidInputError(f"joints = {list(names)}: give distinct joint names, at least one")
+    where = f"{path}, topic {topic!r}"
+    samples, vel = _Samples(), []
+    seen: dict[str, None] = {}
     with _reader(path) as reader:
         conns = _connections(reader, path, topic, (JOINT_STATE,))
-        msgs = _messages(reader, conns)
-        if not msgs:
-            raise InvalidInputError(f"{path}: topic {topic!r} has no messages")
-        seen: dict[str, None] = {}
-        for _, m in msgs:
-            seen.update(dict.fromkeys(m.name))
-        names = tuple(msgs[0][1].name) if joints is None else tuple(joints)
-        missing = [j for j in names if j not in seen]
-        if missing:
-            raise InvalidInputError(
-                f"{path}: topic {topic!r} has no joint {', '.join(map(repr, missing))}; its joints are "
-                f"{', '.join(seen)}")
-        kept = [(ts, m) for ts, m in msgs if all(j in m.name for j in names)]
-        t = _times(reader, kept)
-    rows, vel = [], []
-    for _, m in kept:
-        index = [list(m.name).index(j) for j in names]
-        if len(m.position) != len(m.name):
-            raise InvalidInputError(
-                f"{path}: a message on {topic!r} has {len(m.name)} names but {len(m.position)} positions")
-        rows.append(np.asarray(m.position, dtype=np.float64)[index])
-        if velocities:
-            if len(m.velocity) != len(m.name):
-                raise InvalidInputError(
-                    f"{path}: velocities=True but a message on {topic!r} has {len(m.velocity)} velocities "
-                    f"for {len(m.name)} joints")
-            vel.append(np.asarray(m.velocity, dtype=np.float64)[index])
-    order = _increasing(t)
-    if len(order) < 3:
+        start = _start_ns(reader, path)
+        for k, ts, m in _messages(reader, conns):
+            here = f"{where}, message {k}"
+            have = _joint_names(m, here)
+            seen.update(dict.fromkeys(have))
+            if names is None:
+                if not have:
+                    raise InvalidInputError(f"{here}: the first message names no joint; give the joints")
+                names = tuple(have)
+            pos = {n: i for i, n in enumerate(have)}
+            if not all(j in pos for j in names):
+                continue
+            index = [pos[j] for j in names]
+            position = np.asarray(m.position, dtype=np.float64)
+            if len(position) != len(have):
+                raise InvalidInputError(f"{here}: {len(have)} joint names but {len(position)} positions")
+            _finite(position[index], here, [f"the position of {j!r}" for j in names])
+            if velocities:
+                velocity = np.asarray(m.velocity, dtype=np.float64)
+                if len(velocity) != len(have):
+                    raise InvalidInputError(
+                        f"{here}: velocities=True but it has {len(velocity)} velocities for {len(have)} joints")
+                _finite(velocity[index], here, [f"the velocity of {j!r}" for j in names])
+                vel.append(velocity[index])
+            samples.add(_stamp_ns(m.header.stamp), ts, k, position[index])
+    if not seen and names is None:
+        raise InvalidInputError(f"{where}: no messages")
+    assert names is not None
+    missing = [j for j in names if j not in seen]
+    if missing:
         raise InvalidInputError(
-            f"{path}: topic {topic!r} has {len(order)} distinct samples of {names}; at least 3 are needed")
-    y = np.asarray(rows)[order]
+            f"{where}: no joint {', '.join(map(repr, missing))}; its joints are {', '.join(seen) or 'none'}")
+    _enough(len(samples), where, f"{names}")
+    t = _times(samples, start, where)
+    order = _increasing(t, samples.index, where)
+    _enough(len(order), where, f"{names}")
+    y = np.asarray(samples.rows)[order]
     yd = np.asarray(vel)[order] if velocities else None
     return JointRecording(names, Trajectory(t[order], y, yd), topic)
 
 
-def _pose_row(position: Any, orientation: Any) -> list[float]:
-    return [position.x, position.y, position.z, orientation.w, orientation.x, orientation.y, orientation.z]
+def _pose_row(position: Any, orientation: Any) -> NDArray[np.float64]:
+    return np.array([position.x, position.y, position.z, orientation.w, orientation.x, orientation.y,
+                     orientation.z], dtype=np.float64)
+
+
+_POSE_FIELDS = ("x", "y", "z", "qw", "qx", "qy", "qz")
+
+
+def _check_pose(row: NDArray[np.float64], where: str) -> None:
+    _finite(row, where, _POSE_FIELDS)
+    if np.linalg.norm(row[3:]) < 1e-9:
+        raise InvalidInputError(f"{where}: its quaternion is zero; an orientation must be a rotation")
 
 
 def read_poses(path: str | Path, topic: str) -> CartesianTrajectory:
     """The poses of a ``geometry_msgs/PoseStamped`` topic (in the messages' ``header.frame_id``)."""
+    where = f"{path}, topic {topic!r}"
+    samples = _Samples()
     with _reader(path) as reader:
         conns = _connections(reader, path, topic, (POSE_STAMPED,))
-        msgs = _messages(reader, conns)
-        if len(msgs) < 2:
-            raise InvalidInputError(
-                f"{path}: topic {topic!r} has {len(msgs)} messages; at least 2 are needed")
-        t = _times(reader, msgs)
-    poses = np.array([_pose_row(m.pose.position, m.pose.orientation) for _, m in msgs], dtype=np.float64)
-    order = _increasing(t)
-    return pose_trajectory(t[order], poses[order])
+        start = _start_ns(reader, path)
+        for k, ts, m in _messages(reader, conns):
+            row = _pose_row(m.pose.position, m.pose.orientation)
+            _check_pose(row, f"{where}, message {k}")
+            samples.add(_stamp_ns(m.header.stamp), ts, k, row)
+    _enough(len(samples), where, "poses")
+    t = _times(samples, start, where)
+    order = _increasing(t, samples.index, where)
+    _enough(len(order), where, "poses")
+    return pose_trajectory(t[order], np.asarray(samples.rows)[order])
 
 
 # --- TF ----------------------------------------------------------------------------------------
@@ -222,27 +359,29 @@ def read_tf(path: str | Path, frame: str, child_frame: str,
     Samples are at the times of the moving transforms on the chain, within the interval all of
     them cover; static transforms (``/tf_static``, or any published once) hold for all times.
     """
+    edges: dict[tuple[str, str], _Samples] = {}
     with _reader(path) as reader:
         present = [t for t in topics if any(c.topic == t for c in reader.connections)]
         if not present:
             have = ", ".join(f"{c.topic} ({c.msgtype})" for c in reader.connections) or "none"
             raise InvalidInputError(f"{path}: no TF topic ({', '.join(topics)}); the bag has: {have}")
         conns = [c for t in present for c in _connections(reader, path, t, (TF_MESSAGE,))]
-        start = int(reader.start_time)
-        edges: dict[tuple[str, str], list[tuple[float, list[float]]]] = {}
-        for _, m in _messages(reader, conns):
+        start = _start_ns(reader, path)
+        for k, ts, m in _messages(reader, conns):
             for tf in m.transforms:
-                key = (tf.header.frame_id.lstrip("/"), tf.child_frame_id.lstrip("/"))
+                key = (str(tf.header.frame_id).lstrip("/"), str(tf.child_frame_id).lstrip("/"))
                 tr = tf.transform
-                edges.setdefault(key, []).append(
-                    ((_stamp_ns(tf) - start) * 1e-9, _pose_row(tr.translation, tr.rotation)))
+                row = _pose_row(tr.translation, tr.rotation)
+                _check_pose(row, f"{path}, TF message {k}, transform {key[0]!r} -> {key[1]!r}")
+                edges.setdefault(key, _Samples()).add(_stamp_ns(tf.header.stamp), ts, k, row)
     steps = _frame_path(edges, frame.lstrip("/"), child_frame.lstrip("/"), path)
     series = []
     for p, c, forward in steps:
-        samples = sorted(edges[(p, c)], key=lambda s: s[0])
-        t = np.array([s[0] for s in samples])
-        keep = _increasing(t)
-        series.append((t[keep], np.array([s[1] for s in samples])[keep], forward))
+        recorded = edges[(p, c)]
+        where = f"{path}, TF {p!r} -> {c!r}"
+        t = _times(recorded, start, where)
+        keep = _increasing(t, recorded.index, where)
+        series.append((t[keep], np.asarray(recorded.rows)[keep], forward))
     moving = [s for s in series if len(s[0]) > 1]
     if moving:
         lo, hi = max(s[0][0] for s in moving), min(s[0][-1] for s in moving)
@@ -253,6 +392,7 @@ def read_tf(path: str | Path, frame: str, child_frame: str,
         times = times[(times >= lo) & (times <= hi)]
     else:
         times = np.array([max(s[0][-1] for s in series)])
+    _enough(len(times), f"{path}, TF {frame!r} -> {child_frame!r}", "poses (a chain of static transforms is one pose)")
     pose = np.tile(np.array([0.0, 0, 0, 1, 0, 0, 0]), (len(times), 1))
     for t, poses, forward in series:
         edge = interpolate_poses(t, poses, times) if len(t) > 1 else np.tile(poses[-1], (len(times), 1))

@@ -17,21 +17,42 @@ from dmprs._arrays import as_float_array, as_scalar
 from dmprs.errors import InvalidInputError
 from dmprs.trajectory import Trajectory
 
-__all__ = ["cut", "motion_ranges", "resample", "split_at_rest"]
+__all__ = ["MAX_RESAMPLED_VALUES", "MIN_SAMPLES", "cut", "motion_ranges", "resample", "split_at_rest"]
+
+#: A demonstration needs at least this many samples: DMP.fit differentiates the positions twice
+#: by finite differences (crates/dmp-core/src/finite_difference.rs, MIN_SAMPLES).
+MIN_SAMPLES = 3
+#: Resampling may produce at most this many values (samples x degrees of freedom, 400 MB of
+#: float64): the grid's size is checked before it is allocated.
+MAX_RESAMPLED_VALUES = 50_000_000
+
+
+def uniform_count(duration: float, rate: float, n_dof: int) -> int:
+    """The number of samples of a uniform grid of ``rate`` Hz over ``duration`` s (from the first
+    sample, up to the last grid point at or before the end), refused before anything is allocated
+    if it would exceed MAX_RESAMPLED_VALUES or fall short of MIN_SAMPLES."""
+    hz = as_scalar(rate, "rate", positive=True)
+    with np.errstate(over="ignore"):
+        steps = np.float64(duration) / (1.0 / hz)
+    if not np.isfinite(steps) or (steps + 1) * n_dof > MAX_RESAMPLED_VALUES:
+        raise InvalidInputError(
+            f"resampling {duration:.6g} s at {hz:g} Hz gives {steps + 1:.4g} samples x {n_dof} DOF, more than "
+            f"the {MAX_RESAMPLED_VALUES:.0e} values allowed (lower the rate)")
+    n = int(np.floor(steps + 1e-9)) + 1
+    if n < MIN_SAMPLES:
+        raise InvalidInputError(
+            f"resampling {duration:.4g} s at {hz:g} Hz leaves {n} samples; a demonstration needs at least "
+            f"{MIN_SAMPLES} (raise the rate)")
+    return n
 
 
 def resample(trajectory: Trajectory, rate: float, *, start_at_zero: bool = True) -> Trajectory:
     """Linear interpolation of positions (and velocities, if known) onto a uniform grid of
     ``rate`` Hz from the first sample; times start at 0 unless ``start_at_zero=False``. The last
     sample is the last grid point at or before the recording's end."""
-    dt = 1.0 / as_scalar(rate, "rate", positive=True)
+    n = uniform_count(trajectory.duration, rate, trajectory.n_dof)
     t = trajectory.t
-    n = int(np.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
-    if n < 3:
-        raise InvalidInputError(
-            f"resampling {trajectory.duration:.4g} s at {rate:g} Hz leaves {n} samples; a "
-            "demonstration needs at least 3 (raise the rate)")
-    t_new = t[0] + np.arange(n) * dt
+    t_new = t[0] + np.arange(n) * (1.0 / float(rate))
 
     def interp(y: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.stack([np.interp(t_new, t, y[:, d]) for d in range(y.shape[1])], axis=1)
@@ -52,10 +73,10 @@ def cut(trajectory: Trajectory, ranges: Sequence[tuple[float, float]]) -> list[T
     for k, rng in enumerate(ranges):
         start, stop = (as_scalar(v, f"ranges[{k}]") for v in rng)
         keep = (trajectory.t >= start) & (trajectory.t <= stop)
-        if keep.sum() < 3:
+        if keep.sum() < MIN_SAMPLES:
             raise InvalidInputError(
                 f"ranges[{k}] = ({start:g}, {stop:g}) s holds {int(keep.sum())} samples of a recording "
-                f"from {trajectory.t[0]:g} to {trajectory.t[-1]:g} s; a demonstration needs at least 3")
+                f"from {trajectory.t[0]:g} to {trajectory.t[-1]:g} s; a demonstration needs at least {MIN_SAMPLES}")
         out.append(from_zero(Trajectory(trajectory.t[keep], trajectory.y[keep],
                                         None if trajectory.yd is None else trajectory.yd[keep])))
     return out

@@ -13,79 +13,123 @@
 from __future__ import annotations
 
 import csv
-import json
+import io
 import re
-import zipfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from dmprs._io import MiB, load_npz, read_json, read_text
 from dmprs.errors import DmprsError, InvalidInputError
+from dmprs.io.segment import MIN_SAMPLES
 from dmprs.trajectory import Trajectory
 
-__all__ = ["QueryTable", "read_csv_trajectory", "read_npz_trajectory", "read_query_table"]
+__all__ = ["CSV_MAX_BYTES", "NPZ_MAX_BYTES", "TABLE_MAX_BYTES", "QueryTable", "read_csv_trajectory",
+           "read_npz_trajectory", "read_query_table"]
+
+#: A CSV demonstration may be at most this large (its values, parsed, take at most 4 x as much).
+CSV_MAX_BYTES = 128 * MiB
+#: The arrays of an npz demonstration may hold at most this many bytes (checked from the npy
+#: headers before anything is read or inflated).
+NPZ_MAX_BYTES = 1024 * MiB
+#: A query table (one row per demonstration) may be at most this large.
+TABLE_MAX_BYTES = 16 * MiB
 
 _HEADER_UNIT = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*(\[(?P<unit>[^\[\]]*)\])?\s*$")
 
 
-def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
-    try:
-        with open(path, newline="", encoding="utf-8") as f:
-            rows = [r for r in csv.reader(f) if r and any(c.strip() for c in r)]
-    except OSError as exc:
-        raise InvalidInputError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    if len(rows) < 2:
-        raise InvalidInputError(f"{path}: expected a header row and at least one data row")
-    return [c.strip() for c in rows[0]], rows[1:]
+def _rows(path: Path, limit: int, what: str) -> tuple[list[str], Iterator[tuple[int, list[str]]]]:
+    """The header of a CSV file (read whole, within ``limit`` bytes, as UTF-8) and its non-blank
+    rows with their line numbers; a malformed row is an error naming the line."""
+    text = read_text(path, limit=limit, what=what)
+    reader = csv.reader(io.StringIO(text, newline=""))
+
+    def rows() -> Iterator[tuple[int, list[str]]]:
+        while True:
+            try:
+                row = next(reader)
+            except StopIteration:
+                return
+            except csv.Error as exc:
+                raise InvalidInputError(f"{path}, line {reader.line_num}: not valid CSV ({exc})") from None
+            if row and any(c.strip() for c in row):
+                yield reader.line_num, row
+
+    it = rows()
+    first = next(it, None)
+    if first is None:
+        raise InvalidInputError(f"{path}: empty; expected a header row and data rows")
+    header = [c.strip() for c in first[1]]
+    dup = next((c for c in header if header.count(c) > 1), None)
+    if dup is not None:
+        raise InvalidInputError(f"{path}, line {first[0]}: column {dup!r} appears twice in the header")
+    return header, it
 
 
 def _number(text: str, path: Path, line: int, column: str) -> float:
     try:
-        return float(text)
+        x = float(text)
     except ValueError:
-        raise InvalidInputError(f"{path}, line {line}, column {column!r}: {text!r} is not a number") from None
+        raise InvalidInputError(f"{path}, line {line}, column {column!r}: {text[:40]!r} is not a number") from None
+    if not np.isfinite(x):
+        raise InvalidInputError(f"{path}, line {line}, column {column!r}: {text.strip()!r}; every value must be finite")
+    return x
 
 
 def read_csv_trajectory(path: str | Path, time_column: str = "t",
                         columns: Sequence[str] | None = None) -> tuple[Trajectory, tuple[str, ...]]:
     """The trajectory in a CSV file and the names of its columns (default: all but the time)."""
     p = Path(path)
-    header, rows = _rows(p)
+    header, rows = _rows(p, CSV_MAX_BYTES, "CSV file")
     if time_column not in header:
         raise InvalidInputError(f"{p}: no time column {time_column!r}; the columns are {', '.join(header)}")
     names = tuple(c for c in header if c != time_column) if columns is None else tuple(columns)
+    if not names:
+        raise InvalidInputError(f"{p}: no column besides the time {time_column!r}")
     missing = [c for c in names if c not in header]
     if missing:
         raise InvalidInputError(
             f"{p}: no column {', '.join(map(repr, missing))}; the columns are {', '.join(header)}")
     index = [header.index(c) for c in (time_column, *names)]
-    data = np.empty((len(rows), len(index)))
-    for i, row in enumerate(rows):
+    data, lines = np.empty((64, len(index))), np.empty(64, dtype=np.int64)
+    n = 0
+    for line, row in rows:
         if len(row) != len(header):
-            raise InvalidInputError(f"{p}, line {i + 2}: {len(row)} fields, the header has {len(header)}")
-        data[i] = [_number(row[j], p, i + 2, header[j]) for j in index]
-    try:
-        return Trajectory(data[:, 0], data[:, 1:]), names
-    except DmprsError as exc:
-        raise InvalidInputError(f"{p}: {exc}") from None
+            raise InvalidInputError(f"{p}, line {line}: {len(row)} fields, the header has {len(header)}")
+        if n == len(data):  # grows by doubling: each row costs at least a byte per field
+            data, lines = np.concatenate([data, np.empty_like(data)]), np.concatenate([lines, lines])
+        data[n] = [_number(row[j], p, line, header[j]) for j in index]
+        lines[n] = line
+        n += 1
+    if n < MIN_SAMPLES:
+        raise InvalidInputError(f"{p}: {n} data rows; a demonstration needs at least {MIN_SAMPLES} "
+                                "(DMP.fit differentiates twice)")
+    t = data[:n, 0]
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if len(back):
+        j = int(back[0]) + 1
+        raise InvalidInputError(f"{p}, line {lines[j]}: time {float(t[j])!r} does not exceed {float(t[j - 1])!r} on line "
+                                f"{lines[j - 1]}; times must increase")
+    return Trajectory(t, data[:n, 1:]), names
 
 
 def read_npz_trajectory(path: str | Path) -> tuple[Trajectory, dict[str, float]]:
     """The trajectory in an npz file and its scalar labels."""
     p = Path(path)
-    try:
-        with np.load(p, allow_pickle=False) as npz:
-            arrays = {k: npz[k] for k in npz.files}
-    except (OSError, ValueError, zipfile.BadZipFile) as exc:
-        raise InvalidInputError(f"{p}: not a readable npz file ({exc})") from None
+    arrays = load_npz(p, str(p), limit=NPZ_MAX_BYTES)
     for key in ("t", "y"):
         if key not in arrays:
             raise InvalidInputError(f"{p}: no array {key!r}; it has {', '.join(sorted(arrays)) or 'none'}")
-    labels = {k: float(v) for k, v in arrays.items()
-              if k not in ("t", "y", "yd", "ydd") and v.ndim == 0 and v.dtype.kind in "fiu"}
+    labels = {}
+    for k, v in arrays.items():
+        if k not in ("t", "y", "yd", "ydd") and v.ndim == 0 and v.dtype.kind in "fiu":
+            x = float(v)
+            if not np.isfinite(x):
+                raise InvalidInputError(f"{p}: label {k!r} is {x}; every value must be finite")
+            labels[k] = x
     try:
         return Trajectory(arrays["t"], arrays["y"], arrays.get("yd"), arrays.get("ydd")), labels
     except DmprsError as exc:
@@ -111,7 +155,7 @@ def read_query_table(path: str | Path) -> QueryTable:
     p = Path(path)
     if p.suffix.lower() == ".json":
         return _json_table(p)
-    header, rows = _rows(p)
+    header, rows = _rows(p, TABLE_MAX_BYTES, "query table")
     if "demo" not in header:
         raise InvalidInputError(f"{p}: no 'demo' column naming each demonstration; the columns are {', '.join(header)}")
     cols = [i for i, h in enumerate(header) if h != "demo"]
@@ -120,25 +164,28 @@ def read_query_table(path: str | Path) -> QueryTable:
     names, units = zip(*(_split_unit(header[i]) for i in cols))
     d = header.index("demo")
     queries: dict[str, tuple[float, ...]] = {}
-    for k, row in enumerate(rows):
+    for line, row in rows:
         if len(row) != len(header):
-            raise InvalidInputError(f"{p}, line {k + 2}: {len(row)} fields, the header has {len(header)}")
-        _add(queries, row[d].strip(), tuple(_number(row[i], p, k + 2, header[i]) for i in cols), p)
+            raise InvalidInputError(f"{p}, line {line}: {len(row)} fields, the header has {len(header)}")
+        _add(queries, row[d].strip(), tuple(_number(row[i], p, line, header[i]) for i in cols), f"{p}, line {line}")
+    if not queries:
+        raise InvalidInputError(f"{p}: expected a header row and at least one data row")
     return QueryTable(tuple(names), tuple(units), queries)
 
 
-def _add(queries: dict[str, tuple[float, ...]], demo: str, q: tuple[float, ...], path: Path) -> None:
+def _add(queries: dict[str, tuple[float, ...]], demo: str, q: tuple[float, ...], where: str) -> None:
+    if not demo:
+        raise InvalidInputError(f"{where}: the demonstration's name is empty")
     if demo in queries:
-        raise InvalidInputError(f"{path}: demonstration {demo!r} appears twice")
+        raise InvalidInputError(f"{where}: demonstration {demo!r} appears twice")
     queries[demo] = q
 
 
 def _json_table(p: Path) -> QueryTable:
-    try:
-        data: Any = json.loads(p.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise InvalidInputError(f"{p}: cannot read it as JSON ({exc})") from None
+    data: Any = read_json(p, what="query table", limit=TABLE_MAX_BYTES)
     units_map = data.get("units", {}) if isinstance(data, dict) else {}
+    if not isinstance(units_map, dict):
+        raise InvalidInputError(f"{p}: 'units' must map query names to units")
     records = data.get("demos") if isinstance(data, dict) else data
     if not isinstance(records, list) or not records or not all(isinstance(r, dict) for r in records):
         raise InvalidInputError(f"{p}: expected a list of {{\"demo\": ..., <query>: <value>}} records")
@@ -153,7 +200,7 @@ def _json_table(p: Path) -> QueryTable:
         for n in names:
             v = r[n]
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise InvalidInputError(f"{p}: record {k}, {n!r} = {v!r} is not a number")
+                raise InvalidInputError(f"{p}: record {k}, {n!r} = {str(v)[:40]!r} is not a number")
             values.append(float(v))
-        _add(queries, str(r["demo"]), tuple(values), p)
+        _add(queries, str(r["demo"]).strip(), tuple(values), f"{p}, record {k}")
     return QueryTable(names, tuple(str(units_map.get(n, "")) for n in names), queries)
