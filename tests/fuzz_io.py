@@ -9,16 +9,15 @@ and links to /dev/zero in place of files, huge declared sizes, compression bombs
 writes it into a fresh temporary directory and reads it with the public API only (so the same
 targets run against older versions of dmprs). A read that succeeds on input that cannot be
 meant (a zero stamp among set ones, a NaN, a duplicate joint, a 2-frame episode, a FIFO, a
-bomb) raises :class:`GarbageAccepted`; so does a result with fewer than 3 samples, a
-non-finite value, or a gap in time of more than an hour.
+bomb) raises :class:`~tests.fuzz_verdicts.AcceptedGarbage`; so does a result with fewer than 3
+samples, a non-finite value, or a gap in time of more than an hour; a refusal that names no file
+or argument raises :class:`~tests.fuzz_verdicts.UnclearMessage`. ``tests/fuzz_tally.py`` counts
+them with the other targets (``python3 -m tests.fuzz_tally 250 "ROS bag"``);
 
-    PYTHONPATH=python python -m tests.fuzz_io [examples per target] [target name ...]
-    PYTHONPATH=python python -m tests.fuzz_io --bombs
+    python3 -m tests.fuzz_io --bombs
 
-runs each example in a forked child (as ``tests/fuzz_tally.py`` does) and prints the tally:
-inputs, clear errors (those naming no file or argument counted as vague), ok, leaked exception
-types, hangs, garbage accepted. ``--bombs`` measures what each compression bomb (and a huge
-``--rate``, a link to /dev/zero) costs: time, peak RSS and temporary files.
+measures what each compression bomb (and a huge ``--rate``, a link to /dev/zero) costs: time,
+peak RSS and temporary files.
 """
 
 from __future__ import annotations
@@ -41,14 +40,11 @@ from hypothesis import strategies as st
 
 import dmprs
 from dmprs.errors import DmprsError
+from tests.fuzz_verdicts import AcceptedGarbage, UnclearMessage
 
 T0 = 1_700_000_000 * 10**9
 BOMB_ZEROS = 96 * 2**20  # beyond the 64 MiB + 100 x compressed limit of every zstd or bz2 bag piece
 BOMB_ZEROS_LZ4 = 256 * 2**20  # lz4 compresses at most 255 x: a bomb needs more zeros to pass the limit
-
-
-class GarbageAccepted(AssertionError):
-    """A reader accepted input that cannot be meant, or returned something no fit can use."""
 
 
 # --- checks on what came back -------------------------------------------------------------------
@@ -56,16 +52,16 @@ class GarbageAccepted(AssertionError):
 def _check_trajectory(traj: Any, what: str) -> None:
     arrays = [traj.t, traj.pose] if isinstance(traj, dmprs.CartesianTrajectory) else [traj.t, traj.y]
     if len(traj.t) < 3:
-        raise GarbageAccepted(f"{what}: {len(traj.t)} samples accepted (a fit needs 3)")
+        raise AcceptedGarbage(f"{what}: {len(traj.t)} samples accepted (a fit needs 3)")
     if not all(np.isfinite(a).all() for a in arrays):
-        raise GarbageAccepted(f"{what}: non-finite values accepted")
+        raise AcceptedGarbage(f"{what}: non-finite values accepted")
     if np.diff(traj.t).max() > 3600.0 or traj.t[-1] - traj.t[0] > 1e6:
-        raise GarbageAccepted(f"{what}: a {np.diff(traj.t).max():.3g} s gap / {traj.t[-1] - traj.t[0]:.3g} s span accepted")
+        raise AcceptedGarbage(f"{what}: a {np.diff(traj.t).max():.3g} s gap / {traj.t[-1] - traj.t[0]:.3g} s span accepted")
 
 
 def _check(out: Any, refuse: str | None) -> list[Any]:
     if refuse:
-        raise GarbageAccepted(f"accepted: {refuse}")
+        raise AcceptedGarbage(f"accepted: {refuse}")
     items = out if isinstance(out, list) else [out]
     for k, item in enumerate(items):
         traj = getattr(item, "trajectory", item)
@@ -73,7 +69,7 @@ def _check(out: Any, refuse: str | None) -> list[Any]:
             _check_trajectory(traj, f"result {k}")
         names = getattr(item, "names", None)
         if names and len(set(names)) != len(names):
-            raise GarbageAccepted(f"duplicate joint names accepted: {names}")
+            raise AcceptedGarbage(f"duplicate joint names accepted: {names}")
     return items
 
 
@@ -271,7 +267,7 @@ def run_bag(a: dict[str, Any]) -> list[Any]:
                 bad = _refusals(a) or {"nan": "a NaN transform", "inf": "an infinite transform"}.get(a["values"])
             return _check(rec, refuse or bad)
         except DmprsError as exc:
-            _mark_vague(exc, tmp)
+            _require_clear(exc, tmp)
             raise
 
 
@@ -405,7 +401,7 @@ def run_lerobot(a: dict[str, Any]) -> list[Any]:
         try:
             return _check(read_lerobot(root, a["column"], dims=a["dims"], episodes=a["episodes"]), refuse)
         except DmprsError as exc:
-            _mark_vague(exc, tmp)
+            _require_clear(exc, tmp)
             raise
 
 
@@ -593,16 +589,16 @@ def run_table(a: dict[str, Any]) -> list[Any]:
             elif kind == "npz":
                 traj, labels = read_npz_trajectory(path)
                 if not all(np.isfinite(v) for v in labels.values()):
-                    raise GarbageAccepted("a non-finite label accepted")
+                    raise AcceptedGarbage("a non-finite label accepted")
                 out = traj
             else:
                 table = read_query_table(path)
                 if not all(np.isfinite(q).all() for q in table.queries.values()):
-                    raise GarbageAccepted("a non-finite query accepted")
+                    raise AcceptedGarbage("a non-finite query accepted")
                 out = list(table.queries.values())
             return _check(out, refuse)
         except DmprsError as exc:
-            _mark_vague(exc, tmp)
+            _require_clear(exc, tmp)
             raise
 
 
@@ -686,12 +682,12 @@ def run_cli(a: dict[str, Any]) -> list[Any]:
         lines = [line for line in res.output.splitlines() if line.strip()]
         if res.exit_code != 0:
             if len(lines) != 1 or not lines[0].startswith("Error: ") or "Traceback" in res.output:
-                raise GarbageAccepted(f"not one 'Error:' line: {res.output[:300]!r}")
+                raise AcceptedGarbage(f"not one 'Error:' line: {res.output[:300]!r}")
             exc = DmprsError(lines[0])
-            _mark_vague(exc, tmp, cli=True)
+            _require_clear(exc, tmp, cli=True)
             raise exc
         if refuse:
-            raise GarbageAccepted(f"accepted: {refuse}")
+            raise AcceptedGarbage(f"accepted: {refuse}")
         db = dmprs.Database.load(Path(tmp) / "db")
         return _check([d.trajectory for d in db], None)
 
@@ -702,10 +698,11 @@ _ARGUMENTS = ("rate", "ranges", "joints", "dims", "column", "episode", "format",
               "demonstration", "field", "topic")
 
 
-def _mark_vague(exc: BaseException, tmp: str, *, cli: bool = False) -> None:
+def _require_clear(exc: BaseException, tmp: str, *, cli: bool = False) -> None:
+    """Raises :class:`UnclearMessage` unless the refusal names the file or an argument."""
     text = str(exc)
-    named = tmp in text or any(w in text for w in _ARGUMENTS) or (cli and "Usage" in text)
-    exc.vague = not named  # type: ignore[attr-defined]
+    if not (tmp in text or any(w in text for w in _ARGUMENTS) or (cli and "Usage" in text)):
+        raise UnclearMessage(f"a refusal naming no file or argument: {text[:200]}") from None
 
 
 IO_TARGETS: dict[str, tuple[st.SearchStrategy[Any], Callable[[Any], list[Any]]]] = {
@@ -714,79 +711,8 @@ IO_TARGETS: dict[str, tuple[st.SearchStrategy[Any], Callable[[Any], list[Any]]]]
     "CSV / npz / query tables": (table_args(), run_table),
     "dmprs demos import end to end": (cli_args(), run_cli),
 }
-
-
-# --- the tally (a copy of tests/fuzz_tally.py's loop for these targets) --------------------------
-
-COLUMNS = ["inputs", "clear errors", "vague", "ok", "leaked types", "hangs", "garbage accepted"]
-HANG_S = 10.0
-
-
-def _child(name: str, args: Any, conn: Any) -> None:
-    import traceback
-
-    try:
-        IO_TARGETS[name][1](args)
-        conn.send(("ok", ""))
-    except DmprsError as exc:
-        conn.send(("vague" if getattr(exc, "vague", False) else "clear errors", str(exc)[:300]))
-    except GarbageAccepted as exc:
-        conn.send(("garbage accepted", str(exc)[:300]))
-    except BaseException as exc:  # noqa: BLE001 - classifying is the point
-        where = traceback.format_exc(limit=-1)[-200:]
-        conn.send(("leaked types", f"{type(exc).__module__}.{type(exc).__name__}: {str(exc)[:160]} @ {where}"))
-
-
-def _one(name: str, args: Any) -> tuple[str, str]:
-    import multiprocessing as mp
-
-    parent, child = mp.Pipe(duplex=False)
-    proc = mp.get_context("fork").Process(target=_child, args=(name, args, child))
-    proc.start()
-    if parent.poll(HANG_S):
-        result = parent.recv()
-        proc.join()
-        return result
-    proc.kill()
-    proc.join()
-    return ("hangs", repr(args)[:300]) if proc.exitcode is None or proc.exitcode < 0 and not parent.poll() \
-        else ("leaked types", f"exit code {proc.exitcode}: {repr(args)[:200]}")
-
-
-def _tally(name: str, strategy: Any, examples: int, counts: Any, notes: list[str], leaked: Any) -> None:
-    from hypothesis import HealthCheck, given, settings
-
-    @settings(max_examples=examples, deadline=None, derandomize=True, database=None,
-              suppress_health_check=list(HealthCheck))
-    @given(strategy)
-    def tally(args: Any) -> None:
-        kind, detail = _one(name, args)
-        counts["inputs"] += 1
-        counts[kind] += 1
-        if kind == "leaked types":
-            leaked[detail.split(":")[0]] += 1
-        if kind not in ("ok", "clear errors"):
-            notes.append(f"{name}: {kind}: {detail}")
-
-    tally()
-
-
-def main(examples: int, only: list[str] | None = None) -> None:
-    import collections
-    import sys
-
-    print("| surface | " + " | ".join(COLUMNS) + " |")
-    print("|---" * (len(COLUMNS) + 1) + "|")
-    notes: list[str] = []
-    leaked: collections.Counter[str] = collections.Counter()
-    for name, (strategy, _) in IO_TARGETS.items():
-        if only and name not in only:
-            continue
-        counts: collections.Counter[str] = collections.Counter()
-        _tally(name, strategy, examples, counts, notes, leaked)
-        print(f"| {name} | " + " | ".join(str(counts[c]) for c in COLUMNS) + " |", flush=True)
-    print("\nleaked types: " + (", ".join(f"{k} ({v})" for k, v in leaked.most_common()) or "none"))
-    print("\n".join(notes), file=sys.stderr)
+#: s before an importer example counts as a hang (a whole bag or dataset is written and read)
+IO_HANG_TIMEOUTS = dict.fromkeys(IO_TARGETS, 10.0)
 
 
 # --- what each bomb costs (python -m tests.fuzz_io --bombs) --------------------------------------
@@ -892,9 +818,4 @@ def bombs(timeout: float = 120.0) -> None:
 
 
 if __name__ == "__main__":
-    import sys
-
-    if sys.argv[1:] == ["--bombs"]:
-        bombs()
-    else:
-        main(int(sys.argv[1]) if len(sys.argv) > 1 else 200, sys.argv[2:])
+    bombs()

@@ -21,6 +21,8 @@ from hypothesis import strategies as st
 
 import dmprs
 from dmprs.learners import PI2, ErrorLearning, GoldenSection, IllinoisRootFinder, PolicyGradient, PoWER
+from tests.fuzz_io import IO_HANG_TIMEOUTS, IO_TARGETS
+from tests.fuzz_verdicts import AcceptedGarbage, UnclearMessage
 
 # Values a careless or hostile caller passes where a number is expected.
 _SPECIAL_FLOATS = [
@@ -272,16 +274,6 @@ def run_learner(a: dict[str, Any]) -> list[Any]:
 
 
 # --- files and directories: what a hostile directory does to a save, a load, a resume, a plot ------
-class AcceptedGarbage(AssertionError):
-    """A call accepted what it must refuse: it wrote outside the directory it was given, wrote
-    through a link, overwrote files dmprs did not write, left files behind, or took an action it
-    should have refused. The tally counts these as "garbage accepted"."""
-
-
-class UnclearMessage(AssertionError):
-    """A refusal whose message does not name the file (the tally counts it as a leaked type)."""
-
-
 def _snapshot(root: Path) -> dict[str, bytes | str]:
     """Every entry under ``root`` with its content (a link: its target; a FIFO or device: its kind),
     never following a link or opening anything but a regular file."""
@@ -784,7 +776,8 @@ def _arm_ops(a: dict[str, Any]) -> list[Any]:
 
 
 #: Targets whose examples take longer than the tally's 5 s default to answer, in s.
-HANG_TIMEOUTS: dict[str, float] = {"MuJoCo arm adapters and setups": 60.0, "run logs: dmprs resume / plot": 30.0}
+HANG_TIMEOUTS: dict[str, float] = {"MuJoCo arm adapters and setups": 60.0, "run logs: dmprs resume / plot": 30.0,
+                                   **IO_HANG_TIMEOUTS}
 #: What to compute once in the tally's parent, before it forks a child per example.
 WARMUPS: dict[str, Callable[[], Any]] = {
     "database directory": lambda: None,
@@ -795,7 +788,8 @@ WARMUPS: dict[str, Callable[[], Any]] = {
 #: Examples per target in tests/test_fuzz.py (the tally takes its count on the command line);
 #: 200 when not listed.
 TEST_EXAMPLES: dict[str, int] = {"database directory": 60, "run logs: dmprs resume / plot": 25,
-                                 "Gymnasium environments": 60, "MuJoCo arm adapters and setups": 4}
+                                 "Gymnasium environments": 60, "MuJoCo arm adapters and setups": 4,
+                                 **dict.fromkeys(IO_TARGETS, 12)}
 
 
 TARGETS: dict[str, tuple[st.SearchStrategy[Any], Callable[[Any], list[Any]]]] = {
@@ -811,8 +805,7 @@ TARGETS: dict[str, tuple[st.SearchStrategy[Any], Callable[[Any], list[Any]]]] = 
     "Gymnasium environments": (env_args(), run_env),
     "MuJoCo arm adapters and setups": (arm_args(), run_arm),
 }
-# The importers' targets (tests/fuzz_io.py, IO_TARGETS) are added here, in one place, by the lead:
-# TARGETS.update(IO_TARGETS)
+TARGETS.update(IO_TARGETS)  # the importers' (tests/fuzz_io.py)
 
 
 def non_finite(value: Any) -> str | None:
