@@ -1,0 +1,137 @@
+"""A ROS 2 service client speaking rmw_cyclonedds's wire format.
+
+rmw_cyclonedds sends a request on `rq/<service>Request` and the reply on `rr/<service>Reply`, each
+sample being the message preceded by `cdds_request_header_t` (a uint64 naming the client, the
+instance handle of its request writer, and an int64 sequence number); the server copies that
+header into its reply, and the client keeps the replies that carry its own id. The client's
+request writer and reply reader carry `clientid=<id>;` in their USER_DATA, which an
+rmw_cyclonedds server uses to wait for the client's reply reader before it answers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import os
+import time
+from typing import Any
+
+from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
+from cyclonedds.idl import IdlStruct
+from cyclonedds.idl import types as idl
+from cyclonedds.idl._main import IdlMeta
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+
+from dmprs.errors import AdapterError
+from dmprs.ros2 import messages, names
+from dmprs.ros2.node import Node, check_timeout, wait_for_matches
+from dmprs.ros2.qos import SERVICES, QosProfile
+
+#: The two header fields rmw_cyclonedds puts before a request's or reply's own fields.
+HEADER_FIELDS = ("cdds_request_guid", "cdds_request_seq")
+
+#: rmw_cyclonedds's server waits this long for a client's reply reader before answering; the
+#: client gives a server the same margin to match its reply reader after it has matched them.
+MATCH_MARGIN = 0.1
+
+
+def _wrapped(message_type: type[Any]) -> type[Any]:
+    """`message_type` with rmw_cyclonedds's request header in front, under the same DDS name."""
+    name = message_type.__name__ + "_Wrapped"
+    namespace = IdlMeta.__prepare__(name, (IdlStruct,), typename=message_type.__idl_typename__)
+    namespace["__idl_annotations__"]["extensibility"] = "final"
+    namespace["__annotations__"].update({HEADER_FIELDS[0]: idl.uint64, HEADER_FIELDS[1]: idl.int64})
+    namespace["__annotations__"].update(message_type.__annotations__)
+    return dataclasses.dataclass(IdlMeta(name, (IdlStruct,), namespace))
+
+
+def wrap(wrapped_type: type[Any], guid: int, seq: int, message: Any) -> Any:
+    fields = {f: getattr(message, f) for f in type(message).__annotations__}
+    return wrapped_type(**{HEADER_FIELDS[0]: guid, HEADER_FIELDS[1]: seq}, **fields)
+
+
+def unwrap(message_type: type[Any], sample: Any) -> Any:
+    return message_type(**{f: getattr(sample, f) for f in message_type.__annotations__})
+
+
+def _client_id() -> bytes:
+    """A client id in rmw_cyclonedds's USER_DATA form: `clientid=<16 hex bytes joined by .>;`."""
+    return ("clientid=" + ".".join(f"{b:x}" for b in os.urandom(16)) + ";").encode()
+
+
+class ServiceClient:
+    """Calls one ROS 2 service, e.g. `ServiceClient(node, "action_msgs/srv/CancelGoal", "/x/_action/cancel_goal")`.
+
+    `service_type` names the request and response types without their `_Request`/`_Response`
+    suffix.
+    """
+
+    _sequence = itertools.count(1)
+
+    def __init__(self, node: Node, service_type: str, service: str, qos: QosProfile = SERVICES):
+        self.service_name = node.resolve(service)
+        self.request_type = messages.message_class(service_type + "_Request")
+        self.response_type = messages.message_class(service_type + "_Response")
+        self._request_wire = _wrapped(self.request_type)
+        self._response_wire = _wrapped(self.response_type)
+        request_topic, reply_topic = names.service_dds_names(self.service_name)
+        user_data = _client_id()
+        self._writer = DataWriter(
+            node.participant,
+            node.topic(request_topic, self._request_wire),
+            qos=qos.to_cyclone(user_data),
+        )
+        self._reader: DataReader[Any] = DataReader(
+            node.participant, node.topic(reply_topic, self._response_wire), qos=qos.to_cyclone(user_data)
+        )
+        self._unread = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive)
+        self._waitset = WaitSet(node.participant)
+        self._waitset.attach(self._unread)
+        self.client_guid = int(self._writer.get_instance_handle())
+        self._replies: dict[int, Any] = {}
+        self._matched = False
+
+    def wait_for_server(self, timeout: float) -> bool:
+        """Block until a server matches both the request and the reply topic (True) or `timeout`."""
+        if self._matched:
+            return True
+        deadline = time.monotonic() + check_timeout(timeout) * 1e-9
+        for entity, publication in ((self._writer, True), (self._reader, False)):
+            if not wait_for_matches(entity, 1, max(0.0, deadline - time.monotonic()), publication):
+                return False
+        time.sleep(MATCH_MARGIN)
+        self._matched = True
+        return True
+
+    def send(self, request: Any) -> int:
+        """Send `request` and return its sequence number (for `wait_for_reply`)."""
+        if not isinstance(request, self.request_type):
+            raise TypeError(f"{self.service_name} takes {self.request_type.__name__}, not {type(request).__name__}")
+        seq = next(self._sequence)
+        self._writer.write(wrap(self._request_wire, self.client_guid, seq, request))
+        return seq
+
+    def wait_for_reply(self, seq: int, timeout: float) -> Any | None:
+        """The reply to request `seq`, waiting at most `timeout` seconds; None if it did not come."""
+        deadline = time.monotonic() + check_timeout(timeout) * 1e-9
+        while True:
+            for sample in self._reader.take(N=64, condition=self._unread):
+                if getattr(sample, HEADER_FIELDS[0]) == self.client_guid:
+                    self._replies[getattr(sample, HEADER_FIELDS[1])] = unwrap(self.response_type, sample)
+            if seq in self._replies:
+                return self._replies.pop(seq)
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            self._waitset.wait(int(left * 1e9))
+
+    def call(self, request: Any, timeout: float) -> Any:
+        """Send `request` and return the reply; AdapterError if no server answers in `timeout`."""
+        deadline = time.monotonic() + check_timeout(timeout) * 1e-9
+        if not self.wait_for_server(timeout):
+            raise AdapterError(f"no server for {self.service_name} within {timeout} s")
+        reply = self.wait_for_reply(self.send(request), max(0.0, deadline - time.monotonic()))
+        if reply is None:
+            raise AdapterError(f"{self.service_name} did not answer within {timeout} s")
+        return reply
