@@ -88,7 +88,8 @@ class ServiceClient:
         self._unread = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive)
         self._waitset = WaitSet(node.participant)
         self._waitset.attach(self._unread)
-        self.client_guid = int(self._writer.get_instance_handle())
+        # rmw_cyclonedds names the client by its request writer's instance handle (a uint64)
+        self.client_guid = int(self._writer.get_instance_handle()) & 0xFFFF_FFFF_FFFF_FFFF
         self._replies: dict[int, Any] = {}
         self._matched = False
 
@@ -135,3 +136,38 @@ class ServiceClient:
         if reply is None:
             raise AdapterError(f"{self.service_name} did not answer within {timeout} s")
         return reply
+
+
+class ServiceServer:
+    """Answers one ROS 2 service in rmw_cyclonedds's wire format: each reply carries its request's
+    header back, so that the client that sent it keeps it."""
+
+    def __init__(self, node: Node, service_type: str, service: str, qos: QosProfile = SERVICES):
+        self.service_name = node.resolve(service)
+        self.request_type = messages.message_class(service_type + "_Request")
+        self.response_type = messages.message_class(service_type + "_Response")
+        self._request_wire = _wrapped(self.request_type)
+        self._response_wire = _wrapped(self.response_type)
+        request_topic, reply_topic = names.service_dds_names(self.service_name)
+        user_data = _client_id().replace(b"clientid=", b"serviceid=")
+        self._reader: DataReader[Any] = DataReader(
+            node.participant, node.topic(request_topic, self._request_wire), qos=qos.to_cyclone(user_data)
+        )
+        self._writer = DataWriter(
+            node.participant, node.topic(reply_topic, self._response_wire), qos=qos.to_cyclone(user_data)
+        )
+        self._unread = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive)
+        self._waitset = WaitSet(node.participant)
+        self._waitset.attach(self._unread)
+
+    def serve(self, handler: Any, timeout: float) -> int:
+        """Answer every waiting request with `handler(request)`, first waiting up to `timeout`
+        seconds for one; returns how many were answered."""
+        samples = self._reader.take(N=64, condition=self._unread)
+        if not samples and self._waitset.wait(check_timeout(timeout)) > 0:
+            samples = self._reader.take(N=64, condition=self._unread)
+        for sample in samples:
+            response = handler(unwrap(self.request_type, sample))
+            guid, seq = (getattr(sample, f) for f in HEADER_FIELDS)
+            self._writer.write(wrap(self._response_wire, guid, seq, response))
+        return len(samples)
