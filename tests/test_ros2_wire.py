@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import threading
 import time
 
 import numpy as np
@@ -247,3 +248,35 @@ def test_bad_calls_raise_dmprs_errors(robot: RobotNode) -> None:
     robot.shutdown()
     with pytest.raises(AdapterError, match="shut down"):
         robot.publish_clock(1.0)
+
+
+def test_ros2_client_goals_reach_a_cyclone_server_and_its_header_round_trips(node: Node, domain_id: int) -> None:
+    from dmprs._core import Ros2GoalClient
+    from dmprs.ros2 import ServiceServer
+
+    server = ServiceServer(node, FJT + "_SendGoal", ACTION + "/_action/send_goal")
+    client = Ros2GoalClient(domain_id, ACTION)
+    assert client.wait_for_server(WAIT)
+    time.sleep(0.5)  # ros2-client sees the server before the server has matched it
+    seen: list[tuple[int, list[str]]] = []
+
+    def answer(request):
+        seen.append((len(request.goal.trajectory.points), request.goal.trajectory.joint_names))
+        return server.response_type(accepted=len(seen) == 1, stamp=m.Time(sec=3, nanosec=4))
+
+    times, positions = np.array([0.5, 1.0, 1.5]), np.arange(9.0).reshape(3, 3)
+    sequence_numbers = []
+    for expected in (True, False):
+        # the call blocks with the GIL released; the server answers from this thread meanwhile
+        box: list[bool | None] = []
+        worker = threading.Thread(target=lambda: box.append(client.send_goal(JOINTS, times, positions, WAIT)))
+        worker.start()
+        assert server.serve(answer, WAIT) == 1
+        worker.join()
+        assert box == [expected]
+        assert server.last_header is not None
+        sequence_numbers.append(server.last_header[1])
+    assert seen == [(3, JOINTS), (3, JOINTS)]
+    # ros2-client writes the sequence number high word first: rmw_cyclonedds's int64 reads n as n * 2**32
+    first, second = sequence_numbers
+    assert first % 2**32 == 0 and second - first == 2**32

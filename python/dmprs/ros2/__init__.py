@@ -10,7 +10,7 @@ from dmprs.ros2.action import STATUS_NAMES, ActionClient, GoalHandle
 from dmprs.ros2.node import LOOPBACK_CONFIG, MAX_DOMAIN_ID, Node, Publisher, Subscription, stamp_seconds
 from dmprs.ros2.qos import ACTION_STATUS, CLOCK, DEFAULT, SENSOR_DATA, SERVICES, QosProfile
 from dmprs.ros2.recorder import JointRecording, JointStateRecorder
-from dmprs.ros2.service import ServiceClient
+from dmprs.ros2.service import ServiceClient, ServiceServer
 
 __all__ = [
     "ACTION_STATUS",
@@ -29,6 +29,7 @@ __all__ = [
     "Publisher",
     "QosProfile",
     "ServiceClient",
+    "ServiceServer",
     "Subscription",
     "stamp_seconds",
 ]

@@ -159,6 +159,8 @@ class ServiceServer:
         self._unread = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive)
         self._waitset = WaitSet(node.participant)
         self._waitset.attach(self._unread)
+        #: (client id, sequence number) of the last request answered, as read from its header
+        self.last_header: tuple[int, int] | None = None
 
     def serve(self, handler: Any, timeout: float) -> int:
         """Answer every waiting request with `handler(request)`, first waiting up to `timeout`
@@ -170,4 +172,5 @@ class ServiceServer:
             response = handler(unwrap(self.request_type, sample))
             guid, seq = (getattr(sample, f) for f in HEADER_FIELDS)
             self._writer.write(wrap(self._response_wire, guid, seq, response))
+            self.last_header = (guid, seq)
         return len(samples)
