@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
 from cyclonedds.core import Policy
 
+import dmprs
 from dmprs.errors import InvalidInputError
 from dmprs.ros2 import ACTION_STATUS, CLOCK, DEFAULT, SENSOR_DATA
 from dmprs.ros2.names import resolve, service_dds_names, topic_dds_name
@@ -51,3 +56,12 @@ def test_qos_profiles_are_ros_2_profiles() -> None:
     assert {Policy.Reliability.BestEffort, Policy.History.KeepLast(1)} <= set(CLOCK.to_cyclone())
     status = set(ACTION_STATUS.to_cyclone())
     assert {reliable, Policy.Durability.TransientLocal, Policy.History.KeepLast(1)} <= status
+
+
+def test_import_dmprs_leaves_cyclonedds_and_rosbags_alone() -> None:
+    code = "import sys, dmprs; print([m for m in ('cyclonedds', 'rosbags', 'dmprs.ros2') if m in sys.modules])"
+    package_root = str(Path(dmprs.__file__).parents[1])
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env={"PYTHONPATH": package_root}
+    )
+    assert out.stdout.strip() == "[]"

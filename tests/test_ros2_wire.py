@@ -269,7 +269,11 @@ def test_ros2_client_goals_reach_a_cyclone_server_and_its_header_round_trips(nod
     for expected in (True, False):
         # the call blocks with the GIL released; the server answers from this thread meanwhile
         box: list[bool | None] = []
-        worker = threading.Thread(target=lambda: box.append(client.send_goal(JOINTS, times, positions, WAIT)))
+
+        def send(box: list[bool | None] = box) -> None:
+            box.append(client.send_goal(JOINTS, times, positions, WAIT))
+
+        worker = threading.Thread(target=send)
         worker.start()
         assert server.serve(answer, WAIT) == 1
         worker.join()

@@ -17,13 +17,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 from importlib import resources
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl import types as idl
 from cyclonedds.idl._main import IdlMeta
-from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.base import Nodetype
 from rosbags.typesys.store import Typestore
 
@@ -55,6 +55,11 @@ _PRIMITIVES: dict[str, Any] = {
     "float32": idl.float32,
     "float64": idl.float64,
 }
+
+# Cyclone's generic IDL types are indexed at run time (array[T, n], sequence[T], bounded_str[n])
+_array: Any = idl.array
+_sequence: Any = idl.sequence
+_bounded_str: Any = idl.bounded_str
 
 _NUMPY_DTYPES = {
     "bool": np.bool_,
@@ -152,7 +157,7 @@ def typestore() -> Typestore:
     folder = resources.files(__package__) / "definitions"
     for relative in SHIPPED_DEFINITIONS:
         text = (folder / relative).read_text(encoding="utf-8")
-        package, kind, filename = relative.split("/")
+        package, _, filename = relative.split("/")
         name, _, suffix = filename.partition(".")
         if suffix == "msg":
             types = _resolve_bare_names(_parse(text, f"{package}/msg/{name}"), package)
@@ -182,7 +187,7 @@ def _field_type(node: Any) -> Any:
     if kind == Nodetype.BASE:
         name, bound = detail
         if name == "string":
-            return idl.bounded_str[bound] if bound else str
+            return _bounded_str[bound] if bound else str
         if name not in _PRIMITIVES:
             raise InvalidInputError(f"ROS field type {name!r} is not supported")
         return _PRIMITIVES[name]
@@ -190,8 +195,8 @@ def _field_type(node: Any) -> Any:
         return message_class(detail)
     inner, size = detail
     if kind == Nodetype.ARRAY:
-        return idl.array[_field_type(inner), size]
-    return idl.sequence[_field_type(inner), size] if size else idl.sequence[_field_type(inner)]
+        return _array[_field_type(inner), size]
+    return _sequence[_field_type(inner), size] if size else _sequence[_field_type(inner)]
 
 
 def _default_factory(node: Any) -> Any:
@@ -228,7 +233,7 @@ def message_class(ros_type: str) -> type[Any]:
         raise InvalidInputError(f"ROS type {ros_type!r} is not known to the {STORE.name} typestore")
     consts, fields = store.fielddefs[ros_type]
     class_name = _split_type(ros_type)[2]
-    namespace = IdlMeta.__prepare__(class_name, (IdlStruct,), typename=dds_type_name(ros_type))
+    namespace = cast(dict[str, Any], IdlMeta.__prepare__(class_name, (IdlStruct,), typename=dds_type_name(ros_type)))
     namespace["__idl_annotations__"]["extensibility"] = "final"
     for field, node in fields:
         namespace["__annotations__"][field] = _field_type(node)

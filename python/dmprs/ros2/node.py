@@ -7,9 +7,18 @@ polls in a loop.
 from __future__ import annotations
 
 import math
-from typing import Any, Generic, TypeVar
+import time
+from typing import Any, Generic, Self, TypeVar
 
-from cyclonedds.core import GuardCondition, ReadCondition, SampleState, ViewState, InstanceState, WaitSet
+from cyclonedds.core import (
+    DDSStatus,
+    GuardCondition,
+    InstanceState,
+    ReadCondition,
+    SampleState,
+    ViewState,
+    WaitSet,
+)
 from cyclonedds.domain import Domain, DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
@@ -110,7 +119,7 @@ class Node:
                 self._domain.__del__()
                 self._domain = None
 
-    def __enter__(self) -> Node:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -123,6 +132,7 @@ class Publisher(Generic[M]):
     def __init__(self, node: Node, message_type: type[M], full_name: str, qos: QosProfile):
         self.topic_name = full_name
         topic = node.topic(names.topic_dds_name(full_name), message_type)
+        self._participant = node.participant
         self._writer = DataWriter(node.participant, topic, qos=qos.to_cyclone())
 
     def publish(self, message: M) -> None:
@@ -132,7 +142,7 @@ class Publisher(Generic[M]):
         return int(self._writer.get_publication_matched_status().current_count)
 
     def wait_for_subscribers(self, count: int = 1, timeout: float = 5.0) -> bool:
-        return wait_for_matches(self._writer, count, timeout, publication=True)
+        return wait_for_matches(self._writer, self._participant, count, timeout, publication=True)
 
 
 class Subscription(Generic[M]):
@@ -141,6 +151,7 @@ class Subscription(Generic[M]):
     def __init__(self, node: Node, message_type: type[M], full_name: str, qos: QosProfile):
         self.topic_name = full_name
         topic = node.topic(names.topic_dds_name(full_name), message_type)
+        self._participant = node.participant
         self._reader: DataReader[M] = DataReader(node.participant, topic, qos=qos.to_cyclone())
         self._unread = ReadCondition(
             self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive
@@ -172,8 +183,6 @@ class Subscription(Generic[M]):
 
     def wait_for_sample(self, after: float, timeout: float) -> M | None:
         """The first sample stamped after `after` seconds (`stamp_seconds`), within `timeout`."""
-        import time
-
         deadline = time.monotonic() + check_timeout(timeout) * 1e-9
         while True:
             for sample in self.take():
@@ -187,27 +196,25 @@ class Subscription(Generic[M]):
         return int(self._reader.get_subscription_matched_status().current_count)
 
     def wait_for_publishers(self, count: int = 1, timeout: float = 5.0) -> bool:
-        return wait_for_matches(self._reader, count, timeout, publication=False)
+        return wait_for_matches(self._reader, self._participant, count, timeout, publication=False)
 
 
-def wait_for_matches(entity: DataWriter[Any] | DataReader[Any], count: int, timeout: float, publication: bool) -> bool:
+def wait_for_matches(
+    entity: DataWriter[Any] | DataReader[Any],
+    participant: DomainParticipant,
+    count: int,
+    timeout: float,
+    publication: bool,
+) -> bool:
     """Block until `entity` has matched `count` remote endpoints (True) or `timeout` passes."""
-    import time
-
-    from cyclonedds.core import DDSStatus
-
     mask = DDSStatus.PublicationMatched if publication else DDSStatus.SubscriptionMatched
+    status = getattr(entity, "get_publication_matched_status" if publication else "get_subscription_matched_status")
     entity.set_status_mask(mask)
-    waitset = WaitSet(entity.participant)
+    waitset = WaitSet(participant)
     waitset.attach(entity)
     deadline = time.monotonic() + check_timeout(timeout) * 1e-9
-
-    def matched() -> int:
-        status = entity.get_publication_matched_status() if publication else entity.get_subscription_matched_status()
-        return int(status.current_count)
-
     try:
-        while matched() < count:
+        while int(status().current_count) < count:
             left = deadline - time.monotonic()
             if left <= 0:
                 return False

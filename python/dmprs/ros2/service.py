@@ -14,7 +14,7 @@ import dataclasses
 import itertools
 import os
 import time
-from typing import Any
+from typing import Any, cast
 
 from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState, WaitSet
 from cyclonedds.idl import IdlStruct
@@ -39,7 +39,7 @@ MATCH_MARGIN = 0.1
 def _wrapped(message_type: type[Any]) -> type[Any]:
     """`message_type` with rmw_cyclonedds's request header in front, under the same DDS name."""
     name = message_type.__name__ + "_Wrapped"
-    namespace = IdlMeta.__prepare__(name, (IdlStruct,), typename=message_type.__idl_typename__)
+    namespace = cast(dict[str, Any], IdlMeta.__prepare__(name, (IdlStruct,), typename=message_type.__idl_typename__))
     namespace["__idl_annotations__"]["extensibility"] = "final"
     namespace["__annotations__"].update({HEADER_FIELDS[0]: idl.uint64, HEADER_FIELDS[1]: idl.int64})
     namespace["__annotations__"].update(message_type.__annotations__)
@@ -89,6 +89,7 @@ class ServiceClient:
         self._waitset = WaitSet(node.participant)
         self._waitset.attach(self._unread)
         # rmw_cyclonedds names the client by its request writer's instance handle (a uint64)
+        self._participant = node.participant
         self.client_guid = int(self._writer.get_instance_handle()) & 0xFFFF_FFFF_FFFF_FFFF
         self._replies: dict[int, Any] = {}
         self._matched = False
@@ -99,7 +100,7 @@ class ServiceClient:
             return True
         deadline = time.monotonic() + check_timeout(timeout) * 1e-9
         for entity, publication in ((self._writer, True), (self._reader, False)):
-            if not wait_for_matches(entity, 1, max(0.0, deadline - time.monotonic()), publication):
+            if not wait_for_matches(entity, self._participant, 1, max(0.0, deadline - time.monotonic()), publication):
                 return False
         time.sleep(MATCH_MARGIN)
         self._matched = True
