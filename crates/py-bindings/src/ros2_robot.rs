@@ -47,7 +47,7 @@ fn rows<'py>(
     width: usize,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let flat: Vec<f64> = rows.iter().flatten().copied().collect();
-    Ok(flat.into_pyarray(py).reshape([rows.len(), width])?)
+    flat.into_pyarray(py).reshape([rows.len(), width])
 }
 
 /// A trajectory in the controller's joint order (from a goal or the joint_trajectory topic).

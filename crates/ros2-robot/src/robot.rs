@@ -732,14 +732,14 @@ impl Incoming {
     fn run(self, mut poll: Poll, stop: &AtomicBool) {
         let mut events = Events::with_capacity(16);
         while !stop.load(Ordering::Acquire) {
-            if let Err(e) = poll.poll(&mut events, Some(IDLE_DRAIN)) {
-                if e.kind() != std::io::ErrorKind::Interrupted {
-                    self.reject(
-                        None,
-                        format!("the node thread stopped: polling failed: {e}"),
-                    );
-                    break;
-                }
+            if let Err(e) = poll.poll(&mut events, Some(IDLE_DRAIN))
+                && e.kind() != std::io::ErrorKind::Interrupted
+            {
+                self.reject(
+                    None,
+                    format!("the node thread stopped: polling failed: {e}"),
+                );
+                break;
             }
             // edge-triggered: drain every reader, whichever woke us
             self.drain_goals();
@@ -845,10 +845,10 @@ impl Incoming {
                     format!("the cancel response could not be sent: {e:?}"),
                 );
             }
-            if !outcome.goals_canceling.is_empty() {
-                if let Err(e) = publish_statuses(&side) {
-                    self.reject(None, e.to_string());
-                }
+            if !outcome.goals_canceling.is_empty()
+                && let Err(e) = publish_statuses(&side)
+            {
+                self.reject(None, e.to_string());
             }
             drop(side);
             for (id, _) in outcome.goals_canceling {
@@ -870,10 +870,10 @@ impl Incoming {
                 }
             };
             let id = *request.goal_id.uuid.as_bytes();
-            if let ResultReply::Now(status, result) = side.table.request_result(&id, request_id) {
-                if let Err(e) = send_result(&side.server, request_id, status, result) {
-                    self.reject(Some(id), e.to_string());
-                }
+            if let ResultReply::Now(status, result) = side.table.request_result(&id, request_id)
+                && let Err(e) = send_result(&side.server, request_id, status, result)
+            {
+                self.reject(Some(id), e.to_string());
             }
         }
     }
