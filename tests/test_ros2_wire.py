@@ -284,3 +284,13 @@ def test_ros2_client_goals_reach_a_cyclone_server_and_its_header_round_trips(nod
     # ros2-client writes the sequence number high word first: rmw_cyclonedds's int64 reads n as n * 2**32
     first, second = sequence_numbers
     assert first % 2**32 == 0 and second - first == 2**32
+
+
+def test_two_action_clients_of_one_node_share_its_topics(robot: RobotNode, node: Node) -> None:
+    first, second = ActionClient(node, FJT, ACTION), ActionClient(node, FJT, ACTION)
+    for client in (first, second):
+        handle, accepted, _ = started_goal(client, robot)
+        robot.finish_goal(accepted.id, m.GoalStatus.STATUS_SUCCEEDED)
+        assert client.result(handle, WAIT)[0] == m.GoalStatus.STATUS_SUCCEEDED
+    with pytest.raises(InvalidInputError, match="takes FollowJointTrajectory_Goal"):
+        first.send_goal(m.JointTrajectory(), WAIT)

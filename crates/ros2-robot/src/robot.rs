@@ -131,12 +131,13 @@ struct Outgoing {
     point_signals: HashMap<String, Publisher<PointStamped>>,
 }
 
+/// One lock per queue, so that a caller blocked in `poll_goal` holds up no other poll.
 struct Queues {
-    goals: Receiver<AcceptedGoal>,
-    rejections: Receiver<Rejection>,
-    cancels: Receiver<GoalId>,
-    trajectories: Receiver<JointTrajectory>,
-    commands: Receiver<Vec<f64>>,
+    goals: Mutex<Receiver<AcceptedGoal>>,
+    rejections: Mutex<Receiver<Rejection>>,
+    cancels: Mutex<Receiver<GoalId>>,
+    trajectories: Mutex<Receiver<JointTrajectory>>,
+    commands: Mutex<Receiver<Vec<f64>>>,
 }
 
 struct Senders {
@@ -152,7 +153,7 @@ pub struct RobotNode {
     config: RobotConfig,
     action: Arc<Mutex<ActionSide>>,
     outgoing: Outgoing,
-    queues: Mutex<Queues>,
+    queues: Queues,
     stop: Arc<AtomicBool>,
     waker: Arc<Waker>,
     thread: Mutex<Option<JoinHandle<()>>>,
@@ -333,13 +334,13 @@ impl RobotNode {
             config,
             action,
             outgoing,
-            queues: Mutex::new(Queues {
-                goals,
-                rejections,
-                cancels,
-                trajectories,
-                commands,
-            }),
+            queues: Queues {
+                goals: Mutex::new(goals),
+                rejections: Mutex::new(rejections),
+                cancels: Mutex::new(cancels),
+                trajectories: Mutex::new(trajectories),
+                commands: Mutex::new(commands),
+            },
             stop,
             waker,
             thread: Mutex::new(Some(thread)),
@@ -348,12 +349,6 @@ impl RobotNode {
 
     pub fn config(&self) -> &RobotConfig {
         &self.config
-    }
-
-    fn queues(&self) -> MutexGuard<'_, Queues> {
-        self.queues
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
     fn action(&self) -> MutexGuard<'_, ActionSide> {
@@ -371,7 +366,7 @@ impl RobotNode {
     /// The next accepted goal, waiting at most `timeout`; `None` when none came.
     pub fn poll_goal(&self, timeout: StdDuration) -> Result<Option<AcceptedGoal>, RobotError> {
         self.check_running()?;
-        match self.queues().goals.recv_timeout(timeout) {
+        match queue(&self.queues.goals).recv_timeout(timeout) {
             Ok(goal) => Ok(Some(goal)),
             Err(RecvTimeoutError::Timeout) => Ok(None),
             Err(RecvTimeoutError::Disconnected) => Err(RobotError::Stopped),
@@ -380,22 +375,22 @@ impl RobotNode {
 
     /// Goals and trajectories refused since the last call.
     pub fn poll_rejections(&self) -> Vec<Rejection> {
-        self.queues().rejections.try_iter().collect()
+        queue(&self.queues.rejections).try_iter().collect()
     }
 
     /// Goals a client asked to cancel since the last call; each is CANCELING until it is finished.
     pub fn poll_cancels(&self) -> Vec<GoalId> {
-        self.queues().cancels.try_iter().collect()
+        queue(&self.queues.cancels).try_iter().collect()
     }
 
     /// Valid trajectories received on `<controller>/joint_trajectory` since the last call.
     pub fn poll_trajectories(&self) -> Vec<JointTrajectory> {
-        self.queues().trajectories.try_iter().collect()
+        queue(&self.queues.trajectories).try_iter().collect()
     }
 
     /// Position commands received since the last call, oldest first.
     pub fn poll_commands(&self) -> Vec<Vec<f64>> {
-        self.queues().commands.try_iter().collect()
+        queue(&self.queues.commands).try_iter().collect()
     }
 
     /// Publish `/joint_states` with the controller's joint names.
@@ -556,6 +551,12 @@ impl Drop for RobotNode {
     fn drop(&mut self) {
         self.shutdown();
     }
+}
+
+fn queue<T>(receiver: &Mutex<Receiver<T>>) -> MutexGuard<'_, Receiver<T>> {
+    receiver
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 fn lock(action: &Mutex<ActionSide>) -> MutexGuard<'_, ActionSide> {

@@ -14,7 +14,7 @@ import time
 import uuid
 from typing import Any
 
-from dmprs.errors import AdapterError
+from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import messages
 from dmprs.ros2.node import Node, check_timeout
 from dmprs.ros2.qos import ACTION_STATUS, DEFAULT
@@ -77,7 +77,7 @@ class ActionClient:
         """Send `goal` under a new UUID and wait for the server's answer (AdapterError after
         `timeout`). A rejected goal comes back with `accepted` False: ROS 2 carries no reason."""
         if not isinstance(goal, self.goal_type):
-            raise TypeError(f"{self.action_name} takes {self.goal_type.__name__}, not {type(goal).__name__}")
+            raise InvalidInputError(f"{self.action_name} takes {self.goal_type.__name__}, not {type(goal).__name__}")
         deadline = time.monotonic() + check_timeout(timeout) * 1e-9
         if not self.wait_for_server(timeout):
             raise AdapterError(f"no action server for {self.action_name} within {timeout} s")

@@ -11,6 +11,7 @@ rmw_cyclonedds server uses to wait for the client's reply reader before it answe
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import os
 import time
@@ -23,7 +24,7 @@ from cyclonedds.idl._main import IdlMeta
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 
-from dmprs.errors import AdapterError
+from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import messages, names
 from dmprs.ros2.node import Node, check_timeout, wait_for_matches
 from dmprs.ros2.qos import SERVICES, QosProfile
@@ -36,8 +37,11 @@ HEADER_FIELDS = ("cdds_request_guid", "cdds_request_seq")
 MATCH_MARGIN = 0.1
 
 
-def _wrapped(message_type: type[Any]) -> type[Any]:
-    """`message_type` with rmw_cyclonedds's request header in front, under the same DDS name."""
+@functools.cache
+def _wrapped(ros_type: str) -> type[Any]:
+    """The message class of `ros_type` with rmw_cyclonedds's request header in front, under the
+    same DDS name (one class per type, so that every client of a node shares its topics)."""
+    message_type = messages.message_class(ros_type)
     name = message_type.__name__ + "_Wrapped"
     namespace = cast(dict[str, Any], IdlMeta.__prepare__(name, (IdlStruct,), typename=message_type.__idl_typename__))
     namespace["__idl_annotations__"]["extensibility"] = "final"
@@ -73,8 +77,8 @@ class ServiceClient:
         self.service_name = node.resolve(service)
         self.request_type = messages.message_class(service_type + "_Request")
         self.response_type = messages.message_class(service_type + "_Response")
-        self._request_wire = _wrapped(self.request_type)
-        self._response_wire = _wrapped(self.response_type)
+        self._request_wire = _wrapped(service_type + "_Request")
+        self._response_wire = _wrapped(service_type + "_Response")
         request_topic, reply_topic = names.service_dds_names(self.service_name)
         user_data = _client_id()
         self._writer = DataWriter(
@@ -109,7 +113,9 @@ class ServiceClient:
     def send(self, request: Any) -> int:
         """Send `request` and return its sequence number (for `wait_for_reply`)."""
         if not isinstance(request, self.request_type):
-            raise TypeError(f"{self.service_name} takes {self.request_type.__name__}, not {type(request).__name__}")
+            raise InvalidInputError(
+                f"{self.service_name} takes {self.request_type.__name__}, not {type(request).__name__}"
+            )
         seq = next(self._sequence)
         self._writer.write(wrap(self._request_wire, self.client_guid, seq, request))
         return seq
@@ -147,8 +153,8 @@ class ServiceServer:
         self.service_name = node.resolve(service)
         self.request_type = messages.message_class(service_type + "_Request")
         self.response_type = messages.message_class(service_type + "_Response")
-        self._request_wire = _wrapped(self.request_type)
-        self._response_wire = _wrapped(self.response_type)
+        self._request_wire = _wrapped(service_type + "_Request")
+        self._response_wire = _wrapped(service_type + "_Response")
         request_topic, reply_topic = names.service_dds_names(self.service_name)
         user_data = _client_id().replace(b"clientid=", b"serviceid=")
         self._reader: DataReader[Any] = DataReader(
