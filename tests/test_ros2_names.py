@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -62,6 +63,10 @@ def test_import_dmprs_leaves_cyclonedds_and_rosbags_alone() -> None:
     code = "import sys, dmprs; print([m for m in ('cyclonedds', 'rosbags', 'dmprs.ros2') if m in sys.modules])"
     package_root = str(Path(dmprs.__file__).parents[1])
     out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env={"PYTHONPATH": package_root}
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "PYTHONPATH": package_root},
     )
     assert out.stdout.strip() == "[]"

@@ -59,12 +59,38 @@ def unwrap(message_type: type[Any], sample: Any) -> Any:
     return message_type(**{f: getattr(sample, f) for f in message_type.__annotations__})
 
 
-def _client_id() -> bytes:
-    """A client id in rmw_cyclonedds's USER_DATA form: `clientid=<16 hex bytes joined by .>;`."""
-    return ("clientid=" + ".".join(f"{b:x}" for b in os.urandom(16)) + ";").encode()
+def _endpoint_id(key: bytes) -> bytes:
+    """An id in rmw_cyclonedds's USER_DATA form: `<key>=<16 hex bytes joined by .>;`."""
+    return key + b"=" + ".".join(f"{b:x}" for b in os.urandom(16)).encode() + b";"
 
 
-class ServiceClient:
+class _ServiceEndpoints:
+    """One side's writer and reader of a service's request and reply topics.
+
+    rmw_cyclonedds tags both endpoints of a client (or of a service) with one id in their
+    USER_DATA, `clientid=<id>;` (`serviceid=<id>;`).
+    """
+
+    def __init__(self, node: Node, service_type: str, service: str, qos: QosProfile, server: bool):
+        self.service_name = node.resolve(service)
+        self.request_type = messages.message_class(service_type + "_Request")
+        self.response_type = messages.message_class(service_type + "_Response")
+        self._request_wire = _wrapped(service_type + "_Request")
+        self._response_wire = _wrapped(service_type + "_Response")
+        request_name, reply_name = names.service_dds_names(self.service_name)
+        request_topic = node.topic(request_name, self._request_wire)
+        reply_topic = node.topic(reply_name, self._response_wire)
+        tag = _endpoint_id(b"serviceid" if server else b"clientid")
+        writes, reads = (reply_topic, request_topic) if server else (request_topic, reply_topic)
+        self._participant = node.participant
+        self._writer = DataWriter(node.participant, writes, qos=qos.to_cyclone(tag))
+        self._reader: DataReader[Any] = DataReader(node.participant, reads, qos=qos.to_cyclone(tag))
+        self._unread = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive)
+        self._waitset = WaitSet(node.participant)
+        self._waitset.attach(self._unread)
+
+
+class ServiceClient(_ServiceEndpoints):
     """Calls one ROS 2 service, e.g. `ServiceClient(node, "action_msgs/srv/CancelGoal", "/x/_action/cancel_goal")`.
 
     `service_type` names the request and response types without their `_Request`/`_Response`
@@ -74,26 +100,8 @@ class ServiceClient:
     _sequence = itertools.count(1)
 
     def __init__(self, node: Node, service_type: str, service: str, qos: QosProfile = SERVICES):
-        self.service_name = node.resolve(service)
-        self.request_type = messages.message_class(service_type + "_Request")
-        self.response_type = messages.message_class(service_type + "_Response")
-        self._request_wire = _wrapped(service_type + "_Request")
-        self._response_wire = _wrapped(service_type + "_Response")
-        request_topic, reply_topic = names.service_dds_names(self.service_name)
-        user_data = _client_id()
-        self._writer = DataWriter(
-            node.participant,
-            node.topic(request_topic, self._request_wire),
-            qos=qos.to_cyclone(user_data),
-        )
-        self._reader: DataReader[Any] = DataReader(
-            node.participant, node.topic(reply_topic, self._response_wire), qos=qos.to_cyclone(user_data)
-        )
-        self._unread = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive)
-        self._waitset = WaitSet(node.participant)
-        self._waitset.attach(self._unread)
+        super().__init__(node, service_type, service, qos, server=False)
         # rmw_cyclonedds names the client by its request writer's instance handle (a uint64)
-        self._participant = node.participant
         self.client_guid = int(self._writer.get_instance_handle()) & 0xFFFF_FFFF_FFFF_FFFF
         self._replies: dict[int, Any] = {}
         self._matched = False
@@ -145,27 +153,12 @@ class ServiceClient:
         return reply
 
 
-class ServiceServer:
+class ServiceServer(_ServiceEndpoints):
     """Answers one ROS 2 service in rmw_cyclonedds's wire format: each reply carries its request's
     header back, so that the client that sent it keeps it."""
 
     def __init__(self, node: Node, service_type: str, service: str, qos: QosProfile = SERVICES):
-        self.service_name = node.resolve(service)
-        self.request_type = messages.message_class(service_type + "_Request")
-        self.response_type = messages.message_class(service_type + "_Response")
-        self._request_wire = _wrapped(service_type + "_Request")
-        self._response_wire = _wrapped(service_type + "_Response")
-        request_topic, reply_topic = names.service_dds_names(self.service_name)
-        user_data = _client_id().replace(b"clientid=", b"serviceid=")
-        self._reader: DataReader[Any] = DataReader(
-            node.participant, node.topic(request_topic, self._request_wire), qos=qos.to_cyclone(user_data)
-        )
-        self._writer = DataWriter(
-            node.participant, node.topic(reply_topic, self._response_wire), qos=qos.to_cyclone(user_data)
-        )
-        self._unread = ReadCondition(self._reader, SampleState.NotRead | ViewState.Any | InstanceState.Alive)
-        self._waitset = WaitSet(node.participant)
-        self._waitset.attach(self._unread)
+        super().__init__(node, service_type, service, qos, server=True)
         #: (client id, sequence number) of the last request answered, as read from its header
         self.last_header: tuple[int, int] | None = None
 
