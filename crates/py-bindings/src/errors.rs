@@ -17,12 +17,14 @@ pub enum PyErrorClass {
     Extrapolation,
     Numerical,
     LearnerState,
+    Adapter,
 }
 
 static INVALID_INPUT: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static EXTRAPOLATION: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static NUMERICAL: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static LEARNER_STATE: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+static ADAPTER: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
 impl PyErrorClass {
     fn cell_and_name(self) -> (&'static PyOnceLock<Py<PyType>>, &'static str) {
@@ -31,6 +33,7 @@ impl PyErrorClass {
             PyErrorClass::Extrapolation => (&EXTRAPOLATION, "ExtrapolationError"),
             PyErrorClass::Numerical => (&NUMERICAL, "NumericalError"),
             PyErrorClass::LearnerState => (&LEARNER_STATE, "LearnerStateError"),
+            PyErrorClass::Adapter => (&ADAPTER, "AdapterError"),
         }
     }
 

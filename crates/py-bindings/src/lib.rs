@@ -1,5 +1,5 @@
 //! PyO3 bindings: the module `dmprs._core`. Thin wrappers only; the algorithms live in
-//! `dmp-core`, `learners` and `matchbox`, the user-facing classes and docs in `python/dmprs`.
+//! `dmp-core`, `learners`, `matchbox` and `ros2-robot`, the user-facing classes and docs in `python/dmprs`.
 
 mod cartesian;
 mod dmp;
@@ -8,6 +8,7 @@ mod generalize;
 mod gp;
 mod learners;
 mod matchbox;
+mod ros2_robot;
 
 use pyo3::prelude::*;
 
@@ -30,6 +31,11 @@ mod _core {
     #[pymodule_export]
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
+    };
+
+    #[pymodule_export]
+    use super::ros2_robot::{
+        PyRobotGoal, PyRobotNode, PyRobotTrajectory, PyRos2GoalClient, PyRos2JointStateListener,
     };
 
     #[pymodule_init]

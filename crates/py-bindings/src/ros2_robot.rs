@@ -1,0 +1,474 @@
+//! `RobotNode`: the simulated ros2_control robot of `ros2-robot` (ros2-client / RustDDS). Every
+//! call returns at once or after its timeout, with the GIL released while it waits.
+
+use std::time::Duration;
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use ros2_robot::msgs::{Duration as RosDuration, JointTrajectoryPoint};
+use ros2_robot::validate::{TrajectoryArrays, controller_order};
+use ros2_robot::{GoalId, GoalStatus, RobotConfig, RobotError, SignalKind};
+
+use crate::errors::{IntoPyResult, PyErrorClass, invalid_input};
+
+impl<T> IntoPyResult<T> for Result<T, RobotError> {
+    fn py_err(self) -> PyResult<T> {
+        self.map_err(|e| {
+            let class = match e {
+                RobotError::InvalidInput(_) => PyErrorClass::InvalidInput,
+                RobotError::Create(_)
+                | RobotError::Write(_)
+                | RobotError::Read(_)
+                | RobotError::Goal(_)
+                | RobotError::Stopped => PyErrorClass::Adapter,
+            };
+            class.err(e.to_string())
+        })
+    }
+}
+
+fn timeout(seconds: f64) -> PyResult<Duration> {
+    Duration::try_from_secs_f64(seconds).map_err(|_| {
+        invalid_input(format!(
+            "timeout {seconds} must be a finite number of seconds >= 0"
+        ))
+    })
+}
+
+fn goal_id(id: &[u8]) -> PyResult<GoalId> {
+    id.try_into()
+        .map_err(|_| invalid_input(format!("goal id must be 16 bytes, not {}", id.len())))
+}
+
+fn rows<'py>(
+    py: Python<'py>,
+    rows: &[Vec<f64>],
+    width: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+    flat.into_pyarray(py).reshape([rows.len(), width])
+}
+
+/// A trajectory in the controller's joint order (from a goal or the joint_trajectory topic).
+#[pyclass(name = "RobotTrajectory", module = "dmprs._core", frozen)]
+pub struct PyRobotTrajectory {
+    arrays: TrajectoryArrays,
+    width: usize,
+}
+
+#[pymethods]
+impl PyRobotTrajectory {
+    /// Each point's time_from_start (s).
+    #[getter]
+    fn times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.arrays.times.clone().into_pyarray(py)
+    }
+
+    /// Positions, one row per point, one column per controller joint.
+    #[getter]
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        rows(py, &self.arrays.positions, self.width)
+    }
+
+    /// Velocities like positions, or None unless every point has them.
+    #[getter]
+    fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        self.arrays
+            .velocities
+            .as_ref()
+            .map(|v| rows(py, v, self.width))
+            .transpose()
+    }
+
+    /// Accelerations like positions, or None unless every point has them.
+    #[getter]
+    fn accelerations<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        self.arrays
+            .accelerations
+            .as_ref()
+            .map(|v| rows(py, v, self.width))
+            .transpose()
+    }
+}
+
+/// A FollowJointTrajectory goal the robot accepted; it executes until `finish_goal`.
+#[pyclass(name = "RobotGoal", module = "dmprs._core", frozen)]
+pub struct PyRobotGoal {
+    id: GoalId,
+    trajectory: Py<PyRobotTrajectory>,
+    goal_time_tolerance: f64,
+    path_tolerance: Vec<(String, f64, f64, f64)>,
+    goal_tolerance: Vec<(String, f64, f64, f64)>,
+}
+
+#[pymethods]
+impl PyRobotGoal {
+    /// The goal's UUID (16 bytes).
+    #[getter]
+    fn id<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.id)
+    }
+
+    #[getter]
+    fn trajectory(&self, py: Python<'_>) -> Py<PyRobotTrajectory> {
+        self.trajectory.clone_ref(py)
+    }
+
+    /// goal_time_tolerance (s).
+    #[getter]
+    fn goal_time_tolerance(&self) -> f64 {
+        self.goal_time_tolerance
+    }
+
+    /// (joint, position, velocity, acceleration) tolerances while executing.
+    #[getter]
+    fn path_tolerance(&self) -> Vec<(String, f64, f64, f64)> {
+        self.path_tolerance.clone()
+    }
+
+    /// (joint, position, velocity, acceleration) tolerances at the end.
+    #[getter]
+    fn goal_tolerance(&self) -> Vec<(String, f64, f64, f64)> {
+        self.goal_tolerance.clone()
+    }
+}
+
+fn tolerances(list: &[ros2_robot::msgs::JointTolerance]) -> Vec<(String, f64, f64, f64)> {
+    list.iter()
+        .map(|t| (t.name.clone(), t.position, t.velocity, t.acceleration))
+        .collect()
+}
+
+fn point(
+    positions: Vec<f64>,
+    velocities: Option<Vec<f64>>,
+    time_from_start: f64,
+) -> JointTrajectoryPoint {
+    JointTrajectoryPoint {
+        positions,
+        velocities: velocities.unwrap_or_default(),
+        time_from_start: RosDuration::from_seconds(time_from_start),
+        ..Default::default()
+    }
+}
+
+fn vector(name: &str, a: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option<Vec<f64>>> {
+    a.map(|a| {
+        a.as_slice()
+            .map(<[f64]>::to_vec)
+            .map_err(|_| invalid_input(format!("{name} must be contiguous")))
+    })
+    .transpose()
+}
+
+/// A simulated ros2_control robot on ROS 2 (ros2-client / RustDDS, its own threads).
+#[pyclass(name = "RobotNode", module = "dmprs._core", frozen)]
+pub struct PyRobotNode {
+    inner: ros2_robot::RobotNode,
+}
+
+#[pymethods]
+impl PyRobotNode {
+    #[new]
+    #[pyo3(signature = (domain_id, controller, joint_names, *, node_name="dmprs_robot", namespace="/",
+        command_topic="/forward_position_controller/commands", float_signals=vec![], point_signals=vec![],
+        loopback_only=true))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        domain_id: u16,
+        controller: &str,
+        joint_names: Vec<String>,
+        node_name: &str,
+        namespace: &str,
+        command_topic: &str,
+        float_signals: Vec<String>,
+        point_signals: Vec<String>,
+        loopback_only: bool,
+    ) -> PyResult<Self> {
+        let mut config = RobotConfig::new(domain_id, controller, joint_names);
+        config.node_name = node_name.into();
+        config.namespace = namespace.into();
+        config.command_topic = command_topic.into();
+        config.loopback_only = loopback_only;
+        config.signals = float_signals
+            .into_iter()
+            .map(|t| (t, SignalKind::Float64))
+            .chain(
+                point_signals
+                    .into_iter()
+                    .map(|t| (t, SignalKind::PointStamped)),
+            )
+            .collect();
+        let inner = py
+            .detach(|| ros2_robot::RobotNode::start(config))
+            .py_err()?;
+        Ok(PyRobotNode { inner })
+    }
+
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        self.inner.config().joint_names.clone()
+    }
+
+    /// The next accepted goal, waiting at most `timeout` seconds; None if none came.
+    fn poll_goal(&self, py: Python<'_>, timeout: f64) -> PyResult<Option<PyRobotGoal>> {
+        let wait = self::timeout(timeout)?;
+        let Some(accepted) = py.detach(|| self.inner.poll_goal(wait)).py_err()? else {
+            return Ok(None);
+        };
+        let joints = &self.inner.config().joint_names;
+        let trajectory = PyRobotTrajectory {
+            arrays: controller_order(&accepted.goal.trajectory, joints),
+            width: joints.len(),
+        };
+        Ok(Some(PyRobotGoal {
+            id: accepted.id,
+            trajectory: Py::new(py, trajectory)?,
+            goal_time_tolerance: accepted.goal.goal_time_tolerance.seconds(),
+            path_tolerance: tolerances(&accepted.goal.path_tolerance),
+            goal_tolerance: tolerances(&accepted.goal.goal_tolerance),
+        }))
+    }
+
+    /// Goals and topic trajectories refused since the last call: (goal id or None, reason).
+    fn poll_rejections<'py>(&self, py: Python<'py>) -> Vec<(Option<Bound<'py, PyBytes>>, String)> {
+        self.inner
+            .poll_rejections()
+            .into_iter()
+            .map(|r| (r.id.map(|id| PyBytes::new(py, &id)), r.reason))
+            .collect()
+    }
+
+    /// Ids of goals a client asked to cancel since the last call (each is CANCELING).
+    fn poll_cancels<'py>(&self, py: Python<'py>) -> Vec<Bound<'py, PyBytes>> {
+        self.inner
+            .poll_cancels()
+            .iter()
+            .map(|id| PyBytes::new(py, id))
+            .collect()
+    }
+
+    /// Trajectories received on `<controller>/joint_trajectory` since the last call.
+    fn poll_trajectories(&self) -> Vec<PyRobotTrajectory> {
+        let joints = &self.inner.config().joint_names;
+        self.inner
+            .poll_trajectories()
+            .iter()
+            .map(|t| PyRobotTrajectory {
+                arrays: controller_order(t, joints),
+                width: joints.len(),
+            })
+            .collect()
+    }
+
+    /// Position commands received since the last call, one row each, oldest first.
+    fn poll_commands<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        rows(
+            py,
+            &self.inner.poll_commands(),
+            self.inner.config().joint_names.len(),
+        )
+    }
+
+    #[pyo3(signature = (stamp, position, velocity=None))]
+    fn publish_joint_state(
+        &self,
+        py: Python<'_>,
+        stamp: f64,
+        position: PyReadonlyArray1<'_, f64>,
+        velocity: Option<PyReadonlyArray1<'_, f64>>,
+    ) -> PyResult<()> {
+        let position = vector("position", Some(position))?.unwrap_or_default();
+        let velocity = vector("velocity", velocity)?.unwrap_or_default();
+        py.detach(|| self.inner.publish_joint_state(stamp, &position, &velocity))
+            .py_err()
+    }
+
+    #[pyo3(signature = (goal_id, stamp, desired, actual, desired_velocity=None, actual_velocity=None,
+        time_from_start=0.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn publish_feedback(
+        &self,
+        py: Python<'_>,
+        goal_id: &[u8],
+        stamp: f64,
+        desired: PyReadonlyArray1<'_, f64>,
+        actual: PyReadonlyArray1<'_, f64>,
+        desired_velocity: Option<PyReadonlyArray1<'_, f64>>,
+        actual_velocity: Option<PyReadonlyArray1<'_, f64>>,
+        time_from_start: f64,
+    ) -> PyResult<()> {
+        let id = self::goal_id(goal_id)?;
+        if !time_from_start.is_finite() {
+            return Err(invalid_input("time_from_start must be finite"));
+        }
+        let desired = point(
+            vector("desired", Some(desired))?.unwrap_or_default(),
+            vector("desired_velocity", desired_velocity)?,
+            time_from_start,
+        );
+        let actual = point(
+            vector("actual", Some(actual))?.unwrap_or_default(),
+            vector("actual_velocity", actual_velocity)?,
+            time_from_start,
+        );
+        py.detach(|| self.inner.publish_feedback(&id, stamp, desired, actual))
+            .py_err()
+    }
+
+    /// End a goal: `status` is action_msgs' STATUS_SUCCEEDED (4), STATUS_CANCELED (5) or
+    /// STATUS_ABORTED (6); `error_code` and `error_string` as control_msgs defines them.
+    #[pyo3(signature = (goal_id, status, error_code=0, error_string=""))]
+    fn finish_goal(
+        &self,
+        py: Python<'_>,
+        goal_id: &[u8],
+        status: i8,
+        error_code: i32,
+        error_string: &str,
+    ) -> PyResult<()> {
+        let id = self::goal_id(goal_id)?;
+        let status = GoalStatus::from_code(status)
+            .filter(|s| s.is_terminal())
+            .ok_or_else(|| {
+                invalid_input(format!(
+                    "status {status} is not a terminal goal status (4, 5 or 6)"
+                ))
+            })?;
+        py.detach(|| {
+            self.inner
+                .finish_goal(&id, status, error_code, error_string)
+        })
+        .py_err()
+    }
+
+    /// Publish a signal topic: a float on a Float64 topic, (x, y, z) on a PointStamped one.
+    fn publish_signal(
+        &self,
+        py: Python<'_>,
+        topic: &str,
+        value: &Bound<'_, PyAny>,
+        stamp: f64,
+    ) -> PyResult<()> {
+        let value: Vec<f64> = match value.extract::<f64>() {
+            Ok(v) => vec![v],
+            Err(_) => value.extract().map_err(|_| {
+                invalid_input(format!("signal {topic}: value must be a float or 3 floats"))
+            })?,
+        };
+        py.detach(|| self.inner.publish_signal(topic, &value, stamp))
+            .py_err()
+    }
+
+    fn publish_clock(&self, py: Python<'_>, seconds: f64) -> PyResult<()> {
+        py.detach(|| self.inner.publish_clock(seconds)).py_err()
+    }
+
+    /// Stop the node's thread and leave the domain (idempotent).
+    fn shutdown(&self, py: Python<'_>) {
+        py.detach(|| self.inner.shutdown());
+    }
+}
+
+/// A FollowJointTrajectory action client on ros2-client, for measuring it against dmprs.ros2.
+#[pyclass(name = "Ros2GoalClient", module = "dmprs._core", frozen)]
+pub struct PyRos2GoalClient {
+    inner: ros2_robot::probe::GoalClient,
+}
+
+#[pymethods]
+impl PyRos2GoalClient {
+    #[new]
+    #[pyo3(signature = (domain_id, action, loopback_only=true))]
+    fn new(py: Python<'_>, domain_id: u16, action: &str, loopback_only: bool) -> PyResult<Self> {
+        let inner = py
+            .detach(|| ros2_robot::probe::GoalClient::new(domain_id, action, loopback_only))
+            .py_err()?;
+        Ok(PyRos2GoalClient { inner })
+    }
+
+    /// True once the action's send_goal service has a server, False after `timeout` seconds.
+    fn wait_for_server(&self, py: Python<'_>, timeout: f64) -> PyResult<bool> {
+        let wait = self::timeout(timeout)?;
+        Ok(py.detach(|| self.inner.wait_for_server(wait)))
+    }
+
+    /// Send a goal (positions: one row per point) and wait for the answer: accepted (bool), or
+    /// None after `timeout` seconds.
+    fn send_goal(
+        &self,
+        py: Python<'_>,
+        joint_names: Vec<String>,
+        times: PyReadonlyArray1<'_, f64>,
+        positions: numpy::PyReadonlyArray2<'_, f64>,
+        timeout: f64,
+    ) -> PyResult<Option<bool>> {
+        let wait = self::timeout(timeout)?;
+        let times = times
+            .as_slice()
+            .map_err(|_| invalid_input("times must be contiguous"))?;
+        let positions = positions.as_array();
+        if positions.nrows() != times.len() || positions.ncols() != joint_names.len() {
+            return Err(invalid_input(
+                "positions must have one row per time and one column per joint",
+            ));
+        }
+        let points = times
+            .iter()
+            .zip(positions.rows())
+            .map(|(&t, row)| point(row.to_vec(), None, t))
+            .collect();
+        let goal = ros2_robot::msgs::FollowJointTrajectoryGoal {
+            trajectory: ros2_robot::msgs::JointTrajectory {
+                joint_names,
+                points,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        py.detach(|| self.inner.send_goal(goal, wait)).py_err()
+    }
+}
+
+/// Records the stamps of `/joint_states` on ros2-client, for measuring it against dmprs.ros2.
+#[pyclass(name = "Ros2JointStateListener", module = "dmprs._core", frozen)]
+pub struct PyRos2JointStateListener {
+    inner: std::sync::Mutex<ros2_robot::probe::JointStateListener>,
+}
+
+#[pymethods]
+impl PyRos2JointStateListener {
+    #[new]
+    #[pyo3(signature = (domain_id, topic="/joint_states", depth=1000, loopback_only=true))]
+    fn new(
+        py: Python<'_>,
+        domain_id: u16,
+        topic: &str,
+        depth: usize,
+        loopback_only: bool,
+    ) -> PyResult<Self> {
+        let inner = py
+            .detach(|| {
+                ros2_robot::probe::JointStateListener::start(domain_id, topic, depth, loopback_only)
+            })
+            .py_err()?;
+        Ok(PyRos2JointStateListener {
+            inner: std::sync::Mutex::new(inner),
+        })
+    }
+
+    /// Messages received so far.
+    fn count(&self) -> usize {
+        self.inner.lock().unwrap_or_else(|p| p.into_inner()).count()
+    }
+
+    /// Stop listening; the header stamps received (s), in arrival order.
+    fn stop<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let stamps = py
+            .detach(|| self.inner.lock().unwrap_or_else(|p| p.into_inner()).stop())
+            .py_err()?;
+        Ok(stamps.into_pyarray(py))
+    }
+}

@@ -1,0 +1,35 @@
+"""ROS 2 on the wire, on Cyclone DDS (the DDS of ROS 2's tier-1 rmw_cyclonedds).
+
+A `Node` joins a ROS 2 domain; it publishes and subscribes to topics with ROS 2's names and QoS
+profiles, calls services and drives actions (`ActionClient`) in rmw_cyclonedds's wire format;
+`JointStateRecorder` records `/joint_states` by joint name. Message classes are generated from
+ROS's own definitions in `dmprs.ros2.messages`. Needs the `ros2` extra (cyclonedds, rosbags).
+"""
+
+from dmprs.ros2.action import STATUS_NAMES, ActionClient, GoalHandle
+from dmprs.ros2.node import LOOPBACK_CONFIG, MAX_DOMAIN_ID, Node, Publisher, Subscription, stamp_seconds
+from dmprs.ros2.qos import ACTION_STATUS, CLOCK, DEFAULT, SENSOR_DATA, SERVICES, QosProfile
+from dmprs.ros2.recorder import JointRecording, JointStateRecorder
+from dmprs.ros2.service import ServiceClient, ServiceServer
+
+__all__ = [
+    "ACTION_STATUS",
+    "CLOCK",
+    "DEFAULT",
+    "LOOPBACK_CONFIG",
+    "MAX_DOMAIN_ID",
+    "SENSOR_DATA",
+    "SERVICES",
+    "STATUS_NAMES",
+    "ActionClient",
+    "GoalHandle",
+    "JointRecording",
+    "JointStateRecorder",
+    "Node",
+    "Publisher",
+    "QosProfile",
+    "ServiceClient",
+    "ServiceServer",
+    "Subscription",
+    "stamp_seconds",
+]

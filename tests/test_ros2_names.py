@@ -1,0 +1,72 @@
+"""ROS 2 name resolution and QoS profiles of dmprs.ros2."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from cyclonedds.core import Policy
+
+import dmprs
+from dmprs.errors import InvalidInputError
+from dmprs.ros2 import ACTION_STATUS, CLOCK, DEFAULT, SENSOR_DATA
+from dmprs.ros2.names import resolve, service_dds_names, topic_dds_name
+
+
+@pytest.mark.parametrize(
+    ("name", "namespace", "expected"),
+    [
+        ("/joint_states", "/robot", "/joint_states"),
+        ("joint_states", "/", "/joint_states"),
+        ("joint_states", "/robot", "/robot/joint_states"),
+        ("arm/commands", "robot", "/robot/arm/commands"),
+        ("~", "/robot", "/robot/dmprs"),
+        ("~/status", "/", "/dmprs/status"),
+        ("~/status", "/robot/left", "/robot/left/dmprs/status"),
+    ],
+)
+def test_names_resolve_as_ros_2_resolves_them(name: str, namespace: str, expected: str) -> None:
+    assert resolve(name, namespace, "dmprs") == expected
+
+
+@pytest.mark.parametrize("name", ["", "a//b", "a/", "1abc", "a__b", "~x", "a b", "é"])
+def test_invalid_names_are_refused(name: str) -> None:
+    with pytest.raises(InvalidInputError):
+        resolve(name, "/", "dmprs")
+
+
+def test_dds_names_of_topics_and_services() -> None:
+    assert topic_dds_name("/joint_states") == "rt/joint_states"
+    assert service_dds_names("/c/follow_joint_trajectory/_action/send_goal") == (
+        "rq/c/follow_joint_trajectory/_action/send_goalRequest",
+        "rr/c/follow_joint_trajectory/_action/send_goalReply",
+    )
+
+
+def test_qos_profiles_are_ros_2_profiles() -> None:
+    from cyclonedds.util import duration
+
+    reliable = Policy.Reliability.Reliable(duration(infinite=True))
+    xcdr1 = Policy.DataRepresentation(use_cdrv0_representation=True)
+    assert {reliable, Policy.Durability.Volatile, Policy.History.KeepLast(10), xcdr1} <= set(DEFAULT.to_cyclone())
+    sensor = set(SENSOR_DATA.to_cyclone())
+    assert {Policy.Reliability.BestEffort, Policy.Durability.Volatile, Policy.History.KeepLast(5), xcdr1} <= sensor
+    assert {Policy.Reliability.BestEffort, Policy.History.KeepLast(1)} <= set(CLOCK.to_cyclone())
+    status = set(ACTION_STATUS.to_cyclone())
+    assert {reliable, Policy.Durability.TransientLocal, Policy.History.KeepLast(1)} <= status
+
+
+def test_import_dmprs_leaves_cyclonedds_and_rosbags_alone() -> None:
+    code = "import sys, dmprs; print([m for m in ('cyclonedds', 'rosbags', 'dmprs.ros2') if m in sys.modules])"
+    package_root = str(Path(dmprs.__file__).parents[1])
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "PYTHONPATH": package_root},
+    )
+    assert out.stdout.strip() == "[]"
