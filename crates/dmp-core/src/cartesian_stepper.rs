@@ -66,7 +66,11 @@ fn unit(name: &'static str, q: &[f64]) -> Result<Quaternion> {
             requirement: "orientations must be unit quaternions (|norm - 1| <= 1e-6)",
         });
     }
-    Ok(if (n - 1.0).abs() <= 1e-15 { q } else { q.map(|c| c / n) })
+    Ok(if (n - 1.0).abs() <= 1e-15 {
+        q
+    } else {
+        q.map(|c| c / n)
+    })
 }
 
 fn check_pose(name: &'static str, pose: &[f64]) -> Result<Quaternion> {
@@ -250,6 +254,16 @@ impl CartesianStepper {
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
+        crate::linalg::simd(move || self.step_inner(measured, coupling))
+    }
+
+    /// [`CartesianStepper::step_coupled`], compiled for AVX2 where the CPU has it (same bits).
+    #[inline(always)]
+    fn step_inner(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
         let factor = match measured {
             Some(m) => {
                 let q = check_pose("measured", m)?;
@@ -327,6 +341,7 @@ impl CartesianStepper {
 
     /// The rate of the obstacles' field at the current state (0 without obstacles), by which
     /// `integrate` splits the period.
+    #[inline(always)]
     fn obstacle_rate(&self) -> f64 {
         let mut rate = 0.0f64;
         let zp = [self.z[0], self.z[1], self.z[2]];
@@ -339,6 +354,7 @@ impl CartesianStepper {
 
     /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
     /// derivative is `self.h`, one Cartesian rollout step per sub-step.
+    #[inline(always)]
     fn integrate(&mut self, inv_tau: f64, coupled: bool, obstacle_rate: f64) {
         let cfg = self.cfg;
         let mut substeps = self.clock.substeps;
@@ -384,7 +400,10 @@ impl CartesianStepper {
 
     /// One Euler step of the goal filter over `a` of scaled time (module docs).
     fn filter_goal(&mut self, a: f64) {
-        let alpha_g = self.clock.goal_filter.expect("a goal moves only when filtered");
+        let alpha_g = self
+            .clock
+            .goal_filter
+            .expect("a goal moves only when filtered");
         let mut settled = true;
         for d in 0..3 {
             let gap = self.target_p[d] - self.goal_p[d];
@@ -410,17 +429,20 @@ impl CartesianStepper {
     }
 
     /// `self.f = f(x)` (eq. 4).
+    #[inline(always)]
     fn update_forcing(&mut self) {
         self.forcing.eval(self.x, &mut self.f);
     }
 
     /// `tau dz/dt` of the current state with the coupling terms, and the position repulsion's
     /// stiffness into `self.stiffness`.
+    #[inline(always)]
     fn derivative(&mut self, coupled: bool) -> [f64; N] {
         let cfg = &self.cfg;
         let mut h = [0.0; N];
         for d in 0..3 {
-            h[d] = cfg.alpha_z * (cfg.beta_z * (self.goal_p[d] - self.p[d]) - self.z[d]) + self.f[d];
+            h[d] =
+                cfg.alpha_z * (cfg.beta_z * (self.goal_p[d] - self.p[d]) - self.z[d]) + self.f[d];
         }
         // Half the rotation vector from q to the goal.
         let e = quaternion::log(&quaternion::product(
@@ -462,6 +484,7 @@ impl CartesianStepper {
 
     /// The Cartesian rollout's `until_rest` criterion at the current state, towards the target
     /// goal, with the goal filter settled.
+    #[inline(always)]
     fn rest(&self) -> bool {
         let cfg = &self.cfg;
         let tol = self.rest_tol;
@@ -480,9 +503,15 @@ impl CartesianStepper {
         })
     }
 
+    #[inline(always)]
     fn check_finite(&self) -> Result<()> {
-        let state = self.p.iter().chain(&self.q).chain(&self.z).chain(&self.out_acceleration);
-        if state.clone().all(|v| v.is_finite()) && self.x.is_finite() {
+        let state = self
+            .p
+            .iter()
+            .chain(&self.q)
+            .chain(&self.z)
+            .chain(&self.out_acceleration);
+        if !state.fold(!self.x.is_finite(), |bad, v| bad | !v.is_finite()) {
             return Ok(());
         }
         Err(Error::Numerical {

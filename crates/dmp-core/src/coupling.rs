@@ -193,7 +193,12 @@ impl SphereObstacle {
             return Err(Error::NonFinite {
                 name: "obstacles",
                 location: format!("[{index}]"),
-                value: self.center.iter().copied().find(|c| !c.is_finite()).unwrap_or(0.0),
+                value: self
+                    .center
+                    .iter()
+                    .copied()
+                    .find(|c| !c.is_finite())
+                    .unwrap_or(0.0),
             });
         }
         if !(self.radius.is_finite() && self.radius >= 0.0) {
@@ -287,8 +292,13 @@ mod tests {
             // U as a function of y: distance to the nearer limit.
             let uy = |y: f64| if y < 0.5 { u(y + 1.0) } else { u(2.0 - y) };
             let grad = (uy(y + e) - uy(y - e)) / (2.0 * e);
-            assert!((c + grad).abs() < 1e-5 * c.abs().max(1.0), "y={y}: {c} vs {}", -grad);
-            let dc = (lim.repulsion(0, y + e).unwrap().0 - lim.repulsion(0, y - e).unwrap().0) / (2.0 * e);
+            assert!(
+                (c + grad).abs() < 1e-5 * c.abs().max(1.0),
+                "y={y}: {c} vs {}",
+                -grad
+            );
+            let dc = (lim.repulsion(0, y + e).unwrap().0 - lim.repulsion(0, y - e).unwrap().0)
+                / (2.0 * e);
             assert!((slope - dc).abs() < 1e-5 * dc.abs().max(1.0));
             assert!(slope < 0.0);
         }
@@ -329,7 +339,11 @@ mod tests {
             let d = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
             let sp = (z[0] * z[0] + z[1] * z[1] + z[2] * z[2]).sqrt();
             let cos = (z[0] * r[0] + z[1] * r[1] + z[2] * r[2]) / (d * sp);
-            if cos >= 0.0 { 0.0 } else { g.lambda * (-cos).powf(g.beta) * sp / (d - ob.radius) }
+            if cos >= 0.0 {
+                0.0
+            } else {
+                g.lambda * (-cos).powf(g.beta) * sp / (d - ob.radius)
+            }
         };
         let mut out = [0.0; 3];
         let rate = ob.add_repulsion(&g, &pos, &z, &mut out);
@@ -340,7 +354,12 @@ mod tests {
             a[i] += e;
             b[i] -= e;
             let grad = (u(a) - u(b)) / (2.0 * e);
-            assert!((out[i] + grad).abs() < 1e-6 * grad.abs().max(1.0), "{i}: {} vs {}", out[i], -grad);
+            assert!(
+                (out[i] + grad).abs() < 1e-6 * grad.abs().max(1.0),
+                "{i}: {} vs {}",
+                out[i],
+                -grad
+            );
         }
         // Moving away: no force.
         let mut none = [0.0; 3];

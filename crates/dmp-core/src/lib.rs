@@ -34,6 +34,7 @@ pub use cartesian::{
     CartesianDemonstration, CartesianDmp, CartesianTrajectory, rollout_batch_cartesian,
 };
 pub use cartesian_generalize::CartesianGeneralizer;
+pub use cartesian_stepper::{CartesianStepper, CartesianStepperOptions};
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
 pub use generalize::{Generalizer, GpMean, LwrGpOptions, Method};
@@ -41,4 +42,3 @@ pub use gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
 pub use lwr::{Kernel, LocalModel, LwrOptions};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};
 pub use stepper::{Stepper, StepperOptions};
-pub use cartesian_stepper::{CartesianStepper, CartesianStepperOptions};

@@ -194,8 +194,14 @@ pub(crate) fn position_limits(
     if opts.position_min.is_none() && opts.position_max.is_none() {
         return Ok(None);
     }
-    let lo = opts.position_min.clone().unwrap_or_else(|| vec![f64::NEG_INFINITY; n]);
-    let hi = opts.position_max.clone().unwrap_or_else(|| vec![f64::INFINITY; n]);
+    let lo = opts
+        .position_min
+        .clone()
+        .unwrap_or_else(|| vec![f64::NEG_INFINITY; n]);
+    let hi = opts
+        .position_max
+        .clone()
+        .unwrap_or_else(|| vec![f64::INFINITY; n]);
     if lo.len() != n {
         return Err(Error::Shape {
             name: "position_min",
@@ -447,6 +453,17 @@ impl Stepper {
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64], &[f64], &[f64])> {
+        // Compiled for AVX2 where the CPU has it (the per-coordinate loops run 4 wide); Rust never
+        // fuses a multiply and an add on its own, so both copies give the same bits.
+        crate::linalg::simd(move || self.step_inner(measured, coupling))
+    }
+
+    #[inline(always)]
+    fn step_inner(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64], &[f64], &[f64])> {
         let factor = match measured {
             Some(m) => {
                 check_coordinates("measured", m, self.n)?;
@@ -483,8 +500,15 @@ impl Stepper {
                 self.derivative_into(&mut h_next, coupled);
             }
             let tc = self.clock.coupling.as_ref().expect("checked");
-            let (next, taud) =
-                tc.next_tau(tau, target, &self.z_k, &self.h, &self.z, &h_next, self.clock.dt);
+            let (next, taud) = tc.next_tau(
+                tau,
+                target,
+                &self.z_k,
+                &self.h,
+                &self.z,
+                &h_next,
+                self.clock.dt,
+            );
             self.h_next = h_next;
             self.clock.tau = next;
             taud
@@ -508,6 +532,7 @@ impl Stepper {
     /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
     /// derivative is `self.h`, in the rollout's sub-steps and order; leaves `self.f = f(x)` of
     /// the new phase.
+    #[inline(always)]
     fn integrate(&mut self, inv_tau: f64, coupled: bool) {
         let cfg = *self.dmp.config();
         let hs = self.clock.dt / self.clock.substeps as f64;
@@ -540,12 +565,18 @@ impl Stepper {
     }
 
     fn limits_acceleration(&self) -> bool {
-        self.clock.coupling.as_ref().is_some_and(|tc| tc.limits_acceleration())
+        self.clock
+            .coupling
+            .as_ref()
+            .is_some_and(|tc| tc.limits_acceleration())
     }
 
     /// One Euler step of the goal filter over `a = h / tau` of scaled time.
     fn filter_goal(&mut self, a: f64) {
-        let alpha_g = self.clock.goal_filter.expect("a goal moves only when filtered");
+        let alpha_g = self
+            .clock
+            .goal_filter
+            .expect("a goal moves only when filtered");
         let mut settled = true;
         for d in 0..self.n {
             let gap = self.g_target[d] - self.g[d];
@@ -560,12 +591,14 @@ impl Stepper {
     }
 
     /// `self.f = f(x)` (eq. 4).
+    #[inline(always)]
     fn update_forcing(&mut self) {
         self.forcing.eval(self.x, &mut self.f);
     }
 
     /// `tau dz/dt` of the current state (eq. 1 with the coupling terms) into `out`, and the
     /// repulsion's stiffness `dC/dy` per coordinate into `self.stiffness`.
+    #[inline(always)]
     fn derivative_into(&mut self, out: &mut [f64], coupled: bool) {
         let cfg = self.dmp.config();
         for d in 0..self.n {
@@ -591,6 +624,7 @@ impl Stepper {
     }
 
     /// `self.h` = the derivative of the current state.
+    #[inline(always)]
     fn derivative(&mut self, coupled: bool) {
         let mut h = std::mem::take(&mut self.h);
         self.derivative_into(&mut h, coupled);
@@ -598,19 +632,21 @@ impl Stepper {
     }
 
     /// The rollout's `until_rest` criterion at the current state, with the filtered goal settled.
+    #[inline(always)]
     fn rest(&self) -> bool {
         let cfg = self.dmp.config();
         let tol = self.rest_tol;
         !self.goal_moving
             && self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) <= tol
-            && (0..self.n).all(|d| {
-                (self.g_target[d] - self.y[d]).abs() <= tol && self.z[d].abs() <= tol
-            })
+            && (0..self.n)
+                .all(|d| (self.g_target[d] - self.y[d]).abs() <= tol && self.z[d].abs() <= tol)
     }
 
+    #[inline(always)]
     fn check_finite(&self) -> Result<()> {
+        // Without short-circuiting, so that the loop vectorizes.
         let state = self.y.iter().chain(&self.z).chain(&self.out_ydd);
-        if state.clone().all(|v| v.is_finite()) && self.x.is_finite() {
+        if !state.fold(!self.x.is_finite(), |bad, v| bad | !v.is_finite()) {
             return Ok(());
         }
         Err(Error::Numerical {

@@ -279,10 +279,7 @@ mod tests {
         assert!(TemporalCoupling::new(2, Some(&[1.0]), None, g).is_err());
         assert!(TemporalCoupling::new(1, Some(&[0.0]), None, g).is_err());
         assert!(TemporalCoupling::new(1, None, Some(&[f64::NAN]), g).is_err());
-        let bad = TemporalCouplingGains {
-            nominal: -1.0,
-            ..g
-        };
+        let bad = TemporalCouplingGains { nominal: -1.0, ..g };
         assert!(TemporalCoupling::new(1, Some(&[1.0]), None, bad).is_err());
     }
 }

@@ -36,7 +36,13 @@ fn unit(q: [f64; 4]) -> Quaternion {
     q.map(|c| c / n)
 }
 
-fn cartesian_dmp(weights: &[f64], n_basis: usize, goal: [f64; 7], start: [f64; 7], tau: f64) -> CartesianDmp {
+fn cartesian_dmp(
+    weights: &[f64],
+    n_basis: usize,
+    goal: [f64; 7],
+    start: [f64; 7],
+    tau: f64,
+) -> CartesianDmp {
     let w = DMatrix::from_column_slice(n_basis, 6, &weights[..n_basis * 6]);
     CartesianDmp::new(config(n_basis), w, &goal, &start, tau).unwrap()
 }
@@ -60,7 +66,10 @@ fn run_joint(s: &mut Stepper, samples: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) 
 
 fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
-    a.iter().zip(b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
 }
 
 proptest! {
@@ -152,18 +161,36 @@ proptest! {
 /// a goal changes.
 #[test]
 fn steps_match_the_rollout_to_rounding_and_an_idle_goal_filter_is_inert() {
-    let w: Vec<f64> = (0..3 * 25).map(|i| 40.0 * ((i as f64) * 0.37).sin()).collect();
+    let w: Vec<f64> = (0..3 * 25)
+        .map(|i| 40.0 * ((i as f64) * 0.37).sin())
+        .collect();
     let dmp = joint_dmp(&w, 25, &[0.4, -1.0, 2.0], &[0.0, 0.5, 1.0], 0.8);
     let tr = dmp.rollout(&RolloutOptions::new(1e-3)).unwrap();
     let mut s = Stepper::new(&dmp, &StepperOptions::new(1e-3)).unwrap();
     let (y, yd, ydd) = run_joint(&mut s, tr.n_samples());
-    let worst = [max_abs_diff(&y, &tr.y), max_abs_diff(&yd, &tr.yd), max_abs_diff(&ydd, &tr.ydd) / 100.0];
-    println!("joint stepper vs rollout: max |dy| {:.1e}, |dyd| {:.1e}, |dydd|/100 {:.1e}", worst[0], worst[1], worst[2]);
+    let worst = [
+        max_abs_diff(&y, &tr.y),
+        max_abs_diff(&yd, &tr.yd),
+        max_abs_diff(&ydd, &tr.ydd) / 100.0,
+    ];
+    println!(
+        "joint stepper vs rollout: max |dy| {:.1e}, |dyd| {:.1e}, |dydd|/100 {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
     assert!(worst.iter().all(|&e| e <= 1e-12));
-    let unfiltered = StepperOptions { goal_filter: None, ..StepperOptions::new(1e-3) };
+    let unfiltered = StepperOptions {
+        goal_filter: None,
+        ..StepperOptions::new(1e-3)
+    };
     let mut plain = Stepper::new(&dmp, &unfiltered).unwrap();
     assert_eq!(run_joint(&mut plain, tr.n_samples()), (y, yd, ydd));
-    let c = cartesian_dmp(&w.repeat(2), 25, pose([0.3, 0.1, 0.0], [0.9, 0.1, 0.3, 0.2]), pose([0.0; 3], [1.0, 0.0, 0.0, 0.0]), 0.8);
+    let c = cartesian_dmp(
+        &w.repeat(2),
+        25,
+        pose([0.3, 0.1, 0.0], [0.9, 0.1, 0.3, 0.2]),
+        pose([0.0; 3], [1.0, 0.0, 0.0, 0.0]),
+        0.8,
+    );
     let tr = c.rollout(&RolloutOptions::new(1e-3)).unwrap();
     let mut s = CartesianStepper::new(&c, &CartesianStepperOptions::new(1e-3)).unwrap();
     for j in 0..tr.n_samples() {
@@ -203,7 +230,8 @@ fn a_held_robot_stops_the_phase_and_resumes_smoothly() {
     // t = 0.3 s to 0.8 s.
     let (mut q, mut qd) = (dmp.y0()[0], 0.0);
     let (wn, hold) = (40.0, (300, 800));
-    let (mut phase_at_hold, mut phase_at_release, mut max_gap, mut max_acc_after) = (0.0, 0.0, 0.0f64, 0.0f64);
+    let (mut phase_at_hold, mut phase_at_release, mut max_gap, mut max_acc_after) =
+        (0.0, 0.0, 0.0f64, 0.0f64);
     let mut prev_yd = 0.0;
     let mut max_dyd_after = 0.0f64;
     for k in 0..6000 {
@@ -247,7 +275,10 @@ fn a_held_robot_stops_the_phase_and_resumes_smoothly() {
     assert!((phase_at_hold - phase_at_release) / phase_at_hold < 0.1);
     assert!(max_gap < 0.1, "{max_gap}");
     // No jump: the command's velocity changes by a bounded acceleration per period.
-    assert!(max_acc_after < 10.0 * nominal_acc, "{max_acc_after} vs {nominal_acc}");
+    assert!(
+        max_acc_after < 10.0 * nominal_acc,
+        "{max_acc_after} vs {nominal_acc}"
+    );
     assert!(max_dyd_after < 10.0 * nominal_acc);
     assert!(s.done(), "did not reach the goal");
     assert!((s.output().0[0] - dmp.goal()[0]).abs() <= 1e-4);
@@ -282,7 +313,9 @@ fn the_goal_filter_bounds_the_acceleration_of_a_goal_jump() {
     };
     let (jump, y_jump, _) = run(None);
     let (filtered, y_filtered, k) = run(Some(24.0));
-    println!("goal jump: peak |ydd| {jump:.1} unfiltered, {filtered:.1} filtered; at rest after {k} steps");
+    println!(
+        "goal jump: peak |ydd| {jump:.1} unfiltered, {filtered:.1} filtered; at rest after {k} steps"
+    );
     assert!(filtered < 0.5 * jump, "{filtered} vs {jump}");
     for (y, g) in y_jump.iter().chain(&y_filtered).zip([0.4, 2.5, 0.4, 2.5]) {
         assert!((y - g).abs() <= 1e-4);
@@ -323,10 +356,19 @@ fn velocity_and_acceleration_limits_slow_the_clock_not_the_path() {
         })
         .unwrap();
     let n = 2;
-    let peak = |v: &[f64], d: usize| v.iter().skip(d).step_by(n).fold(0.0f64, |m, v| m.max(v.abs()));
+    let peak = |v: &[f64], d: usize| {
+        v.iter()
+            .skip(d)
+            .step_by(n)
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    };
     let v_max = [peak(&free.yd, 0) / 1.5, peak(&free.yd, 1) / 1.5];
     let a_max = [peak(&free.ydd, 0) / 1.5, peak(&free.ydd, 1) / 1.5];
-    let phases_free: Vec<f64> = free.t.iter().map(|t| (-2.0 * t / dmp.tau()).exp()).collect();
+    let phases_free: Vec<f64> = free
+        .t
+        .iter()
+        .map(|t| (-2.0 * t / dmp.tau()).exp())
+        .collect();
     for accel in [false, true] {
         let opts = StepperOptions {
             velocity_max: Some(v_max.to_vec()),
@@ -385,7 +427,9 @@ fn position_limits_keep_the_command_inside() {
             let (y, _, _) = s.step(None).unwrap();
             highest = highest.max(y[0]);
         }
-        println!("position limit {limit:.4} (free path peaks at {top:.4}), goal {goal:.3}: highest command {highest:.4}");
+        println!(
+            "position limit {limit:.4} (free path peaks at {top:.4}), goal {goal:.3}: highest command {highest:.4}"
+        );
         assert!(highest < limit, "{highest} >= {limit}");
         if goal < limit - 0.02 {
             assert!((s.output().0[0] - goal).abs() < 1e-4);
@@ -432,7 +476,10 @@ fn a_sphere_on_the_path_is_avoided_and_the_goal_reached() {
             clearance = clearance.min(opts.obstacles[0].clearance(&[pose[0], pose[1], pose[2]]));
             assert!(s.steps() < 20_000, "not at rest");
         }
-        println!("sphere of radius {radius} on the path: minimum clearance {clearance:.4} m, at rest after {} steps", s.steps());
+        println!(
+            "sphere of radius {radius} on the path: minimum clearance {clearance:.4} m, at rest after {} steps",
+            s.steps()
+        );
         assert!(clearance > 0.0);
         let goal = dmp.goal();
         assert!((0..3).all(|d| (s.output().0[d] - goal[d]).abs() <= 1e-4));
