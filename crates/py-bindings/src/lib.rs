@@ -8,6 +8,7 @@ mod generalize;
 mod gp;
 mod learners;
 mod matchbox;
+mod stepper;
 
 use pyo3::prelude::*;
 
@@ -31,6 +32,8 @@ mod _core {
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
     };
+    #[pymodule_export]
+    use super::stepper::{PyCartesianStepper, PyStepper};
 
     #[pymodule_init]
     fn init(m: &pyo3::Bound<'_, pyo3::types::PyModule>) -> pyo3::PyResult<()> {
