@@ -26,6 +26,7 @@ import time
 import numpy as np
 
 import dmprs
+from bench_cartesian import pose_demo  # the Cartesian benchmark's demo (benches/ is on the path)
 from dmprs.demo import reaching_demo
 
 DT = 0.001
@@ -43,18 +44,6 @@ def median_per_call(setup, call, rounds: int = ROUNDS, calls: int = CALLS) -> fl
             call()
         times.append((time.perf_counter() - t0) / calls)
     return statistics.median(times[1:])
-
-
-def pose_demo(n: int = 1000) -> tuple[np.ndarray, np.ndarray]:
-    from scipy.spatial.transform import Rotation
-
-    t = np.linspace(0.0, 1.0, n)
-    a = 10 * t**3 - 15 * t**4 + 6 * t**5
-    axis = np.stack([np.ones_like(t), 0.5 * t, 2.0 - t], axis=1)
-    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
-    q = Rotation.from_rotvec(axis * (0.2 + 1.7 * a)[:, None]).as_quat(scalar_first=True)
-    p = np.stack([0.3 + 0.4 * a, -0.2 * a + 0.05 * np.sin(2 * t), 0.5 - 0.1 * a], axis=1)
-    return t, np.hstack([p, q])
 
 
 def dmprs_joint(t, y, n_basis: int) -> dict[str, float]:

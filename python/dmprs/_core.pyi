@@ -2,6 +2,8 @@
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
 from typing import ClassVar, Self, TypeAlias, final
 
+from typing_extensions import disjoint_base
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -186,6 +188,7 @@ def rollout_batch_cartesian(
 # next call overwrites.
 _StepOutput: TypeAlias = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
 
+@disjoint_base
 class Stepper:
     DEFAULTS: ClassVar[dict[str, float]]
     def __new__(
@@ -233,6 +236,7 @@ class Stepper:
     @property
     def n_dof(self) -> int: ...
 
+@disjoint_base
 class CartesianStepper:
     def __new__(
         cls,

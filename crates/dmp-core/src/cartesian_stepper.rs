@@ -1,5 +1,5 @@
 //! Online execution of a [`CartesianDmp`] one control period at a time: the counterpart of
-//! [`crate::stepper::Stepper`] for a pose (docs/method.md §12, docs/cartesian.md).
+//! [`crate::stepper::Stepper`] for a pose (docs/method.md §2.5, docs/cartesian.md).
 //!
 //! Without measurements, couplings, limits or goal changes, the k-th call returns sample k of
 //! [`CartesianDmp::rollout`] to rounding (the forcing term as [`crate::forcing`] computes it):
@@ -195,7 +195,7 @@ impl CartesianStepper {
         self.clock.tau = nominal;
         if self.clock.coupling.is_some() {
             self.h = self.derivative(false);
-            let tc = self.clock.coupling.as_ref().expect("checked");
+            let tc = self.clock.coupling.as_mut().expect("checked");
             self.clock.tau = tc.tau_at_rest(nominal, &self.h);
         }
         self.out_pose = start;
@@ -254,10 +254,25 @@ impl CartesianStepper {
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
-        crate::linalg::simd(move || self.step_inner(measured, coupling))
+        #[cfg(target_arch = "x86_64")]
+        if crate::linalg::has_avx2_fma() {
+            // SAFETY: the CPU supports the enabled features (checked just above).
+            return unsafe { self.step_avx2(measured, coupling) };
+        }
+        self.step_inner(measured, coupling)
     }
 
-    /// [`CartesianStepper::step_coupled`], compiled for AVX2 where the CPU has it (same bits).
+    /// [`CartesianStepper::step_inner`] compiled for AVX2 (same bits: no fused multiply-adds).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn step_avx2(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
+        self.step_inner(measured, coupling)
+    }
+
     #[inline(always)]
     fn step_inner(
         &mut self,
@@ -318,7 +333,7 @@ impl CartesianStepper {
             } else {
                 [0.0; N]
             };
-            let tc = self.clock.coupling.as_ref().expect("checked");
+            let tc = self.clock.coupling.as_mut().expect("checked");
             let (next, taud) =
                 tc.next_tau(tau, target, &z_k, &h_k, &self.z, &h_next, self.clock.dt);
             self.clock.tau = next;

@@ -1,4 +1,4 @@
-//! Coupling terms of the online DMP (docs/method.md §12.5): accelerations added to the right side
+//! Coupling terms of the online DMP (docs/method.md §2.5.5): accelerations added to the right side
 //! of eq. 1, `tau dz/dt = alpha_z (beta_z (g - y) - z) + f(x) + C`, as Ijspeert et al. (Neural
 //! Computation 2013, §3) add their coupling terms. Each depends only on the position and the
 //! scaled velocity `z = tau yd`, never on `tau`, so a stepper that slows its clock (phase
@@ -173,7 +173,7 @@ pub struct ObstacleGains {
 }
 
 impl Default for ObstacleGains {
-    /// `lambda = 0.1 m^2`, `beta = 2` (docs/method.md §12.5: chosen on a 0.4 m reach past spheres
+    /// `lambda = 0.1 m^2`, `beta = 2` (docs/method.md §2.5.5: chosen on a 0.4 m reach past spheres
     /// of 2-5 cm on its path).
     fn default() -> Self {
         Self {

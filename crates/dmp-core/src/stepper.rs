@@ -1,4 +1,4 @@
-//! Online execution of a DMP inside a control loop (docs/method.md §12): one call of
+//! Online execution of a DMP inside a control loop (docs/method.md §2.5): one call of
 //! [`Stepper::step`] per control period returns the next command `(y, yd, ydd)`.
 //!
 //! Without measurements, coupling terms, limits or goal changes the k-th call returns the
@@ -29,10 +29,11 @@ use crate::rollout::{MAX_SUBSTEPS, stable_step};
 use crate::temporal_coupling::{TemporalCoupling, TemporalCouplingGains};
 
 /// Default phase-stopping gain, in 1 / (units of y)^2: a tracking error of 0.01 (rad or m)
-/// halves the speed of the clock (docs/method.md §12.2).
+/// halves the speed of the clock (docs/method.md §2.5.2).
 pub const DEFAULT_ALPHA_E: f64 = 1e4;
-/// Default goal-filter gain `alpha_g` (= alpha_z / 2 for the default alpha_z = 48): after a goal
-/// jump the commanded acceleration peaks at 23 % of the unfiltered jump's (docs/method.md §12.3).
+/// Default goal-filter gain `alpha_g` (= alpha_z / 2 for the default alpha_z = 48): a goal jump
+/// raises the commanded acceleration gradually, to a fraction of the unfiltered jump
+/// (docs/method.md §2.5.3).
 pub const DEFAULT_GOAL_FILTER: f64 = 24.0;
 /// A filtered goal within this (relative to max(1, |g|)) of its target is set to it, so that
 /// the target is reached exactly rather than approached forever.
@@ -172,7 +173,7 @@ pub(crate) fn substeps_for(
 /// One linearly implicit Euler step `(I - a J) (dy, dz) = a (z, h)` of a coordinate inside a
 /// position limit's band, over `a = h / tau` of scaled time, with `J = [[0, 1], [-(alpha_z
 /// beta_z - stiffness), -alpha_z]]` the Jacobian of its own spring, damper and repulsion
-/// (`stiffness = dC/dy < 0`): stable however stiff the repulsion (docs/method.md §12.5), where
+/// (`stiffness = dC/dy < 0`): stable however stiff the repulsion (docs/method.md §2.5.5), where
 /// explicit Euler would need thousands of sub-steps next to a limit.
 #[inline]
 pub(crate) fn implicit_step(cfg: &DmpConfig, stiffness: f64, a: f64, z: f64, h: f64) -> (f64, f64) {
@@ -412,7 +413,7 @@ impl Stepper {
         self.clock.tau = nominal;
         if self.clock.coupling.is_some() {
             self.derivative(false);
-            let tc = self.clock.coupling.as_ref().expect("checked");
+            let tc = self.clock.coupling.as_mut().expect("checked");
             self.clock.tau = tc.tau_at_rest(nominal, &self.h);
         }
         self.out_y.copy_from_slice(&self.y);
@@ -453,9 +454,24 @@ impl Stepper {
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64], &[f64], &[f64])> {
-        // Compiled for AVX2 where the CPU has it (the per-coordinate loops run 4 wide); Rust never
-        // fuses a multiply and an add on its own, so both copies give the same bits.
-        crate::linalg::simd(move || self.step_inner(measured, coupling))
+        #[cfg(target_arch = "x86_64")]
+        if crate::linalg::has_avx2_fma() {
+            // SAFETY: the CPU supports the enabled features (checked just above).
+            return unsafe { self.step_avx2(measured, coupling) };
+        }
+        self.step_inner(measured, coupling)
+    }
+
+    /// [`Stepper::step_inner`] compiled for AVX2 (the per-coordinate loops run 4 wide); Rust
+    /// never fuses a multiply and an add on its own, so both copies give the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn step_avx2(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64], &[f64], &[f64])> {
+        self.step_inner(measured, coupling)
     }
 
     #[inline(always)]
@@ -499,7 +515,7 @@ impl Stepper {
             if self.limits_acceleration() {
                 self.derivative_into(&mut h_next, coupled);
             }
-            let tc = self.clock.coupling.as_ref().expect("checked");
+            let tc = self.clock.coupling.as_mut().expect("checked");
             let (next, taud) = tc.next_tau(
                 tau,
                 target,

@@ -1,7 +1,7 @@
 //! Velocity and acceleration limits met by slowing the DMP's clock instead of clipping its
 //! command: the temporal coupling of Dahlin and Karayiannidis, "Temporal coupling of dynamical
 //! movement primitives for constrained velocities and accelerations", IEEE RA-L 6(2), 2021
-//! (docs/method.md §12.4).
+//! (docs/method.md §2.5.4).
 //!
 //! With a time-varying `tau` the DMP of eqs. 1-3 reads, per coordinate,
 //!
@@ -62,6 +62,9 @@ pub struct TemporalCoupling {
     acceleration_max: Vec<f64>,
     has_acceleration: bool,
     gains: TemporalCouplingGains,
+    /// Scratch for the feasibility bound: `p = h / z` and `q = a / |z|` per coordinate.
+    p: Vec<f64>,
+    q: Vec<f64>,
 }
 
 impl TemporalCoupling {
@@ -116,6 +119,8 @@ impl TemporalCoupling {
             acceleration_max,
             has_acceleration,
             gains,
+            p: vec![0.0; n],
+            q: vec![0.0; n],
         })
     }
 
@@ -149,7 +154,7 @@ impl TemporalCoupling {
     /// when accelerations are limited).
     #[allow(clippy::too_many_arguments)]
     pub fn next_tau(
-        &self,
+        &mut self,
         tau: f64,
         tau_min: f64,
         z: &[f64],
@@ -196,28 +201,33 @@ impl TemporalCoupling {
     /// The smallest `tau` at which the acceleration bounds of a state `(z, h)` have a common
     /// solution `taud` (module docs): `max_{i,j} (p_i - p_j) / (q_i + q_j)` over pairs of moving
     /// coordinates with `p = h / z`, `q = a / |z|`, and `|h| / a` for those at rest.
-    fn feasible_tau(&self, z: &[f64], h: &[f64]) -> f64 {
+    fn feasible_tau(&mut self, z: &[f64], h: &[f64]) -> f64 {
         let mut tau2 = 0.0f64;
-        let n = z.len();
-        for i in 0..n {
-            let a_i = self.acceleration_max[i];
-            if !a_i.is_finite() {
+        // Coordinates that take part in the pairs: moving and limited (q = 0 leaves one out).
+        for d in 0..z.len() {
+            let a = self.acceleration_max[d];
+            if !a.is_finite() {
+                self.q[d] = 0.0;
+            } else if z[d] == 0.0 {
+                tau2 = tau2.max(h[d].abs() / a);
+                self.q[d] = 0.0;
+            } else {
+                self.p[d] = h[d] / z[d];
+                self.q[d] = a / z[d].abs();
+            }
+        }
+        for i in 0..z.len() {
+            if self.q[i] == 0.0 {
                 continue;
             }
-            if z[i] == 0.0 {
-                tau2 = tau2.max(h[i].abs() / a_i);
-                continue;
-            }
-            let (p_i, q_i) = (h[i] / z[i], a_i / z[i].abs());
-            for j in 0..n {
-                let a_j = self.acceleration_max[j];
-                if j == i || z[j] == 0.0 || !a_j.is_finite() {
+            for j in 0..z.len() {
+                if j == i || self.q[j] == 0.0 {
                     continue;
                 }
-                let (p_j, q_j) = (h[j] / z[j], a_j / z[j].abs());
-                // (p_i - p_j) / (q_i + q_j) > tau2, without a division for the pairs that lose.
-                if p_i - p_j > tau2 * (q_i + q_j) {
-                    tau2 = (p_i - p_j) / (q_i + q_j);
+                let (gap, room) = (self.p[i] - self.p[j], self.q[i] + self.q[j]);
+                // gap / room > tau2, without a division for the pairs that lose.
+                if gap > tau2 * room {
+                    tau2 = gap / room;
                 }
             }
         }
@@ -235,7 +245,7 @@ mod tests {
 
     #[test]
     fn the_next_velocity_is_within_its_limit() {
-        let tc = coupling(&[1.0, 2.0], None);
+        let mut tc = coupling(&[1.0, 2.0], None);
         let z_next = [3.0, -10.0];
         let (tau, _) = tc.next_tau(1.0, 1.0, &[0.0; 2], &[0.0; 2], &z_next, &[0.0; 2], 1e-3);
         assert!((tau - 5.0).abs() < 1e-12);
@@ -245,7 +255,7 @@ mod tests {
     #[test]
     fn the_acceleration_bounds_are_met_when_feasible() {
         let a = [2.0, 3.0];
-        let tc = coupling(&[f64::INFINITY; 2], Some(&a));
+        let mut tc = coupling(&[f64::INFINITY; 2], Some(&a));
         let (z, h) = ([0.5, -0.2], [4.0, 1.0]);
         let tau = 1.2;
         let (_, taud) = tc.next_tau(tau, 1.0, &z, &h, &z, &h, 1e-3);
@@ -258,7 +268,7 @@ mod tests {
     #[test]
     fn feasibility_is_the_smallest_tau_with_a_common_taud() {
         let a = [1.0, 1.0, 2.0];
-        let tc = coupling(&[f64::INFINITY; 3], Some(&a));
+        let mut tc = coupling(&[f64::INFINITY; 3], Some(&a));
         let (z, h) = ([0.3, -0.7, 0.1], [2.0, 3.0, -1.5]);
         let tau = tc.feasible_tau(&z, &h);
         let interval = |tau: f64| {
