@@ -281,3 +281,22 @@ def test_the_clock_only_ever_slows(held, offset, v_scale) -> None:
         assert stepper.tau >= dmp.tau
         assert (np.abs(yd) <= v_max * (1 + 1e-12)).all()
         last_phase = stepper.phase
+
+
+def test_a_constant_coupling_term_shifts_the_rest_point_by_c_over_the_spring() -> None:
+    """At rest eq. 1 with a coupling C reads alpha_z beta_z (g - y) + C = 0: y = g + C / (alpha_z
+    beta_z), for a joint DMP and the position and orientation of a Cartesian one."""
+    dmp = reach(2)
+    stepper = dmp.stepper(0.001)
+    c = np.array([5.76, -2.88])
+    for _ in range(8000):
+        y, _, _ = stepper.step(None, c)
+    np.testing.assert_allclose(y, dmp.goal + c / (dmp.alpha_z * dmp.beta_z), atol=1e-6)
+    cartesian = pose_reach().stepper(0.001)
+    c6 = np.array([0.576, 0.0, -0.288, 0.0, 0.0, 0.576])
+    for _ in range(8000):
+        pose, _, _ = cartesian.step(None, c6)
+    goal = cartesian.goal
+    np.testing.assert_allclose(pose[:3], goal[:3] + c6[:3] / 576.0, atol=1e-6)
+    turn = Rotation.from_quat(np.array(pose[3:]), scalar_first=True) * Rotation.from_quat(goal[3:], scalar_first=True).inv()
+    np.testing.assert_allclose(turn.as_rotvec(), c6[3:] / 576.0, atol=1e-6)
