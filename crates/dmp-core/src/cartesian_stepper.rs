@@ -369,6 +369,8 @@ impl CartesianStepper {
 
     /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
     /// derivative is `self.h`, one Cartesian rollout step per sub-step.
+    // Index loops over the coordinates, as the rollout writes them (several arrays per index).
+    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn integrate(&mut self, inv_tau: f64, coupled: bool, obstacle_rate: f64) {
         let cfg = self.cfg;
@@ -400,9 +402,9 @@ impl CartesianStepper {
                     self.z[d] += dz;
                 }
             }
-            for d in 3..N {
-                let deta = h[d] * inv_tau;
-                self.z[d] += deta * hs;
+            for (eta, h) in self.z[3..].iter_mut().zip(&h[3..]) {
+                let deta = h * inv_tau;
+                *eta += deta * hs;
             }
             self.q = quaternion::renormalize(&quaternion::product(&turn, &self.q));
             self.x -= cfg.alpha_x * self.x * inv_tau * hs;
@@ -451,6 +453,7 @@ impl CartesianStepper {
 
     /// `tau dz/dt` of the current state with the coupling terms, and the position repulsion's
     /// stiffness into `self.stiffness`.
+    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn derivative(&mut self, coupled: bool) -> [f64; N] {
         let cfg = &self.cfg;
@@ -490,8 +493,8 @@ impl CartesianStepper {
             }
         }
         if coupled {
-            for d in 0..N {
-                h[d] += self.user[d];
+            for (h, c) in h.iter_mut().zip(&self.user) {
+                *h += c;
             }
         }
         h

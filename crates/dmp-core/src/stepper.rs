@@ -548,6 +548,8 @@ impl Stepper {
     /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
     /// derivative is `self.h`, in the rollout's sub-steps and order; leaves `self.f = f(x)` of
     /// the new phase.
+    // Index loops over the coordinates, as the rollout writes them (several arrays per index).
+    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn integrate(&mut self, inv_tau: f64, coupled: bool) {
         let cfg = *self.dmp.config();
@@ -614,6 +616,7 @@ impl Stepper {
 
     /// `tau dz/dt` of the current state (eq. 1 with the coupling terms) into `out`, and the
     /// repulsion's stiffness `dC/dy` per coordinate into `self.stiffness`.
+    #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn derivative_into(&mut self, out: &mut [f64], coupled: bool) {
         let cfg = self.dmp.config();
@@ -633,8 +636,8 @@ impl Stepper {
             }
         }
         if coupled {
-            for d in 0..self.n {
-                out[d] += self.user[d];
+            for (o, c) in out.iter_mut().zip(&self.user) {
+                *o += c;
             }
         }
     }
