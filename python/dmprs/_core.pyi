@@ -2,10 +2,9 @@
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
 from typing import ClassVar, Self, TypeAlias, final
 
-from typing_extensions import disjoint_base
-
 import numpy as np
 from numpy.typing import NDArray
+from typing_extensions import disjoint_base
 
 __all__ = [
     "PI2",
