@@ -20,11 +20,13 @@ from dmprs.errors import (
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
 from dmprs.loop import LearningResult, learn
+from dmprs.stepper import CartesianStepper, JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = [
     "DMP",
     "CartesianDMP",
+    "CartesianStepper",
     "CartesianTrajectory",
     "Database",
     "DatabaseError",
@@ -34,6 +36,7 @@ __all__ = [
     "GaussianProcess",
     "Generalizer",
     "InvalidInputError",
+    "JointStepper",
     "LearnerStateError",
     "LearningResult",
     "NumericalError",

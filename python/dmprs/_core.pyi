@@ -1,15 +1,17 @@
 # Type stubs for the Rust extension dmprs._core (crates/py-bindings). The documented API is in
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
-from typing import TypeAlias, final
+from typing import ClassVar, Self, TypeAlias, final
 
 import numpy as np
 from numpy.typing import NDArray
+from typing_extensions import disjoint_base
 
 __all__ = [
     "PI2",
     "UNIT_TOLERANCE",
     "CartesianDmp",
     "CartesianGeneralizer",
+    "CartesianStepper",
     "Dmp",
     "ErrorLearning",
     "GaussianProcess",
@@ -24,6 +26,7 @@ __all__ = [
     "RobotTrajectory",
     "Ros2GoalClient",
     "Ros2JointStateListener",
+    "Stepper",
     "__version__",
     "matchbox_check",
     "matchbox_simulate",
@@ -185,6 +188,110 @@ def rollout_batch_cartesian(
     until_rest: bool = False,
     rest_tol: float = 1e-4,
 ) -> list[_CartesianArrays]: ...
+
+# The online steppers of crates/dmp-core (stepper.rs, cartesian_stepper.rs); subclassed, validated
+# and documented by dmprs.stepper. step() returns one cached tuple of read-only arrays that the
+# next call overwrites.
+_StepOutput: TypeAlias = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+
+@disjoint_base
+class Stepper:
+    DEFAULTS: ClassVar[dict[str, float]]
+    def __new__(
+        cls,
+        dmp: Dmp,
+        dt: float,
+        *,
+        substeps: int | None,
+        alpha_e: list[float],
+        goal_filter: float | None,
+        velocity_max: list[float] | None,
+        acceleration_max: list[float] | None,
+        position_min: list[float] | None,
+        position_max: list[float] | None,
+        limit_margin: list[float] | None,
+        limit_gain: float,
+        gamma_nominal: float,
+        gamma_a: float,
+        eps: float,
+        rest_tol: float,
+    ) -> Self: ...
+    def step(self, measured: object | None = None, coupling: object | None = None) -> _StepOutput: ...
+    def reset(self, start: object | None = None) -> None: ...
+    def set_goal(self, goal: object) -> None: ...
+    def set_tau(self, tau: float) -> None: ...
+    def done(self) -> bool: ...
+    @property
+    def output(self) -> _StepOutput: ...
+    @property
+    def phase(self) -> float: ...
+    @property
+    def tau(self) -> float: ...
+    @property
+    def nominal_tau(self) -> float: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def goal(self) -> NDArray[np.float64]: ...
+    @property
+    def goal_target(self) -> NDArray[np.float64]: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def substeps(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
+
+@disjoint_base
+class CartesianStepper:
+    def __new__(
+        cls,
+        dmp: CartesianDmp,
+        dt: float,
+        *,
+        substeps: int | None,
+        alpha_e: list[float],
+        goal_filter: float | None,
+        velocity_max: list[float] | None,
+        acceleration_max: list[float] | None,
+        position_min: list[float] | None,
+        position_max: list[float] | None,
+        limit_margin: list[float] | None,
+        limit_gain: float,
+        gamma_nominal: float,
+        gamma_a: float,
+        eps: float,
+        rest_tol: float,
+        obstacles: NDArray[np.float64] | None,
+        obstacle_gain: float,
+        obstacle_beta: float,
+    ) -> Self: ...
+    def step(self, measured: object | None = None, coupling: object | None = None) -> _StepOutput: ...
+    def reset(self, start: object | None = None) -> None: ...
+    def set_goal(self, goal: object) -> None: ...
+    def set_tau(self, tau: float) -> None: ...
+    def set_obstacles(self, obstacles: NDArray[np.float64] | None) -> None: ...
+    def done(self) -> bool: ...
+    @property
+    def output(self) -> _StepOutput: ...
+    @property
+    def phase(self) -> float: ...
+    @property
+    def tau(self) -> float: ...
+    @property
+    def nominal_tau(self) -> float: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def goal(self) -> NDArray[np.float64]: ...
+    @property
+    def goal_target(self) -> NDArray[np.float64]: ...
+    @property
+    def obstacles(self) -> NDArray[np.float64]: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def substeps(self) -> int: ...
 
 # The ask/tell learners of crates/learners; built and documented by dmprs.learners. An option
 # left at None takes the default of the core's config struct.

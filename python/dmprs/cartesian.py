@@ -14,6 +14,7 @@ from dmprs._arrays import as_count, as_float_array, as_scalar
 from dmprs._core import CartesianDmp as _CoreDmp
 from dmprs.dmp import _constants, _rollout_options
 from dmprs.errors import InvalidInputError
+from dmprs.stepper import CartesianStepper
 from dmprs.trajectory import CartesianTrajectory
 
 __all__ = ["CartesianDMP"]
@@ -229,6 +230,13 @@ class CartesianDMP:
         """
         opts = _rollout_options(dt, duration, until_rest, rest_tol)
         return CartesianTrajectory._trusted(*self._core.rollout(**opts))
+
+    def stepper(self, dt: float = 0.001, **options: Any) -> CartesianStepper:
+        """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
+        period returning ``(pose, velocity, acceleration)``, with phase stopping, goal changes,
+        limits, position limits and sphere ``obstacles``; ``options`` as
+        :class:`dmprs.stepper.CartesianStepper`."""
+        return CartesianStepper(self, dt, **options)
 
     def with_goal(self, pose: ArrayLike) -> CartesianDMP:
         """The same movement towards a new goal pose (7,). The quaternion's sign is taken on the

@@ -13,6 +13,7 @@ from dmprs import _core
 from dmprs._arrays import as_count, as_flag, as_float_array, as_scalar, short
 from dmprs._core import Dmp as _CoreDmp
 from dmprs.errors import InvalidInputError
+from dmprs.stepper import JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 if TYPE_CHECKING:
@@ -228,6 +229,13 @@ class DMP:
         """
         opts = _rollout_options(dt, duration, until_rest, rest_tol)
         return Trajectory._trusted(*self._core.rollout(**opts))
+
+    def stepper(self, dt: float = 0.001, **options: Any) -> JointStepper:
+        """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
+        period, with phase stopping, goal changes, limits and coupling terms; ``options`` as
+        :class:`dmprs.stepper.JointStepper` (``substeps``, ``alpha_e``, ``goal_filter``,
+        ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...)."""
+        return JointStepper(self, dt, **options)
 
     def with_goal(self, goal: ArrayLike) -> DMP:
         """The same movement towards a new goal (weights and tau unchanged)."""

@@ -5,15 +5,20 @@
 //! from demonstrations and their rollout, and their generalization over a database of
 //! demonstrations (paper eq. 6: Gaussian processes, locally weighted regression, linear
 //! interpolation), and the Cartesian (position + unit quaternion) DMP of Ude, Nemec, Petrič and
-//! Morimoto (2014) on the same phase and basis. Pure Rust on nalgebra; no Python, no learners.
+//! Morimoto (2014) on the same phase and basis, and both executed online one control period at a
+//! time (steppers with phase stopping, a goal filter, temporal coupling for limits and coupling
+//! terms). Pure Rust on nalgebra; no Python, no learners.
 
 pub mod basis;
 pub mod cartesian;
 pub mod cartesian_generalize;
+pub mod cartesian_stepper;
+pub mod coupling;
 pub mod design_matrix;
 pub mod dmp;
 pub mod error;
 pub mod finite_difference;
+mod forcing;
 pub mod generalize;
 pub mod gp;
 pub mod linalg;
@@ -21,15 +26,19 @@ pub mod lwr;
 pub mod optimize;
 pub mod quaternion;
 pub mod rollout;
+pub mod stepper;
+pub mod temporal_coupling;
 
 pub use basis::Basis;
 pub use cartesian::{
     CartesianDemonstration, CartesianDmp, CartesianTrajectory, rollout_batch_cartesian,
 };
 pub use cartesian_generalize::CartesianGeneralizer;
+pub use cartesian_stepper::{CartesianStepper, CartesianStepperOptions};
 pub use dmp::{Demonstration, Dmp, DmpConfig};
 pub use error::{Error, Result};
 pub use generalize::{Generalizer, GpMean, LwrGpOptions, Method};
 pub use gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};
 pub use lwr::{Kernel, LocalModel, LwrOptions};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};
+pub use stepper::{Stepper, StepperOptions};

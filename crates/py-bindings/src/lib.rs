@@ -9,6 +9,7 @@ mod gp;
 mod learners;
 mod matchbox;
 mod ros2_robot;
+mod stepper;
 
 use pyo3::prelude::*;
 
@@ -32,6 +33,8 @@ mod _core {
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
     };
+    #[pymodule_export]
+    use super::stepper::{PyCartesianStepper, PyStepper};
 
     #[pymodule_export]
     use super::ros2_robot::{

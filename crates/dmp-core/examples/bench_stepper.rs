@@ -1,0 +1,126 @@
+//! Time of one `step()` of the online steppers in Rust (benches/README.md, "Online steppers"):
+//! a 7-DOF joint DMP with 25 and 50 kernels and a Cartesian DMP with 50, open loop, and the
+//! joint one with a measured state (a robot that tracks perfectly) and with velocity and
+//! acceleration limits.
+//!
+//! `cargo run --release -p dmp-core --example bench_stepper`: the median over 2000 rounds of
+//! 500 steps (about 20 us each, mostly shorter than a scheduler's time slice, so that the median
+//! round ran undisturbed on a loaded machine); the movement restarts every 10 rounds, so the
+//! phase sweeps the basis and the movement comes to rest.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use dmp_core::{
+    CartesianDmp, CartesianStepper, CartesianStepperOptions, Dmp, DmpConfig, Stepper,
+    StepperOptions,
+};
+use nalgebra::{DMatrix, DVector};
+
+const ROUNDS: usize = 2000;
+const STEPS: usize = 500;
+const ROUNDS_PER_MOVEMENT: usize = 10;
+
+fn weights(n_basis: usize, n: usize) -> DMatrix<f64> {
+    DMatrix::from_fn(n_basis, n, |k, d| {
+        150.0 * ((k * 7 + d * 3) as f64 * 0.37).sin()
+    })
+}
+
+fn config(n_basis: usize) -> DmpConfig {
+    DmpConfig {
+        n_basis,
+        ..DmpConfig::default()
+    }
+}
+
+/// Median ns per call of `step` over `ROUNDS` rounds of `STEPS` calls; `round(i)` restarts the
+/// movement when `i` is a multiple of `ROUNDS_PER_MOVEMENT`.
+fn median_ns(mut round: impl FnMut(bool) -> f64) -> f64 {
+    let mut times: Vec<f64> = (0..ROUNDS)
+        .map(|i| round(i % ROUNDS_PER_MOVEMENT == 0))
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[ROUNDS / 2]
+}
+
+fn joint(n_basis: usize, opts: &StepperOptions, measured: bool) -> f64 {
+    let dmp = Dmp::new(
+        config(n_basis),
+        weights(n_basis, 7),
+        DVector::from_element(7, 1.0),
+        DVector::from_element(7, 0.0),
+        1.0,
+    )
+    .unwrap();
+    let mut s = Stepper::new(&dmp, opts).unwrap();
+    // A robot that tracks perfectly: the measured position is the last command.
+    let mut y = vec![0.0; 7];
+    median_ns(|restart| {
+        if restart {
+            s.reset(None).unwrap();
+            y.fill(0.0);
+        }
+        let t = Instant::now();
+        for _ in 0..STEPS {
+            let m = measured.then_some(y.as_slice());
+            let (command, _, _) = s.step(black_box(m)).unwrap();
+            if measured {
+                y.copy_from_slice(command);
+            }
+            black_box(&y);
+        }
+        t.elapsed().as_secs_f64() * 1e9 / STEPS as f64
+    })
+}
+
+fn cartesian(n_basis: usize) -> f64 {
+    let goal = [
+        0.4,
+        0.1,
+        0.05,
+        0.8775825618903728,
+        0.0,
+        0.479425538604203,
+        0.0,
+    ];
+    let start = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
+    let dmp = CartesianDmp::new(config(n_basis), weights(n_basis, 6), &goal, &start, 1.0).unwrap();
+    let mut s = CartesianStepper::new(&dmp, &CartesianStepperOptions::new(1e-3)).unwrap();
+    median_ns(|restart| {
+        if restart {
+            s.reset(None).unwrap();
+        }
+        let t = Instant::now();
+        for _ in 0..STEPS {
+            black_box(s.step(None).unwrap());
+        }
+        t.elapsed().as_secs_f64() * 1e9 / STEPS as f64
+    })
+}
+
+fn main() {
+    let open = StepperOptions::new(1e-3);
+    let limited = StepperOptions {
+        velocity_max: Some(vec![1.0; 7]),
+        acceleration_max: Some(vec![20.0; 7]),
+        ..StepperOptions::new(1e-3)
+    };
+    println!("| stepper | ns per step (median of {ROUNDS} rounds of {STEPS}) |");
+    println!("|---|---:|");
+    for n in [25, 50] {
+        println!(
+            "| joint, 7 DOF, N = {n}, open loop | {:.1} |",
+            joint(n, &open, false)
+        );
+    }
+    println!(
+        "| joint, 7 DOF, N = 50, measured (phase stopping) | {:.1} |",
+        joint(50, &open, true)
+    );
+    println!(
+        "| joint, 7 DOF, N = 50, velocity + acceleration limits | {:.1} |",
+        joint(50, &limited, false)
+    );
+    println!("| Cartesian, N = 50, open loop | {:.1} |", cartesian(50));
+}

@@ -1,0 +1,589 @@
+//! Online execution of a [`CartesianDmp`] one control period at a time: the counterpart of
+//! [`crate::stepper::Stepper`] for a pose (docs/method.md §2.5, docs/cartesian.md).
+//!
+//! Without measurements, couplings, limits or goal changes, the k-th call returns sample k of
+//! [`CartesianDmp::rollout`] to rounding (the forcing term as [`crate::forcing`] computes it):
+//! the same updates in the same order (position as the
+//! discrete DMP, `q <- exp(dt/(2 tau) eta) * q`, then the phase). When `dt` is beyond explicit
+//! Euler's stability limit the period is split into the joint rollout's sub-steps (the Cartesian
+//! rollout has none and diverges there); each sub-step is then one step of the Cartesian rollout
+//! at `dt / substeps`.
+//!
+//! The six coordinates of the phase stopping, the limits and the coupling terms are those of the
+//! underlying DMP: x, y, z (units of position), then the three of the orientation (rad): the
+//! scaled velocity `z = tau [v, omega]`. A measured pose's error is its position difference and
+//! its rotation vector `2 log(q~ * conj(q))`. The goal filter moves the goal position as the
+//! joint stepper does and the goal orientation along the geodesic,
+//! `g_o <- exp(alpha_g h / tau * log(g_new * conj(g_o))) * g_o`. Position limits (a box) and
+//! sphere obstacles ([`crate::coupling`]) act on the position.
+
+use crate::cartesian::{CartesianDmp, POSE_WIDTH, UNIT_TOLERANCE};
+use crate::coupling::{ObstacleGains, PositionLimits, SphereObstacle};
+use crate::dmp::DmpConfig;
+use crate::error::{Error, Result, fmt_g};
+use crate::forcing::Forcing;
+use crate::quaternion::{self, Quaternion};
+use crate::rollout::MAX_SUBSTEPS;
+use crate::stepper::{Clock, StepperOptions, check_coordinates, implicit_step, position_limits};
+
+/// The coordinates of the underlying DMP: x, y, z, then the three of the orientation.
+const N: usize = 6;
+/// With obstacles, sub-steps are added until `h / tau` times the field's rate is at most this
+/// (explicit Euler is stable on a velocity-dependent term only below 2).
+const OBSTACLE_STEP: f64 = 0.5;
+/// An orientation within this angle (rad) of its filtered target is set to it.
+const GOAL_SNAP: f64 = 1e-12;
+
+/// The options of a [`CartesianStepper`]: those of the joint stepper over the six coordinates
+/// (position limits over the three of the position), and obstacles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CartesianStepperOptions {
+    pub base: StepperOptions,
+    pub obstacles: Vec<SphereObstacle>,
+    pub obstacle_gains: ObstacleGains,
+}
+
+impl CartesianStepperOptions {
+    pub fn new(dt: f64) -> Self {
+        Self {
+            base: StepperOptions::new(dt),
+            obstacles: Vec::new(),
+            obstacle_gains: ObstacleGains::default(),
+        }
+    }
+}
+
+/// A unit quaternion from a caller, checked as [`CartesianDmp::new`] checks its poses.
+fn unit(name: &'static str, q: &[f64]) -> Result<Quaternion> {
+    let q = [q[0], q[1], q[2], q[3]];
+    let n = quaternion::norm(&q);
+    if (n - 1.0).abs() > UNIT_TOLERANCE {
+        return Err(Error::Quaternion {
+            name,
+            index: 0,
+            value: format!("[{}, {}, {}, {}]", q[0], q[1], q[2], q[3]),
+            norm: n,
+            requirement: "orientations must be unit quaternions (|norm - 1| <= 1e-6)",
+        });
+    }
+    Ok(if (n - 1.0).abs() <= 1e-15 {
+        q
+    } else {
+        q.map(|c| c / n)
+    })
+}
+
+fn check_pose(name: &'static str, pose: &[f64]) -> Result<Quaternion> {
+    check_coordinates(name, pose, POSE_WIDTH)?;
+    unit(name, &pose[3..])
+}
+
+/// Executes a [`CartesianDmp`] one control period at a time (module docs).
+#[derive(Debug, Clone)]
+pub struct CartesianStepper {
+    dmp: CartesianDmp,
+    cfg: DmpConfig,
+    clock: Clock,
+    limits: Option<PositionLimits>,
+    obstacles: Vec<SphereObstacle>,
+    obstacle_gains: ObstacleGains,
+    rest_tol: f64,
+    max_w: f64,
+    forcing: Forcing,
+    // The state that the next call outputs.
+    x: f64,
+    p: [f64; 3],
+    q: Quaternion,
+    /// `tau [v, omega]`.
+    z: [f64; N],
+    goal_p: [f64; 3],
+    goal_q: Quaternion,
+    target_p: [f64; 3],
+    target_q: Quaternion,
+    goal_moving: bool,
+    f: [f64; N],
+    h: [f64; N],
+    stiffness: [f64; 3],
+    user: [f64; N],
+    // The last sample returned.
+    out_pose: [f64; POSE_WIDTH],
+    out_velocity: [f64; N],
+    out_acceleration: [f64; N],
+    out_x: f64,
+    out_tau: f64,
+    at_rest: bool,
+    steps: u64,
+}
+
+impl CartesianStepper {
+    pub fn new(dmp: &CartesianDmp, opts: &CartesianStepperOptions) -> Result<Self> {
+        let cfg = *dmp.config();
+        let clock = Clock::new(&cfg, dmp.tau(), N, &opts.base)?;
+        let limits = position_limits(&opts.base, 3, &cfg)?;
+        opts.obstacle_gains.validate()?;
+        for (i, o) in opts.obstacles.iter().enumerate() {
+            o.validate(i)?;
+        }
+        let w = dmp.weights();
+        let goal = dmp.goal();
+        let mut s = Self {
+            dmp: dmp.clone(),
+            cfg,
+            clock,
+            limits,
+            obstacles: opts.obstacles.clone(),
+            obstacle_gains: opts.obstacle_gains,
+            rest_tol: opts.base.rest_tol,
+            max_w: w.iter().fold(0.0f64, |m, w| m.max(w.abs())),
+            forcing: Forcing::new(dmp.basis(), w),
+            x: 1.0,
+            p: [0.0; 3],
+            q: quaternion::IDENTITY,
+            z: [0.0; N],
+            goal_p: [goal[0], goal[1], goal[2]],
+            goal_q: dmp.goal_quaternion(),
+            target_p: [goal[0], goal[1], goal[2]],
+            target_q: dmp.goal_quaternion(),
+            goal_moving: false,
+            f: [0.0; N],
+            h: [0.0; N],
+            stiffness: [0.0; 3],
+            user: [0.0; N],
+            out_pose: [0.0; POSE_WIDTH],
+            out_velocity: [0.0; N],
+            out_acceleration: [0.0; N],
+            out_x: 1.0,
+            out_tau: dmp.tau(),
+            at_rest: false,
+            steps: 0,
+        };
+        s.reset(None)?;
+        Ok(s)
+    }
+
+    /// Back to the start of a movement from the pose `start` (default: the DMP's start) at rest,
+    /// phase 1, towards the current goal. The start quaternion is taken on the side of the DMP's.
+    pub fn reset(&mut self, start: Option<&[f64]>) -> Result<()> {
+        let start = match start {
+            Some(s) => {
+                let q = check_pose("start", s)?;
+                let q = quaternion::same_hemisphere(&q, &self.dmp.start_quaternion());
+                [s[0], s[1], s[2], q[0], q[1], q[2], q[3]]
+            }
+            None => self.dmp.start(),
+        };
+        if let Some(lim) = &self.limits
+            && let Some(d) = lim.contains(&start[..3])
+        {
+            return Err(Error::InvalidParameter {
+                name: "start",
+                value: format!("{} at [{d}]", fmt_g(start[d])),
+                requirement: "must be strictly inside position_min and position_max",
+            });
+        }
+        self.p = [start[0], start[1], start[2]];
+        self.q = [start[3], start[4], start[5], start[6]];
+        self.z = [0.0; N];
+        self.x = 1.0;
+        self.goal_p = self.target_p;
+        self.goal_q = self.target_q;
+        self.goal_moving = false;
+        self.forcing.restart();
+        self.update_forcing();
+        let nominal = self.clock.nominal;
+        self.clock.previous = nominal;
+        self.clock.tau = nominal;
+        if self.clock.coupling.is_some() {
+            self.h = self.derivative(false);
+            let tc = self.clock.coupling.as_mut().expect("checked");
+            self.clock.tau = tc.tau_at_rest(nominal, &self.h);
+        }
+        self.out_pose = start;
+        self.out_velocity = [0.0; N];
+        self.out_acceleration = [0.0; N];
+        self.out_x = 1.0;
+        self.out_tau = self.clock.tau;
+        self.at_rest = false;
+        self.steps = 0;
+        Ok(())
+    }
+
+    /// A new goal pose, filtered or at once; its quaternion is taken on the side of the current
+    /// goal's, so the sign a caller passes cannot turn the movement into the long way round.
+    pub fn set_goal(&mut self, goal: &[f64]) -> Result<()> {
+        let q = check_pose("goal", goal)?;
+        self.target_p = [goal[0], goal[1], goal[2]];
+        self.target_q = quaternion::same_hemisphere(&q, &self.target_q);
+        if self.clock.goal_filter.is_none() {
+            self.goal_p = self.target_p;
+            self.goal_q = self.target_q;
+        }
+        self.goal_moving = self.goal_p != self.target_p || self.goal_q != self.target_q;
+        Ok(())
+    }
+
+    /// A new nominal tau (s), from the next period on.
+    pub fn set_tau(&mut self, tau: f64) -> Result<()> {
+        self.clock.set_nominal(&self.cfg, tau)
+    }
+
+    /// Replaces the obstacles (their number may change; this allocates, `step` does not).
+    pub fn set_obstacles(&mut self, obstacles: &[SphereObstacle]) -> Result<()> {
+        for (i, o) in obstacles.iter().enumerate() {
+            o.validate(i)?;
+        }
+        self.obstacles.clear();
+        self.obstacles.extend_from_slice(obstacles);
+        Ok(())
+    }
+
+    /// One control period: returns this period's command, `(pose, [v, omega], [a, omegadot])`
+    /// (pose `[x, y, z, qw, qx, qy, qz]`, angular quantities in the world frame), and advances
+    /// the state by `dt`. `measured` (the robot's pose) turns on phase stopping.
+    pub fn step(
+        &mut self,
+        measured: Option<&[f64]>,
+    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
+        self.step_coupled(measured, None)
+    }
+
+    /// [`CartesianStepper::step`] with a coupling term `C` (6 values: position, then orientation)
+    /// added to `tau dz/dt` for this period.
+    pub fn step_coupled(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
+        #[cfg(target_arch = "x86_64")]
+        if crate::linalg::has_avx2_fma() {
+            // SAFETY: the CPU supports the enabled features (checked just above).
+            return unsafe { self.step_avx2(measured, coupling) };
+        }
+        self.step_inner(measured, coupling)
+    }
+
+    /// [`CartesianStepper::step_inner`] compiled for AVX2 (same bits: no fused multiply-adds).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn step_avx2(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
+        self.step_inner(measured, coupling)
+    }
+
+    #[inline(always)]
+    fn step_inner(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
+        let factor = match measured {
+            Some(m) => {
+                let q = check_pose("measured", m)?;
+                let out_q = [
+                    self.out_pose[3],
+                    self.out_pose[4],
+                    self.out_pose[5],
+                    self.out_pose[6],
+                ];
+                let q = quaternion::same_hemisphere(&q, &out_q);
+                let r = quaternion::log(&quaternion::product(&q, &quaternion::conjugate(&out_q)));
+                let errors = (0..3)
+                    .map(|d| m[d] - self.out_pose[d])
+                    .chain(r.iter().map(|r| 2.0 * r));
+                self.clock.stop_factor(errors)
+            }
+            None => 1.0,
+        };
+        let coupled = coupling.is_some();
+        if let Some(c) = coupling {
+            check_coordinates("coupling", c, N)?;
+            self.user.copy_from_slice(c);
+        }
+        let target = if factor == 1.0 {
+            self.clock.nominal
+        } else {
+            self.clock.nominal * factor
+        };
+        let tau = self.clock.period_tau(target);
+        let inv_tau = 1.0 / tau;
+        self.h = self.derivative(coupled);
+        let obstacle_rate = self.obstacle_rate();
+        self.at_rest = self.rest();
+        self.out_x = self.x;
+        self.out_tau = tau;
+        self.out_pose = [
+            self.p[0], self.p[1], self.p[2], self.q[0], self.q[1], self.q[2], self.q[3],
+        ];
+        for d in 0..N {
+            self.out_velocity[d] = self.z[d] * inv_tau;
+        }
+        let (z_k, h_k) = (self.z, self.h);
+        self.integrate(inv_tau, coupled, obstacle_rate);
+        let taud = if self.clock.coupling.is_some() {
+            let limits_acceleration = self
+                .clock
+                .coupling
+                .as_ref()
+                .is_some_and(|tc| tc.limits_acceleration());
+            let h_next = if limits_acceleration {
+                self.derivative(coupled)
+            } else {
+                [0.0; N]
+            };
+            let tc = self.clock.coupling.as_mut().expect("checked");
+            let (next, taud) =
+                tc.next_tau(tau, target, &z_k, &h_k, &self.z, &h_next, self.clock.dt);
+            self.clock.tau = next;
+            taud
+        } else {
+            self.clock.backward_rate(tau)
+        };
+        for d in 0..N {
+            self.out_acceleration[d] = if taud == 0.0 {
+                h_k[d] * inv_tau * inv_tau
+            } else {
+                (h_k[d] - taud * z_k[d]) * inv_tau * inv_tau
+            };
+        }
+        self.clock.previous = tau;
+        self.steps += 1;
+        self.check_finite()?;
+        Ok((&self.out_pose, &self.out_velocity, &self.out_acceleration))
+    }
+
+    /// The rate of the obstacles' field at the current state (0 without obstacles), by which
+    /// `integrate` splits the period.
+    #[inline(always)]
+    fn obstacle_rate(&self) -> f64 {
+        let mut rate = 0.0f64;
+        let zp = [self.z[0], self.z[1], self.z[2]];
+        let mut scratch = [0.0; 3];
+        for o in &self.obstacles {
+            rate = rate.max(o.add_repulsion(&self.obstacle_gains, &self.p, &zp, &mut scratch));
+        }
+        rate
+    }
+
+    /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
+    /// derivative is `self.h`, one Cartesian rollout step per sub-step.
+    // Index loops over the coordinates, as the rollout writes them (several arrays per index).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn integrate(&mut self, inv_tau: f64, coupled: bool, obstacle_rate: f64) {
+        let cfg = self.cfg;
+        let mut substeps = self.clock.substeps;
+        if obstacle_rate > 0.0 {
+            let needed = (self.clock.dt * inv_tau * obstacle_rate / OBSTACLE_STEP).ceil();
+            // Capped: beyond it the field is far stiffer than any sensible gain makes it.
+            substeps = substeps.max(needed.min(MAX_SUBSTEPS as f64) as usize);
+        }
+        let hs = self.clock.dt / substeps as f64;
+        let a = hs * inv_tau;
+        let half_step = 0.5 * hs * inv_tau;
+        for sub in 0..substeps {
+            let h = if sub == 0 {
+                self.h
+            } else {
+                self.update_forcing();
+                self.derivative(coupled)
+            };
+            let turn = quaternion::exp(&[self.z[3], self.z[4], self.z[5]].map(|c| c * half_step));
+            for d in 0..3 {
+                if self.stiffness[d] == 0.0 {
+                    let dz = h[d] * inv_tau;
+                    self.p[d] += self.z[d] * inv_tau * hs;
+                    self.z[d] += dz * hs;
+                } else {
+                    let (dp, dz) = implicit_step(&cfg, self.stiffness[d], a, self.z[d], h[d]);
+                    self.p[d] += dp;
+                    self.z[d] += dz;
+                }
+            }
+            for (eta, h) in self.z[3..].iter_mut().zip(&h[3..]) {
+                let deta = h * inv_tau;
+                *eta += deta * hs;
+            }
+            self.q = quaternion::renormalize(&quaternion::product(&turn, &self.q));
+            self.x -= cfg.alpha_x * self.x * inv_tau * hs;
+            if self.goal_moving {
+                self.filter_goal(a);
+            }
+        }
+        self.update_forcing();
+    }
+
+    /// One Euler step of the goal filter over `a` of scaled time (module docs).
+    fn filter_goal(&mut self, a: f64) {
+        let alpha_g = self
+            .clock
+            .goal_filter
+            .expect("a goal moves only when filtered");
+        let mut settled = true;
+        for d in 0..3 {
+            let gap = self.target_p[d] - self.goal_p[d];
+            if gap.abs() <= 1e-12 * self.target_p[d].abs().max(1.0) {
+                self.goal_p[d] = self.target_p[d];
+            } else {
+                self.goal_p[d] += alpha_g * gap * a;
+                settled = false;
+            }
+        }
+        let r = quaternion::log(&quaternion::product(
+            &self.target_q,
+            &quaternion::conjugate(&self.goal_q),
+        ));
+        if (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() <= GOAL_SNAP {
+            self.goal_q = self.target_q;
+        } else {
+            let turn = quaternion::exp(&r.map(|c| c * alpha_g * a));
+            self.goal_q = quaternion::renormalize(&quaternion::product(&turn, &self.goal_q));
+            settled = false;
+        }
+        self.goal_moving = !settled;
+    }
+
+    /// `self.f = f(x)` (eq. 4).
+    #[inline(always)]
+    fn update_forcing(&mut self) {
+        self.forcing.eval(self.x, &mut self.f);
+    }
+
+    /// `tau dz/dt` of the current state with the coupling terms, and the position repulsion's
+    /// stiffness into `self.stiffness`.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn derivative(&mut self, coupled: bool) -> [f64; N] {
+        let cfg = &self.cfg;
+        let mut h = [0.0; N];
+        for d in 0..3 {
+            h[d] =
+                cfg.alpha_z * (cfg.beta_z * (self.goal_p[d] - self.p[d]) - self.z[d]) + self.f[d];
+        }
+        // Half the rotation vector from q to the goal.
+        let e = quaternion::log(&quaternion::product(
+            &self.goal_q,
+            &quaternion::conjugate(&self.q),
+        ));
+        for d in 0..3 {
+            let to_goal = 2.0 * e[d];
+            h[3 + d] = cfg.alpha_z * (cfg.beta_z * to_goal - self.z[3 + d]) + self.f[3 + d];
+        }
+        if let Some(lim) = &self.limits {
+            for d in 0..3 {
+                self.stiffness[d] = match lim.repulsion(d, self.p[d]) {
+                    Some((c, slope)) => {
+                        h[d] += c;
+                        slope.min(-f64::MIN_POSITIVE)
+                    }
+                    None => 0.0,
+                };
+            }
+        }
+        if !self.obstacles.is_empty() {
+            let zp = [self.z[0], self.z[1], self.z[2]];
+            let mut push = [0.0; 3];
+            for o in &self.obstacles {
+                o.add_repulsion(&self.obstacle_gains, &self.p, &zp, &mut push);
+            }
+            for d in 0..3 {
+                h[d] += push[d];
+            }
+        }
+        if coupled {
+            for (h, c) in h.iter_mut().zip(&self.user) {
+                *h += c;
+            }
+        }
+        h
+    }
+
+    /// The Cartesian rollout's `until_rest` criterion at the current state, towards the target
+    /// goal, with the goal filter settled.
+    #[inline(always)]
+    fn rest(&self) -> bool {
+        let cfg = &self.cfg;
+        let tol = self.rest_tol;
+        if self.goal_moving || self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) > tol {
+            return false;
+        }
+        let e = quaternion::log(&quaternion::product(
+            &self.target_q,
+            &quaternion::conjugate(&self.q),
+        ));
+        (0..3).all(|d| {
+            (self.target_p[d] - self.p[d]).abs() <= tol
+                && (2.0 * e[d]).abs() <= tol
+                && self.z[d].abs() <= tol
+                && self.z[3 + d].abs() <= tol
+        })
+    }
+
+    #[inline(always)]
+    fn check_finite(&self) -> Result<()> {
+        let state = self
+            .p
+            .iter()
+            .chain(&self.q)
+            .chain(&self.z)
+            .chain(&self.out_acceleration);
+        if !state.fold(!self.x.is_finite(), |bad, v| bad | !v.is_finite()) {
+            return Ok(());
+        }
+        Err(Error::Numerical {
+            context: "Cartesian DMP stepper",
+            detail: format!(
+                "the state became non-finite after {} steps (a coupling term or goal too large \
+                 for f64, or a dt too coarse); reset() to start again",
+                self.steps
+            ),
+        })
+    }
+
+    /// The phase `x` of the last command (1 before the first step).
+    pub fn phase(&self) -> f64 {
+        self.out_x
+    }
+    /// The time scale `tau_eff` of the last command's period (s).
+    pub fn tau(&self) -> f64 {
+        self.out_tau
+    }
+    pub fn nominal_tau(&self) -> f64 {
+        self.clock.nominal
+    }
+    /// As [`crate::stepper::Stepper::done`], with the Cartesian rollout's criterion (position in
+    /// its units, orientation in rad).
+    pub fn done(&self) -> bool {
+        self.at_rest
+    }
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+    /// The goal pose the spring currently pulls towards (moving while filtered).
+    pub fn goal(&self) -> [f64; POSE_WIDTH] {
+        let (p, q) = (self.goal_p, self.goal_q);
+        [p[0], p[1], p[2], q[0], q[1], q[2], q[3]]
+    }
+    pub fn goal_target(&self) -> [f64; POSE_WIDTH] {
+        let (p, q) = (self.target_p, self.target_q);
+        [p[0], p[1], p[2], q[0], q[1], q[2], q[3]]
+    }
+    pub fn dt(&self) -> f64 {
+        self.clock.dt
+    }
+    pub fn substeps(&self) -> usize {
+        self.clock.substeps
+    }
+    pub fn dmp(&self) -> &CartesianDmp {
+        &self.dmp
+    }
+    pub fn obstacles(&self) -> &[SphereObstacle] {
+        &self.obstacles
+    }
+    /// The last command, `(pose, [v, omega], [a, omegadot])`.
+    pub fn output(&self) -> (&[f64; POSE_WIDTH], &[f64; N], &[f64; N]) {
+        (&self.out_pose, &self.out_velocity, &self.out_acceleration)
+    }
+}

@@ -1,0 +1,733 @@
+//! Online execution of a DMP inside a control loop (docs/method.md §2.5): one call of
+//! [`Stepper::step`] per control period returns the next command `(y, yd, ydd)`.
+//!
+//! Without measurements, coupling terms, limits or goal changes the k-th call returns the
+//! rollout's sample k (`t = k dt`) to rounding: the same explicit Euler in the same order of
+//! updates (`y += z/tau h`, `z += dz h`, `x -= alpha_x x/tau h`), with the rollout's sub-steps
+//! when `dt` is beyond the stability limit ([`crate::rollout::stable_step`]); only the forcing
+//! term's exponentials are computed differently ([`crate::forcing`]).
+//!
+//! Online, the stepper adds
+//! * **phase stopping** (Ijspeert et al. 2002, 2013): a measured state `y~` slows the clock by
+//!   `1 + sum_d alpha_e,d (y~_d - y_d)^2`, the same factor for the phase and the transformation
+//!   system (`tau_eff = tau (1 + ...)`), so a held robot waits at one phase and resumes from it;
+//! * **a goal filter** `tau dg/dt = alpha_g (g_new - g)`, so a new goal moves the attractor
+//!   smoothly;
+//! * **temporal coupling** ([`crate::temporal_coupling`]) for velocity and acceleration limits;
+//! * **coupling terms** ([`crate::coupling`]): repulsion from position limits, and a caller's term
+//!   per step.
+//!
+//! The time scale `tau_eff` is constant over one control period and the state is integrated in
+//! the scaled time `ds = dt / tau_eff`, in which the DMP does not depend on `tau`: however the
+//! clock is slowed, the path is the DMP's (to the Euler discretization of a finer step).
+
+use crate::coupling::PositionLimits;
+use crate::dmp::{Dmp, DmpConfig};
+use crate::error::{Error, Result, check_scalar, fmt_g};
+use crate::forcing::Forcing;
+use crate::rollout::{MAX_SUBSTEPS, stable_step};
+use crate::temporal_coupling::{TemporalCoupling, TemporalCouplingGains};
+
+/// Default phase-stopping gain, in 1 / (units of y)^2: a tracking error of 0.01 (rad or m)
+/// halves the speed of the clock (docs/method.md §2.5.2).
+pub const DEFAULT_ALPHA_E: f64 = 1e4;
+/// Default goal-filter gain `alpha_g` (= alpha_z / 2 for the default alpha_z = 48): a goal jump
+/// raises the commanded acceleration gradually, to a fraction of the unfiltered jump
+/// (docs/method.md §2.5.3).
+pub const DEFAULT_GOAL_FILTER: f64 = 24.0;
+/// A filtered goal within this (relative to max(1, |g|)) of its target is set to it, so that
+/// the target is reached exactly rather than approached forever.
+const GOAL_SNAP: f64 = 1e-12;
+
+/// How a stepper runs: the control period and everything the online DMP adds to the rollout.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepperOptions {
+    /// The control period (s): one call of `step` advances the clock by `dt`.
+    pub dt: f64,
+    /// Euler sub-steps per period; `None`: the fewest stable ones, the rollout's rule (1 for any
+    /// `dt` within the stability limit).
+    pub substeps: Option<usize>,
+    /// Phase-stopping gains in 1 / (units of y)^2: one for every coordinate, or one each; empty
+    /// or all 0: off. Only used when `step` is given a measured state.
+    pub alpha_e: Vec<f64>,
+    /// `alpha_g` of the goal filter; `None`: `set_goal` moves the attractor at once.
+    pub goal_filter: Option<f64>,
+    /// Velocity limits per coordinate (`+inf`: none), met by temporal coupling.
+    pub velocity_max: Option<Vec<f64>>,
+    /// Acceleration limits per coordinate (`+inf`: none), met by temporal coupling.
+    pub acceleration_max: Option<Vec<f64>>,
+    pub temporal_coupling: TemporalCouplingGains,
+    /// Position limits per coordinate (`-inf` / `+inf`: none) for the repulsion.
+    pub position_min: Option<Vec<f64>>,
+    pub position_max: Option<Vec<f64>>,
+    /// Width of the repulsion's band per coordinate; `None`: 5 % of the range.
+    pub limit_margin: Option<Vec<f64>>,
+    /// `kappa` of the repulsion: at half the band from a limit it pushes as the DMP's spring
+    /// `alpha_z beta_z` does over `kappa` bands.
+    pub limit_gain: f64,
+    /// Tolerance of [`Stepper::done`] (units of y): the rollout's `rest_tol`.
+    pub rest_tol: f64,
+}
+
+impl StepperOptions {
+    /// The defaults at control period `dt`: phase stopping with [`DEFAULT_ALPHA_E`], the goal
+    /// filter with [`DEFAULT_GOAL_FILTER`], no limits, no coupling.
+    pub fn new(dt: f64) -> Self {
+        Self {
+            dt,
+            substeps: None,
+            alpha_e: vec![DEFAULT_ALPHA_E],
+            goal_filter: Some(DEFAULT_GOAL_FILTER),
+            velocity_max: None,
+            acceleration_max: None,
+            temporal_coupling: TemporalCouplingGains::default(),
+            position_min: None,
+            position_max: None,
+            limit_margin: None,
+            limit_gain: 1.0,
+            rest_tol: 1e-4,
+        }
+    }
+}
+
+/// A coordinate vector passed to a stepper, checked: `n` finite values.
+pub(crate) fn check_coordinates(name: &'static str, v: &[f64], n: usize) -> Result<()> {
+    if v.len() != n {
+        return Err(Error::Shape {
+            name,
+            expected: format!("({n},), one value per coordinate"),
+            got: format!("({},)", v.len()),
+        });
+    }
+    match v.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(Error::NonFinite {
+            name,
+            location: format!("[{i}]"),
+            value: v[i],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The per-coordinate phase-stopping gains, `alpha_e` expanded to `n` (all 0 when off).
+pub(crate) fn phase_stopping_gains(alpha_e: &[f64], n: usize) -> Result<Vec<f64>> {
+    for (i, &a) in alpha_e.iter().enumerate() {
+        if !(a.is_finite() && a >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "alpha_e",
+                value: format!("{} at [{i}]", fmt_g(a)),
+                requirement: "must be finite and >= 0",
+            });
+        }
+    }
+    match alpha_e.len() {
+        0 => Ok(vec![0.0; n]),
+        1 => Ok(vec![alpha_e[0]; n]),
+        len if len == n => Ok(alpha_e.to_vec()),
+        len => Err(Error::Shape {
+            name: "alpha_e",
+            expected: format!("a scalar or ({n},), one gain per coordinate"),
+            got: format!("({len},)"),
+        }),
+    }
+}
+
+/// The fewest Euler sub-steps per period that are stable at time scale `tau` (the rollout's
+/// rule), or `requested` if it is at least that many.
+pub(crate) fn substeps_for(
+    cfg: &DmpConfig,
+    tau: f64,
+    dt: f64,
+    requested: Option<usize>,
+) -> Result<usize> {
+    let limit = stable_step(cfg.alpha_z, cfg.beta_z, cfg.alpha_x) * tau;
+    let needed = if dt <= limit {
+        1.0
+    } else {
+        (dt / limit).ceil()
+    };
+    if needed.is_nan() || needed > MAX_SUBSTEPS as f64 {
+        return Err(Error::InvalidParameter {
+            name: "dt",
+            value: fmt_g(dt),
+            requirement: "is too coarse for this DMP: explicit Euler would need more than 1000 \
+                          sub-steps per period; use a smaller dt or a larger tau",
+        });
+    }
+    match requested {
+        None => Ok(needed as usize),
+        Some(k) if k as f64 >= needed && k <= MAX_SUBSTEPS => Ok(k),
+        Some(k) => Err(Error::InvalidParameter {
+            name: "substeps",
+            value: k.to_string(),
+            requirement: if k > MAX_SUBSTEPS {
+                "must be at most 1000"
+            } else {
+                "is too few for dt: explicit Euler needs at least the rollout's count \
+                 (pass None for it)"
+            },
+        }),
+    }
+}
+
+/// One linearly implicit Euler step `(I - a J) (dy, dz) = a (z, h)` of a coordinate inside a
+/// position limit's band, over `a = h / tau` of scaled time, with `J = [[0, 1], [-(alpha_z
+/// beta_z - stiffness), -alpha_z]]` the Jacobian of its own spring, damper and repulsion
+/// (`stiffness = dC/dy < 0`): stable however stiff the repulsion (docs/method.md §2.5.5), where
+/// explicit Euler would need thousands of sub-steps next to a limit.
+#[inline]
+pub(crate) fn implicit_step(cfg: &DmpConfig, stiffness: f64, a: f64, z: f64, h: f64) -> (f64, f64) {
+    let k = cfg.alpha_z * cfg.beta_z - stiffness;
+    let det = 1.0 + a * cfg.alpha_z + a * a * k;
+    (
+        a * (z * (1.0 + a * cfg.alpha_z) + a * h) / det,
+        a * (h - a * k * z) / det,
+    )
+}
+
+/// The repulsion from `opts`' position limits over `n` coordinates, if any are given (a missing
+/// side is unlimited).
+pub(crate) fn position_limits(
+    opts: &StepperOptions,
+    n: usize,
+    cfg: &DmpConfig,
+) -> Result<Option<PositionLimits>> {
+    if opts.position_min.is_none() && opts.position_max.is_none() {
+        return Ok(None);
+    }
+    let lo = opts
+        .position_min
+        .clone()
+        .unwrap_or_else(|| vec![f64::NEG_INFINITY; n]);
+    let hi = opts
+        .position_max
+        .clone()
+        .unwrap_or_else(|| vec![f64::INFINITY; n]);
+    if lo.len() != n {
+        return Err(Error::Shape {
+            name: "position_min",
+            expected: format!("({n},), one limit per position coordinate"),
+            got: format!("({},)", lo.len()),
+        });
+    }
+    Ok(Some(PositionLimits::new(
+        &lo,
+        &hi,
+        opts.limit_margin.as_deref(),
+        opts.limit_gain,
+        cfg.alpha_z * cfg.beta_z,
+    )?))
+}
+
+/// The clock of a stepper: the nominal tau (set by `set_tau`), the time scale of the current
+/// period, and the temporal coupling that may raise it.
+#[derive(Debug, Clone)]
+pub(crate) struct Clock {
+    pub dt: f64,
+    pub substeps: usize,
+    requested_substeps: Option<usize>,
+    pub nominal: f64,
+    /// With temporal coupling: the time scale of the next period (chosen by the last step).
+    pub tau: f64,
+    /// The time scale of the last period (for `taud` without temporal coupling).
+    pub previous: f64,
+    pub coupling: Option<TemporalCoupling>,
+    /// `alpha_g`, if the goal is filtered.
+    pub goal_filter: Option<f64>,
+    pub alpha_e: Vec<f64>,
+}
+
+impl Clock {
+    pub fn new(cfg: &DmpConfig, tau: f64, n: usize, opts: &StepperOptions) -> Result<Self> {
+        check_scalar("dt", opts.dt, true)?;
+        check_scalar("rest_tol", opts.rest_tol, true)?;
+        if let Some(a) = opts.goal_filter {
+            check_scalar("goal_filter", a, true)?;
+        }
+        let coupling = if opts.velocity_max.is_some() || opts.acceleration_max.is_some() {
+            Some(TemporalCoupling::new(
+                n,
+                opts.velocity_max.as_deref(),
+                opts.acceleration_max.as_deref(),
+                opts.temporal_coupling,
+            )?)
+        } else {
+            None
+        };
+        Ok(Self {
+            dt: opts.dt,
+            substeps: substeps_for(cfg, tau, opts.dt, opts.substeps)?,
+            requested_substeps: opts.substeps,
+            nominal: tau,
+            tau,
+            previous: tau,
+            coupling,
+            goal_filter: opts.goal_filter,
+            alpha_e: phase_stopping_gains(&opts.alpha_e, n)?,
+        })
+    }
+
+    /// A new nominal tau; the sub-steps follow it when they are the automatic count.
+    pub fn set_nominal(&mut self, cfg: &DmpConfig, tau: f64) -> Result<()> {
+        check_scalar("tau", tau, true)?;
+        self.substeps = substeps_for(cfg, tau, self.dt, self.requested_substeps)?;
+        self.nominal = tau;
+        Ok(())
+    }
+
+    /// The phase-stopping factor `1 + sum_d alpha_e,d e_d^2` for the tracking errors `e`.
+    #[inline]
+    pub fn stop_factor(&self, errors: impl Iterator<Item = f64>) -> f64 {
+        let mut s = 0.0;
+        for (a, e) in self.alpha_e.iter().zip(errors) {
+            s += a * e * e;
+        }
+        1.0 + s
+    }
+
+    /// The time scale of this period given the phase-stopped target `nominal * factor`.
+    #[inline]
+    pub fn period_tau(&self, target: f64) -> f64 {
+        if self.coupling.is_some() {
+            self.tau
+        } else {
+            target
+        }
+    }
+
+    /// `taud` of this period without temporal coupling: the backward difference of the time
+    /// scale (exactly 0 while it does not change).
+    #[inline]
+    pub fn backward_rate(&self, tau: f64) -> f64 {
+        if tau == self.previous {
+            0.0
+        } else {
+            (tau - self.previous) / self.dt
+        }
+    }
+}
+
+/// Executes a [`Dmp`] one control period at a time (module docs).
+#[derive(Debug, Clone)]
+pub struct Stepper {
+    dmp: Dmp,
+    n: usize,
+    clock: Clock,
+    limits: Option<PositionLimits>,
+    rest_tol: f64,
+    /// `max |w|`, for the rest criterion's bound on the forcing term.
+    max_w: f64,
+    // The state that the next call outputs.
+    x: f64,
+    y: Vec<f64>,
+    z: Vec<f64>,
+    /// The (filtered) goal the spring pulls to, and the one it moves to.
+    g: Vec<f64>,
+    g_target: Vec<f64>,
+    goal_moving: bool,
+    /// `f(x)` of the current phase.
+    f: Vec<f64>,
+    forcing: Forcing,
+    // Scratch, allocated once.
+    /// `tau dz/dt` of the state being output; of the sub-steps; of the next state.
+    h: Vec<f64>,
+    h_sub: Vec<f64>,
+    /// `dC/dy` of the position-limit repulsion per coordinate (0 outside its bands).
+    stiffness: Vec<f64>,
+    z_k: Vec<f64>,
+    h_next: Vec<f64>,
+    user: Vec<f64>,
+    // The last sample returned.
+    out_y: Vec<f64>,
+    out_yd: Vec<f64>,
+    out_ydd: Vec<f64>,
+    out_x: f64,
+    out_tau: f64,
+    at_rest: bool,
+    steps: u64,
+}
+
+impl Stepper {
+    pub fn new(dmp: &Dmp, opts: &StepperOptions) -> Result<Self> {
+        let n = dmp.n_dof();
+        let clock = Clock::new(dmp.config(), dmp.tau(), n, opts)?;
+        let cfg = dmp.config();
+        let limits = position_limits(opts, n, cfg)?;
+        let w = dmp.weights().as_slice();
+        let mut s = Self {
+            dmp: dmp.clone(),
+            n,
+            clock,
+            limits,
+            rest_tol: opts.rest_tol,
+            max_w: w.iter().fold(0.0f64, |m, w| m.max(w.abs())),
+            x: 1.0,
+            y: dmp.y0().as_slice().to_vec(),
+            z: vec![0.0; n],
+            g: dmp.goal().as_slice().to_vec(),
+            g_target: dmp.goal().as_slice().to_vec(),
+            goal_moving: false,
+            f: vec![0.0; n],
+            forcing: Forcing::new(dmp.basis(), dmp.weights()),
+            h: vec![0.0; n],
+            h_sub: vec![0.0; n],
+            stiffness: vec![0.0; n],
+            z_k: vec![0.0; n],
+            h_next: vec![0.0; n],
+            user: vec![0.0; n],
+            out_y: vec![0.0; n],
+            out_yd: vec![0.0; n],
+            out_ydd: vec![0.0; n],
+            out_x: 1.0,
+            out_tau: dmp.tau(),
+            at_rest: false,
+            steps: 0,
+        };
+        s.reset(None)?;
+        Ok(s)
+    }
+
+    /// Back to the start of a movement from `start` (default: the DMP's y0) at rest, phase 1,
+    /// towards the current goal (a goal being filtered is set to its target).
+    pub fn reset(&mut self, start: Option<&[f64]>) -> Result<()> {
+        let start = start.unwrap_or(self.dmp.y0().as_slice());
+        check_coordinates("start", start, self.n)?;
+        if let Some(lim) = &self.limits
+            && let Some(d) = lim.contains(start)
+        {
+            return Err(Error::InvalidParameter {
+                name: "start",
+                value: format!("{} at [{d}]", fmt_g(start[d])),
+                requirement: "must be strictly inside position_min and position_max",
+            });
+        }
+        self.y.copy_from_slice(start);
+        self.z.fill(0.0);
+        self.x = 1.0;
+        self.g.copy_from_slice(&self.g_target);
+        self.goal_moving = false;
+        self.forcing.restart();
+        self.update_forcing();
+        let nominal = self.clock.nominal;
+        self.clock.previous = nominal;
+        self.clock.tau = nominal;
+        if self.clock.coupling.is_some() {
+            self.derivative(false);
+            let tc = self.clock.coupling.as_mut().expect("checked");
+            self.clock.tau = tc.tau_at_rest(nominal, &self.h);
+        }
+        self.out_y.copy_from_slice(&self.y);
+        self.out_yd.fill(0.0);
+        self.out_ydd.fill(0.0);
+        self.out_x = 1.0;
+        self.out_tau = self.clock.tau;
+        self.at_rest = false;
+        self.steps = 0;
+        Ok(())
+    }
+
+    /// A new goal: filtered (`tau dg/dt = alpha_g (g_new - g)`) or at once (module docs).
+    pub fn set_goal(&mut self, goal: &[f64]) -> Result<()> {
+        check_coordinates("goal", goal, self.n)?;
+        self.g_target.copy_from_slice(goal);
+        if self.clock.goal_filter.is_none() {
+            self.g.copy_from_slice(goal);
+        }
+        self.goal_moving = self.g != self.g_target;
+        Ok(())
+    }
+
+    /// A new nominal tau (s), from the next period on.
+    pub fn set_tau(&mut self, tau: f64) -> Result<()> {
+        self.clock.set_nominal(self.dmp.config(), tau)
+    }
+
+    /// One control period: returns the command of this period, `(y, yd, ydd)`, and advances the
+    /// state by `dt`. `measured` (the robot's position) turns on phase stopping.
+    pub fn step(&mut self, measured: Option<&[f64]>) -> Result<(&[f64], &[f64], &[f64])> {
+        self.step_coupled(measured, None)
+    }
+
+    /// [`Stepper::step`] with a coupling term `C` added to `tau dz/dt` (eq. 1) for this period.
+    pub fn step_coupled(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64], &[f64], &[f64])> {
+        #[cfg(target_arch = "x86_64")]
+        if crate::linalg::has_avx2_fma() {
+            // SAFETY: the CPU supports the enabled features (checked just above).
+            return unsafe { self.step_avx2(measured, coupling) };
+        }
+        self.step_inner(measured, coupling)
+    }
+
+    /// [`Stepper::step_inner`] compiled for AVX2 (the per-coordinate loops run 4 wide); Rust
+    /// never fuses a multiply and an add on its own, so both copies give the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn step_avx2(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64], &[f64], &[f64])> {
+        self.step_inner(measured, coupling)
+    }
+
+    #[inline(always)]
+    fn step_inner(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+    ) -> Result<(&[f64], &[f64], &[f64])> {
+        let factor = match measured {
+            Some(m) => {
+                check_coordinates("measured", m, self.n)?;
+                let e = m.iter().zip(&self.out_y).map(|(m, y)| m - y);
+                self.clock.stop_factor(e)
+            }
+            None => 1.0,
+        };
+        let coupled = coupling.is_some();
+        if let Some(c) = coupling {
+            check_coordinates("coupling", c, self.n)?;
+            self.user.copy_from_slice(c);
+        }
+        let target = if factor == 1.0 {
+            self.clock.nominal
+        } else {
+            self.clock.nominal * factor
+        };
+        let tau = self.clock.period_tau(target);
+        let inv_tau = 1.0 / tau;
+        self.derivative(coupled);
+        self.at_rest = self.rest();
+        self.out_x = self.x;
+        self.out_tau = tau;
+        self.out_y.copy_from_slice(&self.y);
+        for d in 0..self.n {
+            self.out_yd[d] = self.z[d] * inv_tau;
+        }
+        self.z_k.copy_from_slice(&self.z);
+        self.integrate(inv_tau, coupled);
+        let taud = if self.clock.coupling.is_some() {
+            let mut h_next = std::mem::take(&mut self.h_next);
+            if self.limits_acceleration() {
+                self.derivative_into(&mut h_next, coupled);
+            }
+            let tc = self.clock.coupling.as_mut().expect("checked");
+            let (next, taud) = tc.next_tau(
+                tau,
+                target,
+                &self.z_k,
+                &self.h,
+                &self.z,
+                &h_next,
+                self.clock.dt,
+            );
+            self.h_next = h_next;
+            self.clock.tau = next;
+            taud
+        } else {
+            self.clock.backward_rate(tau)
+        };
+        for d in 0..self.n {
+            // The rollout's `dz * inv_tau` with `dz = h * inv_tau` when the clock is steady.
+            self.out_ydd[d] = if taud == 0.0 {
+                self.h[d] * inv_tau * inv_tau
+            } else {
+                (self.h[d] - taud * self.z_k[d]) * inv_tau * inv_tau
+            };
+        }
+        self.clock.previous = tau;
+        self.steps += 1;
+        self.check_finite()?;
+        Ok((&self.out_y, &self.out_yd, &self.out_ydd))
+    }
+
+    /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
+    /// derivative is `self.h`, in the rollout's sub-steps and order; leaves `self.f = f(x)` of
+    /// the new phase.
+    // Index loops over the coordinates, as the rollout writes them (several arrays per index).
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn integrate(&mut self, inv_tau: f64, coupled: bool) {
+        let cfg = *self.dmp.config();
+        let hs = self.clock.dt / self.clock.substeps as f64;
+        let a = hs * inv_tau;
+        let mut h_sub = std::mem::take(&mut self.h_sub);
+        for sub in 0..self.clock.substeps {
+            if sub > 0 {
+                self.update_forcing();
+                self.derivative_into(&mut h_sub, coupled);
+            }
+            let h = if sub == 0 { &self.h } else { &h_sub };
+            for d in 0..self.n {
+                if self.stiffness[d] == 0.0 {
+                    let dz = h[d] * inv_tau;
+                    self.y[d] += self.z[d] * inv_tau * hs;
+                    self.z[d] += dz * hs;
+                } else {
+                    let (dy, dz) = implicit_step(&cfg, self.stiffness[d], a, self.z[d], h[d]);
+                    self.y[d] += dy;
+                    self.z[d] += dz;
+                }
+            }
+            self.x -= cfg.alpha_x * self.x * inv_tau * hs;
+            if self.goal_moving {
+                self.filter_goal(a);
+            }
+        }
+        self.h_sub = h_sub;
+        self.update_forcing();
+    }
+
+    fn limits_acceleration(&self) -> bool {
+        self.clock
+            .coupling
+            .as_ref()
+            .is_some_and(|tc| tc.limits_acceleration())
+    }
+
+    /// One Euler step of the goal filter over `a = h / tau` of scaled time.
+    fn filter_goal(&mut self, a: f64) {
+        let alpha_g = self
+            .clock
+            .goal_filter
+            .expect("a goal moves only when filtered");
+        let mut settled = true;
+        for d in 0..self.n {
+            let gap = self.g_target[d] - self.g[d];
+            if gap.abs() <= GOAL_SNAP * self.g_target[d].abs().max(1.0) {
+                self.g[d] = self.g_target[d];
+            } else {
+                self.g[d] += alpha_g * gap * a;
+                settled = false;
+            }
+        }
+        self.goal_moving = !settled;
+    }
+
+    /// `self.f = f(x)` (eq. 4).
+    #[inline(always)]
+    fn update_forcing(&mut self) {
+        self.forcing.eval(self.x, &mut self.f);
+    }
+
+    /// `tau dz/dt` of the current state (eq. 1 with the coupling terms) into `out`, and the
+    /// repulsion's stiffness `dC/dy` per coordinate into `self.stiffness`.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn derivative_into(&mut self, out: &mut [f64], coupled: bool) {
+        let cfg = self.dmp.config();
+        for d in 0..self.n {
+            out[d] = cfg.alpha_z * (cfg.beta_z * (self.g[d] - self.y[d]) - self.z[d]) + self.f[d];
+        }
+        if let Some(lim) = &self.limits {
+            for d in 0..self.n {
+                self.stiffness[d] = match lim.repulsion(d, self.y[d]) {
+                    Some((c, slope)) => {
+                        out[d] += c;
+                        // A slope of exactly 0 would select the explicit update: keep it < 0.
+                        slope.min(-f64::MIN_POSITIVE)
+                    }
+                    None => 0.0,
+                };
+            }
+        }
+        if coupled {
+            for (o, c) in out.iter_mut().zip(&self.user) {
+                *o += c;
+            }
+        }
+    }
+
+    /// `self.h` = the derivative of the current state.
+    #[inline(always)]
+    fn derivative(&mut self, coupled: bool) {
+        let mut h = std::mem::take(&mut self.h);
+        self.derivative_into(&mut h, coupled);
+        self.h = h;
+    }
+
+    /// The rollout's `until_rest` criterion at the current state, with the filtered goal settled.
+    #[inline(always)]
+    fn rest(&self) -> bool {
+        let cfg = self.dmp.config();
+        let tol = self.rest_tol;
+        !self.goal_moving
+            && self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) <= tol
+            && (0..self.n)
+                .all(|d| (self.g_target[d] - self.y[d]).abs() <= tol && self.z[d].abs() <= tol)
+    }
+
+    #[inline(always)]
+    fn check_finite(&self) -> Result<()> {
+        // Without short-circuiting, so that the loop vectorizes.
+        let state = self.y.iter().chain(&self.z).chain(&self.out_ydd);
+        if !state.fold(!self.x.is_finite(), |bad, v| bad | !v.is_finite()) {
+            return Ok(());
+        }
+        Err(Error::Numerical {
+            context: "DMP stepper",
+            detail: format!(
+                "the state became non-finite after {} steps (a coupling term or goal too large \
+                 for f64, or a dt too coarse); reset() to start again",
+                self.steps
+            ),
+        })
+    }
+
+    /// The phase `x` of the last command (1 before the first step).
+    pub fn phase(&self) -> f64 {
+        self.out_x
+    }
+    /// The time scale `tau_eff` of the last command's period (s).
+    pub fn tau(&self) -> f64 {
+        self.out_tau
+    }
+    /// The nominal tau (s), as set by [`Stepper::set_tau`].
+    pub fn nominal_tau(&self) -> f64 {
+        self.clock.nominal
+    }
+    /// Whether the last command was at rest at the goal: the rollout's `until_rest` criterion
+    /// (within `rest_tol` of the goal, `|tau yd| <= rest_tol`, the forcing term unable to move
+    /// it by more than `rest_tol`) with the goal filter settled. False before the first step.
+    pub fn done(&self) -> bool {
+        self.at_rest
+    }
+    /// Calls of `step` since the start or the last reset; the last command is at
+    /// `t = (steps - 1) dt` of the stepper's clock.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+    /// The goal the spring currently pulls towards (moving while filtered).
+    pub fn goal(&self) -> &[f64] {
+        &self.g
+    }
+    pub fn goal_target(&self) -> &[f64] {
+        &self.g_target
+    }
+    pub fn dt(&self) -> f64 {
+        self.clock.dt
+    }
+    pub fn substeps(&self) -> usize {
+        self.clock.substeps
+    }
+    pub fn n_dof(&self) -> usize {
+        self.n
+    }
+    pub fn dmp(&self) -> &Dmp {
+        &self.dmp
+    }
+    pub fn position_limits(&self) -> Option<&PositionLimits> {
+        self.limits.as_ref()
+    }
+    pub fn temporal_coupling(&self) -> Option<&TemporalCoupling> {
+        self.clock.coupling.as_ref()
+    }
+    /// The last command, `(y, yd, ydd)`.
+    pub fn output(&self) -> (&[f64], &[f64], &[f64]) {
+        (&self.out_y, &self.out_yd, &self.out_ydd)
+    }
+}
