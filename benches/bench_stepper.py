@@ -52,7 +52,7 @@ def dmprs_joint(t, y, n_basis: int) -> dict[str, float]:
     stepper = dmp.stepper(DT)
     step = stepper.step
     out["open loop"] = median_per_call(stepper.reset, step)
-    measured = dmp.y0.copy()
+    measured = dmp.start.copy()
     out["measured"] = median_per_call(stepper.reset, lambda: step(measured))
     free = dmp.rollout(DT)
     limited = dmp.stepper(

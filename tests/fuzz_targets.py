@@ -138,7 +138,7 @@ def dmp_new_args(draw: Any) -> dict[str, Any]:
     return {
         "weights": scale * np.cos(np.arange(d * n, dtype=float)).reshape(d, n),
         "goal": draw(st.one_of(st.just([1.0] * d), st.lists(number, min_size=0, max_size=4), anything)),
-        "y0": [0.0] * d,
+        "start": [0.0] * d,
         "tau": draw(maybe_number),
         "ctor": {k: v for k, v in _fit_kwargs(draw).items() if k != "n_basis"},
         "rollout": _rollout_kwargs(draw),
@@ -149,7 +149,7 @@ def dmp_new_args(draw: Any) -> dict[str, Any]:
 
 
 def run_dmp_new(a: dict[str, Any]) -> list[Any]:
-    dmp = dmprs.DMP(a["weights"], a["goal"], a["y0"], a["tau"], **a["ctor"])
+    dmp = dmprs.DMP(a["weights"], a["goal"], a["start"], a["tau"], **a["ctor"])
     out: list[Any] = [dmp.rollout(**a["rollout"])]
     data = dmp.to_dict()
     data[a["dict_key"]] = a["dict_value"]
@@ -813,7 +813,7 @@ def non_finite(value: Any) -> str | None:
     if isinstance(value, dmprs.Trajectory):
         return non_finite([value.t, value.y, value.yd, value.ydd])
     if isinstance(value, dmprs.DMP):
-        return non_finite([value.weights, value.goal, value.y0, value.tau])
+        return non_finite([value.weights, value.goal, value.start, value.tau])
     if isinstance(value, (list, tuple)):
         for v in value:
             if (bad := non_finite(v)) is not None:

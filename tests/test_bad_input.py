@@ -158,7 +158,7 @@ def test_goal_of_the_wrong_length(dmp):
 def test_nan_goal_and_start(dmp):
     with raises(r"goal\[1\] is NaN"):
         dmp.with_goal([0.0, np.nan])
-    with raises(r"y0\[0\] is inf"):
+    with raises(r"start\[0\] is inf"):
         dmp.with_start([np.inf, 0.0])
 
 
@@ -185,8 +185,8 @@ def test_from_dict_rejects_foreign_and_newer_dicts(dmp):
     d = dmp.to_dict()
     with raises("not a DMP dict"):
         dmprs.DMP.from_dict({**d, "type": "other"})
-    with raises("version 2 is not supported"):
-        dmprs.DMP.from_dict({**d, "version": 2})
+    with raises("version 3 is not supported"):
+        dmprs.DMP.from_dict({**d, "version": 3})
     with raises("missing tau"):
         dmprs.DMP.from_dict({k: v for k, v in d.items() if k != "tau"})
     with raises("expected a dict"):
@@ -198,13 +198,14 @@ def test_rollout_batch_rejects_non_dmps(dmp):
         dmprs.rollout_batch([dmp, "x"])
 
 
+CONSTANTS = {"alpha_z": 48.0, "beta_z": 12.0, "alpha_x": 2.0, "width_factor": 2.0}
+
+
 def test_core_called_directly_still_validates():
     # The bindings are a boundary too: the Rust checks hold without the Python wrapper.
     from dmprs import _core
 
     with raises("n_basis = 1 is invalid"):
-        _core.Dmp.fit(np.linspace(0, 1, 5), np.zeros((5, 1)), None, None,
-                      n_basis=1, alpha_z=48.0, beta_z=12.0, alpha_x=2.0, width_factor=2.0)
+        _core.Dmp.fit(np.linspace(0, 1, 5), np.zeros((5, 1)), None, None, 1, CONSTANTS)
     with raises("dt = -1 is invalid"):
-        _core.Dmp(np.zeros((1, 3)), np.zeros(1), np.zeros(1), 1.0, alpha_z=48.0, beta_z=12.0,
-                  alpha_x=2.0, width_factor=2.0).rollout(-1.0)
+        _core.Dmp(np.zeros((1, 3)), np.zeros(1), np.zeros(1), 1.0, CONSTANTS).rollout(-1.0)

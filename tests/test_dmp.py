@@ -38,7 +38,7 @@ def test_fit_then_rollout_reproduces_the_demo_within_one_percent(demo):
     assert (err < 0.01).all(), err
     assert dmp.tau == 1.0
     np.testing.assert_array_equal(dmp.goal, y[-1])
-    np.testing.assert_array_equal(dmp.y0, y[0])
+    np.testing.assert_array_equal(dmp.start, y[0])
 
 
 def test_fit_without_derivatives_equals_fit_with_numpy_gradient(demo):
@@ -76,7 +76,7 @@ def test_new_goal_start_and_tau(demo):
     np.testing.assert_allclose(tr.y[-1], goal, atol=1e-6)
     assert tr.duration > dmp.tau
     c = 0.75
-    shifted = dmp.with_goal(dmp.goal + c).with_start(dmp.y0 + c).rollout()
+    shifted = dmp.with_goal(dmp.goal + c).with_start(dmp.start + c).rollout()
     np.testing.assert_allclose(shifted.y, dmp.rollout().y + c, atol=1e-12)
     slow = dmp.with_tau(2.0).rollout(dt=0.002)
     np.testing.assert_allclose(slow.y, dmp.rollout(dt=0.001).y, atol=1e-10)

@@ -39,7 +39,7 @@ def database(queries, **kw):
 
 
 def flat(dmp):
-    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, dmp.y0])
+    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, dmp.start])
 
 
 # --- linear (docs/method.md §3.3) -------------------------------------------------------------

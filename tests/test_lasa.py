@@ -60,7 +60,7 @@ def test_goal_and_start_changes_follow_the_closed_form(demos, shape_index):
     base = dmp.rollout(dt=dt, duration=2 * dmp.tau)
     dg, dy0 = np.array([15.0, -10.0]), np.array([-8.0, 5.0])
     goal = dmp.with_goal(dmp.goal + dg).rollout(dt=dt, duration=2 * dmp.tau)
-    start = dmp.with_start(dmp.y0 + dy0).rollout(dt=dt, duration=2 * dmp.tau)
+    start = dmp.with_start(dmp.start + dy0).rollout(dt=dt, duration=2 * dmp.tau)
     to_goal, from_start = closed_form(base.t, dmp.tau, dmp.alpha_z)
     # explicit Euler at tau / 20000: the discrete response is within 0.1 % of the closed form
     np.testing.assert_allclose(goal.y - base.y, np.outer(to_goal, dg), atol=1e-3 * np.abs(dg).max())
@@ -68,4 +68,4 @@ def test_goal_and_start_changes_follow_the_closed_form(demos, shape_index):
     # it comes to rest at the new goal (within rest_tol = 0.01 mm)
     rest = dmp.with_goal(dmp.goal + dg).rollout(dt=1e-3, until_rest=True, rest_tol=0.01)
     np.testing.assert_allclose(rest.y[-1], dmp.goal + dg, atol=0.01)
-    np.testing.assert_array_equal(start.y[0], dmp.y0 + dy0)
+    np.testing.assert_array_equal(start.y[0], dmp.start + dy0)

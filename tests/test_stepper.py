@@ -92,7 +92,7 @@ def test_a_perfectly_tracking_robot_does_not_slow_the_clock() -> None:
     dmp = reach()
     tr = dmp.rollout(0.001)
     stepper = dmp.stepper(0.001)
-    measured = dmp.y0.copy()
+    measured = dmp.start.copy()
     ys = []
     for _ in range(tr.n_samples):
         y, _, _ = stepper.step(measured)

@@ -6,9 +6,10 @@ The numerical core is Rust (``dmprs._core``); this package is the API users impo
 
 from dmprs import adapters, learners, tasks
 from dmprs._core import __version__
+from dmprs.batch import rollout_batch
 from dmprs.cartesian import CartesianDMP
 from dmprs.database import Database, Demo
-from dmprs.dmp import DMP, rollout_batch
+from dmprs.dmp import DMP
 from dmprs.errors import (
     DatabaseError,
     DmprsError,

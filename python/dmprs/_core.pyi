@@ -42,45 +42,15 @@ _TrajectoryArrays: TypeAlias = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
 ]
 
-@final
-class Dmp:
-    def __new__(
-        cls,
-        weights: NDArray[np.float64],
-        goal: NDArray[np.float64],
-        y0: NDArray[np.float64],
-        tau: float,
-        *,
-        alpha_z: float,
-        beta_z: float,
-        alpha_x: float,
-        width_factor: float,
-    ) -> Dmp: ...
-    @staticmethod
-    def fit(
-        t: NDArray[np.float64],
-        y: NDArray[np.float64],
-        yd: NDArray[np.float64] | None,
-        ydd: NDArray[np.float64] | None,
-        *,
-        n_basis: int,
-        alpha_z: float,
-        beta_z: float,
-        alpha_x: float,
-        width_factor: float,
-    ) -> Dmp: ...
-    def rollout(
-        self, dt: float, duration: float | None = None, until_rest: bool = False, rest_tol: float = 1e-4
-    ) -> _TrajectoryArrays: ...
-    def with_goal(self, goal: NDArray[np.float64]) -> Dmp: ...
-    def with_start(self, y0: NDArray[np.float64]) -> Dmp: ...
-    def with_tau(self, tau: float) -> Dmp: ...
+class _Primitive:
+    """What Dmp and CartesianDmp share (crates/py-bindings/src/primitive.rs): the parameters."""
+
     @property
     def weights(self) -> NDArray[np.float64]: ...
     @property
     def goal(self) -> NDArray[np.float64]: ...
     @property
-    def y0(self) -> NDArray[np.float64]: ...
+    def start(self) -> NDArray[np.float64]: ...
     @property
     def tau(self) -> float: ...
     @property
@@ -99,6 +69,35 @@ class Dmp:
     def centers(self) -> NDArray[np.float64]: ...
     @property
     def widths(self) -> NDArray[np.float64]: ...
+
+#: The constants as the core takes them: alpha_z, beta_z, alpha_x, width_factor.
+_Constants: TypeAlias = dict[str, float]
+
+@final
+class Dmp(_Primitive):
+    def __new__(
+        cls,
+        weights: NDArray[np.float64],
+        goal: NDArray[np.float64],
+        start: NDArray[np.float64],
+        tau: float,
+        constants: _Constants,
+    ) -> Dmp: ...
+    @staticmethod
+    def fit(
+        t: NDArray[np.float64],
+        y: NDArray[np.float64],
+        yd: NDArray[np.float64] | None,
+        ydd: NDArray[np.float64] | None,
+        n_basis: int,
+        constants: _Constants,
+    ) -> Dmp: ...
+    def rollout(
+        self, dt: float, duration: float | None = None, until_rest: bool = False, rest_tol: float = 1e-4
+    ) -> _TrajectoryArrays: ...
+    def with_goal(self, goal: NDArray[np.float64]) -> Dmp: ...
+    def with_start(self, start: NDArray[np.float64]) -> Dmp: ...
+    def with_tau(self, tau: float) -> Dmp: ...
 
 def rollout_batch(
     dmps: list[Dmp],
@@ -119,7 +118,7 @@ _CartesianArrays: TypeAlias = tuple[
 ]
 
 @final
-class CartesianDmp:
+class CartesianDmp(_Primitive):
     """Position + unit-quaternion DMP of crates/dmp-core/src/cartesian.rs; documented by
     dmprs.cartesian. Rollouts give (t, position, quaternion, velocity, angular_velocity,
     acceleration, angular_acceleration)."""
@@ -130,27 +129,16 @@ class CartesianDmp:
         goal: NDArray[np.float64],
         start: NDArray[np.float64],
         tau: float,
-        *,
-        alpha_z: float,
-        beta_z: float,
-        alpha_x: float,
-        width_factor: float,
+        constants: _Constants,
     ) -> CartesianDmp: ...
     @staticmethod
     def fit(
         t: NDArray[np.float64],
         pose: NDArray[np.float64],
-        velocity: NDArray[np.float64] | None,
-        acceleration: NDArray[np.float64] | None,
-        angular_velocity: NDArray[np.float64] | None,
-        angular_acceleration: NDArray[np.float64] | None,
-        *,
+        derivatives: dict[str, NDArray[np.float64] | None],
         normalize: bool,
         n_basis: int,
-        alpha_z: float,
-        beta_z: float,
-        alpha_x: float,
-        width_factor: float,
+        constants: _Constants,
     ) -> CartesianDmp: ...
     def rollout(
         self, dt: float, duration: float | None = None, until_rest: bool = False, rest_tol: float = 1e-4
@@ -158,28 +146,6 @@ class CartesianDmp:
     def with_goal(self, goal: NDArray[np.float64]) -> CartesianDmp: ...
     def with_start(self, start: NDArray[np.float64]) -> CartesianDmp: ...
     def with_tau(self, tau: float) -> CartesianDmp: ...
-    @property
-    def weights(self) -> NDArray[np.float64]: ...
-    @property
-    def goal(self) -> NDArray[np.float64]: ...
-    @property
-    def start(self) -> NDArray[np.float64]: ...
-    @property
-    def tau(self) -> float: ...
-    @property
-    def n_basis(self) -> int: ...
-    @property
-    def alpha_z(self) -> float: ...
-    @property
-    def beta_z(self) -> float: ...
-    @property
-    def alpha_x(self) -> float: ...
-    @property
-    def width_factor(self) -> float: ...
-    @property
-    def centers(self) -> NDArray[np.float64]: ...
-    @property
-    def widths(self) -> NDArray[np.float64]: ...
 
 def rollout_batch_cartesian(
     dmps: list[CartesianDmp],

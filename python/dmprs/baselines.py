@@ -134,7 +134,7 @@ def run_baseline(spec: BaselineSpec, log_dir: str | Path | None = None, *,
     success_at = None
 
     def with_weights(theta: NDArray[np.float64]) -> Callable[[], DMP]:
-        return lambda: DMP(theta.reshape(w0.shape), dmp0.goal, dmp0.y0, dmp0.tau,
+        return lambda: DMP(theta.reshape(w0.shape), dmp0.goal, dmp0.start, dmp0.tau,
                            alpha_z=dmp0.alpha_z, beta_z=dmp0.beta_z, alpha_x=dmp0.alpha_x,
                            width_factor=dmp0.width_factor)
 

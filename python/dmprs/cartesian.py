@@ -3,7 +3,6 @@ out by the Rust core (``crates/dmp-core/src/cartesian.rs``; docs/cartesian.md)."
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -11,17 +10,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs._arrays import as_count, as_float_array, as_scalar
-from dmprs._core import CartesianDmp as _CoreDmp
-from dmprs.dmp import _constants, _rollout_options
 from dmprs.errors import InvalidInputError
+from dmprs.primitive import Primitive, constants, rollout_options
 from dmprs.stepper import CartesianStepper
 from dmprs.trajectory import CartesianTrajectory
 
 __all__ = ["CartesianDMP"]
-
-_DICT_TYPE = "dmprs.CartesianDMP"
-_DICT_VERSION = 1
-
 
 def _pose(value: ArrayLike, name: str) -> NDArray[np.float64]:
     p = as_float_array(value, name, 1)
@@ -34,7 +28,7 @@ def _derivative(value: ArrayLike | None, name: str) -> NDArray[np.float64] | Non
     return None if value is None else as_float_array(value, name, 2)
 
 
-class CartesianDMP:
+class CartesianDMP(Primitive):
     r"""A DMP of an end-effector pose: position ``p`` (m) and orientation ``q``, a unit
     quaternion ``(w, x, y, z)``, sharing one phase, one basis and one tau.
 
@@ -60,8 +54,9 @@ class CartesianDMP:
     See docs/cartesian.md for the equations of the fit and the decisions behind them.
     """
 
-    __slots__ = ("_core",)
-    _core: _CoreDmp
+    __slots__ = ()
+    _core: _core.CartesianDmp
+    _DICT_TYPE = "dmprs.CartesianDMP"
 
     def __init__(
         self,
@@ -81,20 +76,9 @@ class CartesianDMP:
                 f"weights has shape {w.shape}, expected (6, N): x, y, z, then 3 orientation rows"
             )
         as_count(w.shape[1], "n_basis (columns of weights)", 2)
-        core = _core.CartesianDmp(
-            w, _pose(goal, "goal"), _pose(start, "start"), as_scalar(tau, "tau", positive=True),
-            **_constants(alpha_z, beta_z, alpha_x, width_factor),
-        )
+        core = _core.CartesianDmp(w, _pose(goal, "goal"), _pose(start, "start"), as_scalar(tau, "tau", positive=True),
+                                  constants(alpha_z, beta_z, alpha_x, width_factor))
         object.__setattr__(self, "_core", core)
-
-    @classmethod
-    def _wrap(cls, core: _CoreDmp) -> CartesianDMP:
-        self = object.__new__(cls)
-        object.__setattr__(self, "_core", core)
-        return self
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError("CartesianDMP is immutable; use with_goal, with_start or with_tau")
 
     @classmethod
     def fit(
@@ -134,17 +118,15 @@ class CartesianDMP:
             normalize: scale every quaternion to unit norm instead of refusing one whose norm is
                 off by more than 1e-6 (the zero quaternion is refused either way).
         """
-        core = _core.CartesianDmp.fit(
-            as_float_array(t, "t", 1),
-            as_float_array(pose, "pose", 2),
-            _derivative(velocity, "velocity"),
-            _derivative(acceleration, "acceleration"),
-            _derivative(angular_velocity, "angular_velocity"),
-            _derivative(angular_acceleration, "angular_acceleration"),
-            normalize=bool(normalize),
-            n_basis=as_count(n_basis, "n_basis", 2),
-            **_constants(alpha_z, beta_z, alpha_x, width_factor),
-        )
+        derivatives = {
+            "velocity": _derivative(velocity, "velocity"),
+            "acceleration": _derivative(acceleration, "acceleration"),
+            "angular_velocity": _derivative(angular_velocity, "angular_velocity"),
+            "angular_acceleration": _derivative(angular_acceleration, "angular_acceleration"),
+        }
+        core = _core.CartesianDmp.fit(as_float_array(t, "t", 1), as_float_array(pose, "pose", 2), derivatives,
+                                      bool(normalize), as_count(n_basis, "n_basis", 2),
+                                      constants(alpha_z, beta_z, alpha_x, width_factor))
         return cls._wrap(core)
 
     @classmethod
@@ -159,57 +141,6 @@ class CartesianDMP:
             tr.t, tr.pose, n_basis, velocity=tr.velocity, angular_velocity=tr.angular_velocity,
             acceleration=tr.acceleration, angular_acceleration=tr.angular_acceleration, **options,
         )
-
-    # --- parameters -------------------------------------------------------------------------
-    @property
-    def weights(self) -> NDArray[np.float64]:
-        """(6, N): rows x, y, z (m), then the orientation's three (rad)."""
-        return self._core.weights
-
-    @property
-    def goal(self) -> NDArray[np.float64]:
-        """Goal pose (7,)."""
-        return self._core.goal
-
-    @property
-    def start(self) -> NDArray[np.float64]:
-        """Start pose (7,)."""
-        return self._core.start
-
-    @property
-    def tau(self) -> float:
-        """Temporal scaling (s); the duration of the demonstration it was fitted to."""
-        return self._core.tau
-
-    @property
-    def n_basis(self) -> int:
-        return self._core.n_basis
-
-    @property
-    def alpha_z(self) -> float:
-        return self._core.alpha_z
-
-    @property
-    def beta_z(self) -> float:
-        return self._core.beta_z
-
-    @property
-    def alpha_x(self) -> float:
-        return self._core.alpha_x
-
-    @property
-    def width_factor(self) -> float:
-        return self._core.width_factor
-
-    @property
-    def centers(self) -> NDArray[np.float64]:
-        """Kernel centres c_k on the phase, (N,)."""
-        return self._core.centers
-
-    @property
-    def widths(self) -> NDArray[np.float64]:
-        """Kernel widths h_k, (N,)."""
-        return self._core.widths
 
     # --- behaviour --------------------------------------------------------------------------
     def rollout(
@@ -228,7 +159,7 @@ class CartesianDMP:
         on until the position is within ``rest_tol`` (m) and the orientation within ``rest_tol``
         (rad) of the goal, at rest, and no longer driven by the forcing term.
         """
-        opts = _rollout_options(dt, duration, until_rest, rest_tol)
+        opts = rollout_options(dt, duration, until_rest, rest_tol)
         return CartesianTrajectory._trusted(*self._core.rollout(**opts))
 
     def stepper(self, dt: float = 0.001, **options: Any) -> CartesianStepper:
@@ -246,66 +177,3 @@ class CartesianDMP:
     def with_start(self, pose: ArrayLike) -> CartesianDMP:
         """The same movement from a new start pose (7,) (sign on the side of the current start)."""
         return CartesianDMP._wrap(self._core.with_start(_pose(pose, "start")))
-
-    def with_tau(self, tau: float) -> CartesianDMP:
-        """The same path at another speed."""
-        return CartesianDMP._wrap(self._core.with_tau(as_scalar(tau, "tau", positive=True)))
-
-    # --- serialization ----------------------------------------------------------------------
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-safe dict of plain floats and lists; :meth:`from_dict` restores it exactly."""
-        return {
-            "type": _DICT_TYPE,
-            "version": _DICT_VERSION,
-            "tau": self.tau,
-            "goal": self.goal.tolist(),
-            "start": self.start.tolist(),
-            "weights": self.weights.tolist(),
-            "alpha_z": self.alpha_z,
-            "beta_z": self.beta_z,
-            "alpha_x": self.alpha_x,
-            "width_factor": self.width_factor,
-        }
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> CartesianDMP:
-        """Inverse of :meth:`to_dict`."""
-        if not isinstance(data, Mapping):
-            raise InvalidInputError(
-                f"expected a dict from CartesianDMP.to_dict(); got {type(data).__name__}"
-            )
-        if data.get("type") != _DICT_TYPE:
-            raise InvalidInputError(
-                f"not a CartesianDMP dict: 'type' is {data.get('type')!r}, expected {_DICT_TYPE!r}"
-            )
-        version = data.get("version")
-        if not isinstance(version, int) or version > _DICT_VERSION or version < 1:
-            raise InvalidInputError(
-                f"CartesianDMP dict version {version!r} is not supported (this dmprs reads version "
-                f"{_DICT_VERSION})"
-            )
-        required = ("tau", "goal", "start", "weights", "alpha_z", "beta_z", "alpha_x", "width_factor")
-        missing = [k for k in required if k not in data]
-        if missing:
-            raise InvalidInputError(f"CartesianDMP dict is missing {', '.join(missing)}")
-        return cls(
-            data["weights"], data["goal"], data["start"], data["tau"],
-            alpha_z=data["alpha_z"], beta_z=data["beta_z"],
-            alpha_x=data["alpha_x"], width_factor=data["width_factor"],
-        )
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        return (CartesianDMP.from_dict, (self.to_dict(),))
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, CartesianDMP):
-            return NotImplemented
-        return self.to_dict() == other.to_dict()
-
-    __hash__ = None  # type: ignore[assignment]
-
-    def __repr__(self) -> str:
-        return (
-            f"CartesianDMP(n_basis={self.n_basis}, tau={self.tau:.6g}, "
-            f"goal={np.array2string(self.goal, precision=4)})"
-        )

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from dmprs._core import __version__
-from dmprs.dmp import DMP, rollout_batch
+from dmprs.batch import rollout_batch
+from dmprs.dmp import DMP
 from dmprs.errors import DmprsError
 from dmprs.profiles import min_jerk
 

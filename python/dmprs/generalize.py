@@ -12,8 +12,9 @@ from dmprs import _core
 from dmprs._arrays import as_count, as_query, as_scalar
 from dmprs.cartesian import CartesianDMP
 from dmprs.database import Database
-from dmprs.dmp import DMP, _constants
+from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError
+from dmprs.primitive import constants as _constants
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 from dmprs.triangulation import PiecewiseLinear
 

@@ -43,7 +43,7 @@ TAU_LOW, TAU_HIGH = 0.2, 5.0
 
 
 def _flatten(dmp: DMP) -> NDArray[np.float64]:
-    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, dmp.y0])
+    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, dmp.start])
 
 
 class PiecewiseLinear:

@@ -142,7 +142,7 @@ impl Dmp {
             });
         }
         let n_dof = weights.ncols();
-        for (name, v) in [("goal", &goal), ("y0", &y0)] {
+        for (name, v) in [("goal", &goal), ("start", &y0)] {
             if v.len() != n_dof {
                 return Err(Error::Shape {
                     name,
@@ -152,7 +152,7 @@ impl Dmp {
             }
         }
         check_vector("goal", &goal)?;
-        check_vector("y0", &y0)?;
+        check_vector("start", &y0)?;
         check_scalar("tau", tau, true)?;
         for (k, w) in weights.column_iter().enumerate() {
             if let Some((n, &v)) = w.iter().enumerate().find(|(_, v)| !v.is_finite()) {

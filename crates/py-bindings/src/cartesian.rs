@@ -16,6 +16,7 @@ use pyo3::prelude::*;
 use crate::dmp::{contiguous, time_major};
 use crate::errors::{IntoPyResult, invalid_input};
 use crate::generalize::{parse_method, parse_queries, query, row_major};
+use crate::primitive::{Constants, parameter_getters};
 
 /// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
 type CartesianArrays<'py> = (
@@ -63,6 +64,17 @@ fn pose(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<[f64; POSE_WIDTH]
     })
 }
 
+/// A pose demonstration's measured derivatives, each optional, as a dict with these keys
+/// (`(T, 3)` arrays, world frame).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct PoseDerivatives<'py> {
+    velocity: Option<PyReadonlyArray2<'py, f64>>,
+    acceleration: Option<PyReadonlyArray2<'py, f64>>,
+    angular_velocity: Option<PyReadonlyArray2<'py, f64>>,
+    angular_acceleration: Option<PyReadonlyArray2<'py, f64>>,
+}
+
 fn optional<'a>(
     name: &str,
     a: &'a Option<PyReadonlyArray2<'_, f64>>,
@@ -78,26 +90,16 @@ pub struct PyCartesianDmp {
 #[pymethods]
 impl PyCartesianDmp {
     #[new]
-    #[pyo3(signature = (weights, goal, start, tau, *, alpha_z, beta_z, alpha_x, width_factor))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (weights, goal, start, tau, constants))]
     fn new(
         weights: PyReadonlyArray2<'_, f64>,
         goal: PyReadonlyArray1<'_, f64>,
         start: PyReadonlyArray1<'_, f64>,
         tau: f64,
-        alpha_z: f64,
-        beta_z: f64,
-        alpha_x: f64,
-        width_factor: f64,
+        constants: Constants,
     ) -> PyResult<Self> {
         // (6, N) C-ordered is the N x 6 column-major matrix of the core.
-        let config = DmpConfig {
-            n_basis: weights.shape()[1],
-            alpha_z,
-            beta_z,
-            alpha_x,
-            width_factor,
-        };
+        let config = constants.config(weights.shape()[1]);
         let w = DMatrix::from(time_major("weights", &weights)?);
         let inner = CartesianDmp::new(
             config,
@@ -112,42 +114,32 @@ impl PyCartesianDmp {
     }
 
     #[staticmethod]
-    #[pyo3(signature = (t, pose, velocity, acceleration, angular_velocity, angular_acceleration,
-                        *, normalize, n_basis, alpha_z, beta_z, alpha_x, width_factor))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (t, pose, derivatives, normalize, n_basis, constants))]
     fn fit(
         py: Python<'_>,
         t: PyReadonlyArray1<'_, f64>,
         pose: PyReadonlyArray2<'_, f64>,
-        velocity: Option<PyReadonlyArray2<'_, f64>>,
-        acceleration: Option<PyReadonlyArray2<'_, f64>>,
-        angular_velocity: Option<PyReadonlyArray2<'_, f64>>,
-        angular_acceleration: Option<PyReadonlyArray2<'_, f64>>,
+        derivatives: PoseDerivatives<'_>,
         normalize: bool,
         n_basis: usize,
-        alpha_z: f64,
-        beta_z: f64,
-        alpha_x: f64,
-        width_factor: f64,
+        constants: Constants,
     ) -> PyResult<Self> {
         let t = contiguous("t", &t)?;
         let demo = CartesianDemonstration {
             t,
             pose: time_major("pose", &pose)?,
-            velocity: optional("velocity", &velocity)?,
-            acceleration: optional("acceleration", &acceleration)?,
-            angular_velocity: optional("angular_velocity", &angular_velocity)?,
-            angular_acceleration: optional("angular_acceleration", &angular_acceleration)?,
+            velocity: optional("velocity", &derivatives.velocity)?,
+            acceleration: optional("acceleration", &derivatives.acceleration)?,
+            angular_velocity: optional("angular_velocity", &derivatives.angular_velocity)?,
+            angular_acceleration: optional(
+                "angular_acceleration",
+                &derivatives.angular_acceleration,
+            )?,
             normalize,
         };
-        let config = DmpConfig {
-            n_basis,
-            alpha_z,
-            beta_z,
-            alpha_x,
-            width_factor,
-        };
-        let inner = py.detach(|| CartesianDmp::fit(&demo, config)).py_err()?;
+        let inner = py
+            .detach(|| CartesianDmp::fit(&demo, constants.config(n_basis)))
+            .py_err()?;
         Ok(Self { inner })
     }
 
@@ -187,57 +179,9 @@ impl PyCartesianDmp {
             inner: self.inner.with_tau(tau).py_err()?,
         })
     }
-
-    /// (6, N)
-    #[getter]
-    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let w = self.inner.weights();
-        w.as_slice()
-            .to_vec()
-            .into_pyarray(py)
-            .reshape([w.ncols(), w.nrows()])
-    }
-    #[getter]
-    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.goal().to_vec().into_pyarray(py)
-    }
-    #[getter]
-    fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.start().to_vec().into_pyarray(py)
-    }
-    #[getter]
-    fn tau(&self) -> f64 {
-        self.inner.tau()
-    }
-    #[getter]
-    fn n_basis(&self) -> usize {
-        self.inner.n_basis()
-    }
-    #[getter]
-    fn alpha_z(&self) -> f64 {
-        self.inner.config().alpha_z
-    }
-    #[getter]
-    fn beta_z(&self) -> f64 {
-        self.inner.config().beta_z
-    }
-    #[getter]
-    fn alpha_x(&self) -> f64 {
-        self.inner.config().alpha_x
-    }
-    #[getter]
-    fn width_factor(&self) -> f64 {
-        self.inner.config().width_factor
-    }
-    #[getter]
-    fn centers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.basis().centers().to_vec().into_pyarray(py)
-    }
-    #[getter]
-    fn widths<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.basis().widths().to_vec().into_pyarray(py)
-    }
 }
+
+parameter_getters!(PyCartesianDmp);
 
 /// Rolls out many Cartesian DMPs on all cores with the GIL released.
 #[pyfunction(name = "rollout_batch_cartesian")]

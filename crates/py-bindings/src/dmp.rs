@@ -1,7 +1,7 @@
 //! `dmprs._core.Dmp` and `rollout_batch`: numpy in, numpy out. `dmprs.DMP` (Python) wraps these
 //! and documents them; the arrays reaching here are already float64 and of the right rank.
 
-use dmp_core::{Demonstration, Dmp, DmpConfig, RolloutOptions, Trajectory, rollout_batch};
+use dmp_core::{Demonstration, Dmp, RolloutOptions, Trajectory, rollout_batch};
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
@@ -10,6 +10,7 @@ use numpy::{
 use pyo3::prelude::*;
 
 use crate::errors::{IntoPyResult, invalid_input};
+use crate::primitive::{Constants, parameter_getters};
 
 /// The data of a numpy array that must be contiguous (every array the Python layer passes is:
 /// it goes through `as_float_array`, so this only fails when the bindings are called directly).
@@ -50,23 +51,6 @@ pub(crate) fn demonstration<'a>(
     })
 }
 
-/// The DMP constants as they arrive from Python (keywords of the same names), in one place.
-pub(crate) fn dmp_config(
-    n_basis: usize,
-    alpha_z: f64,
-    beta_z: f64,
-    alpha_x: f64,
-    width_factor: f64,
-) -> DmpConfig {
-    DmpConfig {
-        n_basis,
-        alpha_z,
-        beta_z,
-        alpha_x,
-        width_factor,
-    }
-}
-
 type TrajectoryArrays<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
@@ -92,27 +76,22 @@ pub struct PyDmp {
 #[pymethods]
 impl PyDmp {
     #[new]
-    #[pyo3(signature = (weights, goal, y0, tau, *, alpha_z, beta_z, alpha_x, width_factor))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (weights, goal, start, tau, constants))]
     fn new(
         weights: PyReadonlyArray2<'_, f64>,
         goal: PyReadonlyArray1<'_, f64>,
-        y0: PyReadonlyArray1<'_, f64>,
+        start: PyReadonlyArray1<'_, f64>,
         tau: f64,
-        alpha_z: f64,
-        beta_z: f64,
-        alpha_x: f64,
-        width_factor: f64,
+        constants: Constants,
     ) -> PyResult<Self> {
         // weights arrive (D, N) C-ordered, which is the N x D column-major matrix of the core.
-        let n = weights.shape()[1];
         let w = time_major("weights", &weights)?;
-        let config = dmp_config(n, alpha_z, beta_z, alpha_x, width_factor);
+        let config = constants.config(weights.shape()[1]);
         let inner = Dmp::new(
             config,
             DMatrix::from(w),
             vector("goal", &goal)?,
-            vector("y0", &y0)?,
+            vector("start", &start)?,
             tau,
         );
         Ok(Self {
@@ -121,23 +100,18 @@ impl PyDmp {
     }
 
     #[staticmethod]
-    #[pyo3(signature = (t, y, yd, ydd, *, n_basis, alpha_z, beta_z, alpha_x, width_factor))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (t, y, yd, ydd, n_basis, constants))]
     fn fit(
         t: PyReadonlyArray1<'_, f64>,
         y: PyReadonlyArray2<'_, f64>,
         yd: Option<PyReadonlyArray2<'_, f64>>,
         ydd: Option<PyReadonlyArray2<'_, f64>>,
         n_basis: usize,
-        alpha_z: f64,
-        beta_z: f64,
-        alpha_x: f64,
-        width_factor: f64,
+        constants: Constants,
     ) -> PyResult<Self> {
         let demo = demonstration(&t, &y, yd.as_ref(), ydd.as_ref())?;
-        let config = dmp_config(n_basis, alpha_z, beta_z, alpha_x, width_factor);
         Ok(Self {
-            inner: Dmp::fit(&demo, config).py_err()?,
+            inner: Dmp::fit(&demo, constants.config(n_basis)).py_err()?,
         })
     }
 
@@ -166,9 +140,9 @@ impl PyDmp {
         })
     }
 
-    fn with_start(&self, y0: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+    fn with_start(&self, start: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
         Ok(Self {
-            inner: self.inner.with_start(vector("y0", &y0)?).py_err()?,
+            inner: self.inner.with_start(vector("start", &start)?).py_err()?,
         })
     }
 
@@ -177,61 +151,9 @@ impl PyDmp {
             inner: self.inner.with_tau(tau).py_err()?,
         })
     }
-
-    /// (D, N)
-    #[getter]
-    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let w = self.inner.weights();
-        w.as_slice()
-            .to_vec()
-            .into_pyarray(py)
-            .reshape([w.ncols(), w.nrows()])
-    }
-    #[getter]
-    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.goal().as_slice().to_vec().into_pyarray(py)
-    }
-    #[getter]
-    fn y0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.y0().as_slice().to_vec().into_pyarray(py)
-    }
-    #[getter]
-    fn tau(&self) -> f64 {
-        self.inner.tau()
-    }
-    #[getter]
-    fn n_dof(&self) -> usize {
-        self.inner.n_dof()
-    }
-    #[getter]
-    fn n_basis(&self) -> usize {
-        self.inner.n_basis()
-    }
-    #[getter]
-    fn alpha_z(&self) -> f64 {
-        self.inner.config().alpha_z
-    }
-    #[getter]
-    fn beta_z(&self) -> f64 {
-        self.inner.config().beta_z
-    }
-    #[getter]
-    fn alpha_x(&self) -> f64 {
-        self.inner.config().alpha_x
-    }
-    #[getter]
-    fn width_factor(&self) -> f64 {
-        self.inner.config().width_factor
-    }
-    #[getter]
-    fn centers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.basis().centers().to_vec().into_pyarray(py)
-    }
-    #[getter]
-    fn widths<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.basis().widths().to_vec().into_pyarray(py)
-    }
 }
+
+parameter_getters!(PyDmp);
 
 /// Rolls out many DMPs on all cores with the GIL released.
 #[pyfunction(name = "rollout_batch")]

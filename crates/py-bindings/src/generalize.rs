@@ -5,8 +5,9 @@ use dmp_core::{Generalizer, GpMean, Kernel, LocalModel, LwrGpOptions, LwrOptions
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::dmp::{PyDmp, contiguous, demonstration, dmp_config, time_major};
+use crate::dmp::{PyDmp, contiguous, demonstration, time_major};
 use crate::errors::{IntoPyResult, invalid_input};
+use crate::primitive::dmp_config;
 
 type DemoArrays<'py> = (
     PyReadonlyArray1<'py, f64>,

@@ -8,6 +8,7 @@ mod generalize;
 mod gp;
 mod learners;
 mod matchbox;
+mod primitive;
 mod ros2_robot;
 mod stepper;
 

@@ -132,7 +132,7 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
         if not isinstance(ref, DMP):
             raise InvalidInputError(f"{self.scenario.name}: weight actions are for joint-space DMPs")
         w = ref.weights + action.reshape(self._shape) * self._half
-        dmp = DMP(w, ref.goal, ref.y0, ref.tau, alpha_z=ref.alpha_z, beta_z=ref.beta_z, alpha_x=ref.alpha_x,
+        dmp = DMP(w, ref.goal, ref.start, ref.tau, alpha_z=ref.alpha_z, beta_z=ref.beta_z, alpha_x=ref.alpha_x,
                   width_factor=ref.width_factor)
         return dmp, desired
 

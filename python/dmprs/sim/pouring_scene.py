@@ -33,8 +33,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import pymunk
-import pymunk.batch
 from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError, NumericalError
@@ -185,6 +183,11 @@ class _Scene:
 
     def __init__(self, radii: NDArray[np.float64], positions: NDArray[np.float64],
                  velocities: NDArray[np.float64] | None = None) -> None:
+        # pymunk loads with the first scene, not with `import dmprs` (the package's rule for
+        # simulators: they load where they are used).
+        import pymunk
+        import pymunk.batch
+
         space = pymunk.Space()
         space.gravity = (0.0, -GRAVITY)
         space.iterations = ITERATIONS
@@ -240,6 +243,8 @@ class _Scene:
 
     def positions(self) -> NDArray[np.float64]:
         """(n, 2) disc positions in insertion order, read in one batch call."""
+        import pymunk.batch  # loaded by __init__ already; named here for this method's calls
+
         buf = self._buffer
         buf.clear()
         pymunk.batch.get_space_bodies(
