@@ -9,7 +9,9 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation, Slerp
 
 from dmprs.errors import InvalidInputError
-from dmprs.io.poses import pose_trajectory, quat_multiply, quat_rotate, resample_poses, split_poses_at_rest
+from dmprs.io.poses import pose_trajectory, resample_poses, split_poses_at_rest
+from dmprs.quaternion import product as quat_multiply
+from dmprs.quaternion import rotate as quat_rotate
 
 
 def smooth_rotations(seed: int, n: int = 40) -> Rotation:

@@ -5,7 +5,7 @@ Readers build them with :func:`pose_trajectory`, which normalizes the quaternion
 on one hemisphere from sample to sample (``q`` and ``-q`` are the same rotation; a sign flip
 between two samples would look like a jump of 2 pi to anything that differentiates the
 orientation). ROS messages store quaternions scalar last; dmprs scalar first. The quaternion
-helpers here are for resampling (slerp) and composing TF chains.
+arithmetic is :mod:`dmprs.quaternion`'s.
 """
 
 from __future__ import annotations
@@ -13,61 +13,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from dmprs import quaternion
 from dmprs._arrays import as_float_array, as_scalar, check_finite, check_increasing
 from dmprs.errors import InvalidInputError
 from dmprs.io.segment import moving_ranges, uniform_count
 from dmprs.trajectory import CartesianTrajectory
 
 __all__ = [
-    "pose_trajectory", "poses_between", "quat_conjugate", "quat_multiply", "quat_rotate", "resample_poses", "slerp",
+    "pose_trajectory", "poses_between", "resample_poses",
     "split_poses_at_rest",
 ]
-
-
-def quat_multiply(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Hamilton product of (..., 4) scalar-first quaternions."""
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack([
-        aw * bw - ax * bx - ay * by - az * bz,
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-    ], axis=-1)
-
-
-def quat_conjugate(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The inverse of a unit quaternion."""
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
-
-
-def quat_rotate(q: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Rotates (..., 3) vectors by (..., 4) unit quaternions: q v q*."""
-    qv = np.concatenate([np.zeros(v.shape[:-1] + (1,)), v], axis=-1)
-    return quat_multiply(quat_multiply(q, qv), quat_conjugate(q))[..., 1:]
-
-
-def _continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Flips signs so that consecutive quaternions are on the same hemisphere."""
-    out = q.copy()
-    for j in range(1, len(out)):
-        if np.dot(out[j], out[j - 1]) < 0:
-            out[j] = -out[j]
-    return out
-
-
-def slerp(q0: NDArray[np.float64], q1: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Spherical linear interpolation between rows of (M, 4) unit quaternions at fractions s (M,)."""
-    dot = np.sum(q0 * q1, axis=-1)
-    q1 = np.where(dot[:, None] < 0, -q1, q1)
-    dot = np.abs(dot).clip(-1.0, 1.0)
-    theta = np.arccos(dot)
-    small = theta < 1e-9
-    sin = np.where(small, 1.0, np.sin(theta))
-    w0 = np.where(small, 1.0 - s, np.sin((1.0 - s) * theta) / sin)
-    w1 = np.where(small, s, np.sin(s * theta) / sin)
-    out = w0[:, None] * q0 + w1[:, None] * q1
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
 
 
 def interpolate_poses(t: NDArray[np.float64], poses: NDArray[np.float64],
@@ -76,7 +31,7 @@ def interpolate_poses(t: NDArray[np.float64], poses: NDArray[np.float64],
     j = np.clip(np.searchsorted(t, t_new, side="right") - 1, 0, len(t) - 2)
     s = ((t_new - t[j]) / (t[j + 1] - t[j])).clip(0.0, 1.0)
     pos = poses[j, :3] + s[:, None] * (poses[j + 1, :3] - poses[j, :3])
-    return np.hstack([pos, slerp(poses[j, 3:], poses[j + 1, 3:], s)])
+    return np.hstack([pos, quaternion.slerp(poses[j, 3:], poses[j + 1, 3:], s)])
 
 
 def pose_trajectory(t: ArrayLike, poses: ArrayLike) -> CartesianTrajectory:
@@ -93,7 +48,7 @@ def pose_trajectory(t: ArrayLike, poses: ArrayLike) -> CartesianTrajectory:
     if (norms < 1e-9).any():
         j = int(np.argmax(norms < 1e-9))
         raise InvalidInputError(f"poses[{j}] has a zero quaternion; orientations must be rotations")
-    return CartesianTrajectory(tt, p[:, :3], _continuous(p[:, 3:] / norms[:, None]))
+    return CartesianTrajectory(tt, p[:, :3], quaternion.continuous(p[:, 3:] / norms[:, None]))
 
 
 def resample_poses(trajectory: CartesianTrajectory, rate: float) -> CartesianTrajectory:

@@ -31,9 +31,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs import quaternion
 from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.io.bagcheck import check_bag
-from dmprs.io.poses import interpolate_poses, pose_trajectory, quat_conjugate, quat_multiply, quat_rotate
+from dmprs.io.poses import interpolate_poses, pose_trajectory
 from dmprs.io.segment import MIN_SAMPLES
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -313,12 +314,12 @@ def read_poses(path: str | Path, topic: str) -> CartesianTrajectory:
 
 def _compose(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """Pose b expressed in the frame of pose a, both (M, 7): T_a * T_b."""
-    return np.hstack([a[:, :3] + quat_rotate(a[:, 3:], b[:, :3]), quat_multiply(a[:, 3:], b[:, 3:])])
+    return np.hstack([a[:, :3] + quaternion.rotate(a[:, 3:], b[:, :3]), quaternion.product(a[:, 3:], b[:, 3:])])
 
 
 def _invert(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    qi = quat_conjugate(a[:, 3:])
-    return np.hstack([-quat_rotate(qi, a[:, :3]), qi])
+    qi = quaternion.conjugate(a[:, 3:])
+    return np.hstack([-quaternion.rotate(qi, a[:, :3]), qi])
 
 
 def _frame_path(edges: dict[tuple[str, str], Any], frame: str, child: str,
