@@ -1,5 +1,6 @@
 """Two independent ROS 2 stacks on the wire: dmprs.ros2 (Cyclone DDS) against the Rust robot node
-(ros2-client / RustDDS). Each test joins its own domain on the loopback interface only."""
+(ros2-client / RustDDS). Each test joins its own domain on the loopback interface only.
+"""
 
 from __future__ import annotations
 
@@ -91,8 +92,11 @@ def test_joint_states_from_the_rust_robot_are_recorded_by_name(robot: RobotNode,
     time.sleep(0.2)  # the robot's writer matches the recorder's reader too
     q = np.arange(300, dtype=float).reshape(100, 3) * 0.01
     qd = -q
+    # at a robot's rate (1 kHz), not in one burst: a burst of 100 overruns the writer's
+    # keep-last-10 history, as it would on a real ROS 2 robot with the default QoS
     for k in range(100):
         robot.publish_joint_state(10.0 + k * 0.001, q[k], qd[k])
+        time.sleep(0.001)
     deadline = time.monotonic() + WAIT
     while len(recorder._rows) < 100 and time.monotonic() < deadline:
         time.sleep(0.01)
