@@ -64,7 +64,8 @@ def timed(fn, repeats: int) -> tuple[float, object]:
 def per_call(fn, repeats: int = 5) -> float:
     """Seconds per call: the median over `repeats` rounds of as many calls as fill about 0.2 s
     (timeit's autorange). Microsecond calls timed one at a time mostly measure the timer and
-    the first call's cold caches."""
+    the first call's cold caches.
+    """
     timer = timeit.Timer(fn)
     number, _ = timer.autorange()
     return statistics.median(timer.repeat(repeats, number)) / number

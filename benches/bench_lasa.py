@@ -48,8 +48,8 @@ def dt_of(traj) -> float:
 
 def bench_dmprs(demos):
     fit, dmps = timed(lambda: [dmprs.DMP.fit(d.t, d.y, N_BASIS) for d in demos])
-    roll, outs = timed(lambda: [m.rollout(dt=dt_of(d), duration=d.duration) for m, d in zip(dmps, demos)])
-    errors = [rms_mm(d, o.t, o.y) for d, o in zip(demos, outs)]
+    roll, outs = timed(lambda: [m.rollout(dt=dt_of(d), duration=d.duration) for m, d in zip(dmps, demos, strict=True)])
+    errors = [rms_mm(d, o.t, o.y) for d, o in zip(demos, outs, strict=True)]
     return fit, roll, errors, "Euler (Rust)"
 
 
@@ -67,7 +67,7 @@ def bench_movement_primitives(demos):
 
     fit, dmps = timed(fit_all)
     roll, outs = timed(lambda: [m.open_loop(step_function="euler-cython") for m in dmps])
-    errors = [rms_mm(d, np.asarray(T), np.asarray(Y)) for d, (T, Y) in zip(demos, outs)]
+    errors = [rms_mm(d, np.asarray(T), np.asarray(Y)) for d, (T, Y) in zip(demos, outs, strict=True)]
     return fit, roll, errors, "euler-cython"
 
 

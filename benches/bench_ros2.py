@@ -45,7 +45,7 @@ def cyclone_goal():
     times, positions = goal_arrays()
     points = [
         m.JointTrajectoryPoint(positions=list(row), time_from_start=m.Duration(sec=int(t), nanosec=round((t % 1) * 1e9)))
-        for t, row in zip(times, positions)
+        for t, row in zip(times, positions, strict=True)
     ]
     return m.FollowJointTrajectory_Goal(trajectory=m.JointTrajectory(joint_names=JOINTS, points=points))
 
@@ -176,7 +176,7 @@ def goals_cyclone_client(domain: int, goals: int) -> tuple[float, float]:
         time.sleep(DISCOVERY_SETTLE)
         goal = cyclone_goal()
         latencies = []
-        for k in range(goals + 10):
+        for _ in range(goals + 10):
             t0 = time.perf_counter()
             handle = client.send_goal(goal, GOAL_TIMEOUT)
             latencies.append(time.perf_counter() - t0)
@@ -195,7 +195,7 @@ def goals_rust_client(domain: int, goals: int) -> tuple[float, float]:
     time.sleep(DISCOVERY_SETTLE)
     times, positions = goal_arrays()
     latencies = []
-    for k in range(goals + 10):
+    for _ in range(goals + 10):
         t0 = time.perf_counter()
         accepted = client.send_goal(JOINTS, np.array(times), positions, GOAL_TIMEOUT)
         latencies.append(time.perf_counter() - t0)
@@ -279,7 +279,7 @@ def main() -> None:
           "| joint states lost | received | receiver CPU (% of a core) |")
     print("|---|---|---:|---:|---:|---:|---:|")
     servers = ["ros2-robot (ros2-client)", "dmprs.ros2 (Cyclone DDS)"]
-    for (client, median, p95, lost, received, cpu), server in zip(rows, servers):
+    for (client, median, p95, lost, received, cpu), server in zip(rows, servers, strict=True):
         print(f"| {client} | {server} | {median:.2f} | {p95:.2f} | {lost} | {received} | {cpu * 100:.1f} |")
     print(f"\nload average at the end: {os.getloadavg()[0]:.1f}")
 

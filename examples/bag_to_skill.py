@@ -49,7 +49,7 @@ def record_demo_bag(path: Path) -> Path:
     q = np.stack([0.9 * s, 0.2 - 0.6 * s, 0.4 * np.sin(np.pi * s)], axis=1)
     with Writer(path, version=9) as w:
         conn = w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=ts)
-        for tk, qk in zip(t, q):
+        for tk, qk in zip(t, q, strict=True):
             ns = 1_700_000_000 * 10**9 + round(tk * 1e9)
             msg = T["sensor_msgs/msg/JointState"](
                 header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](

@@ -37,7 +37,7 @@ def main(iterations: int = 30, seed: int = 1) -> dict:
         results = [episode(np.asarray(x)) for x in xs]
         es.tell(xs, [-r for r, _ in results])  # CMA-ES minimizes: the cost is |eps|
         best["evaluations"] += len(xs)
-        for x, (r, info) in zip(xs, results):
+        for r, info in results:
             if r > best["reward"]:
                 best.update(reward=r, success=info["success"], regime=info.get("regime"), generation=generation)
         print(f"generation {generation:2d}: best |eps| {-best['reward']:.4f} rad, regime {best['regime']}")

@@ -98,7 +98,8 @@ class BagWriter:
 
 def compressed_bag(path: Path, fmt: str, compression: str, n: int = 50, t0_ns: int = 1_700_000_000 * 10**9) -> Path:
     """A bag of ``n`` joint states ("a": sin) written with rosbags' own compression: ROS 2
-    ``file``, ``message`` or ``storage`` (MCAP chunks) zstd, ROS 1 ``bz2`` or ``lz4`` chunks."""
+    ``file``, ``message`` or ``storage`` (MCAP chunks) zstd, ROS 1 ``bz2`` or ``lz4`` chunks.
+    """
     from rosbags.rosbag1 import Writer as W1
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
@@ -135,7 +136,8 @@ def zstd_bomb(payload: bytes, zeros: int) -> bytes:
 
 def file_bomb(bag: Path, zeros: int) -> None:
     """Pads the inflated storage file of a file-compressed ROS 2 bag with ``zeros`` zero bytes
-    (sqlite3 ignores what follows its pages: rosbags reads it as before, after inflating it)."""
+    (sqlite3 ignores what follows its pages: rosbags reads it as before, after inflating it).
+    """
     from backports import zstd
 
     (f,) = [p for p in bag.iterdir() if p.suffix == ".zstd"]
@@ -158,7 +160,8 @@ def message_bomb(bag: Path, zeros: int) -> None:
 
 def ros1_chunk_bomb(path: Path, zeros: int) -> None:
     """Appends to a bz2/lz4-chunked ROS 1 bag a copy of its first chunk padded with ``zeros`` zero
-    bytes (the messages keep their offsets), and points the index at it."""
+    bytes (the messages keep their offsets), and points the index at it.
+    """
     import bz2
     import struct
 
@@ -206,7 +209,8 @@ def ros1_chunk_bomb(path: Path, zeros: int) -> None:
 def mcap_chunk_bomb(bag: Path, zeros: int, *, declare: int | None = None) -> None:
     """Rewrites the MCAP file of a ROS 2 bag as one zstd chunk holding its records followed by
     ``zeros`` zero bytes (records of opcode 0 and length 0, which readers skip), without a summary
-    (so readers scan the data section). ``declare`` overrides the chunk's declared size."""
+    (so readers scan the data section). ``declare`` overrides the chunk's declared size.
+    """
     import struct
 
     from backports import zstd

@@ -17,7 +17,8 @@ def demo() -> tuple[np.ndarray, np.ndarray]:
 
 def crash_after(run_dir, n_trials: int) -> None:
     """Leaves a run directory as a crash after ``n_trials`` finished trials would: their lines in
-    trials.jsonl, and beyond them at most the next trial's arrays (written just before its line)."""
+    trials.jsonl, and beyond them at most the next trial's arrays (written just before its line).
+    """
     log = run_dir / "trials.jsonl"
     lines = log.read_text().splitlines(keepends=True)
     log.write_text("".join(lines[:n_trials]))
@@ -29,5 +30,6 @@ def crash_after(run_dir, n_trials: int) -> None:
 @pytest.fixture(scope="session")
 def calibration_cache(tmp_path_factory):
     """One disk cache of the simulated demonstrations' calibrations for the whole session (the
-    arm's takes about 90 s of MuJoCo): the tests that pour share it instead of each calibrating."""
+    arm's takes about 90 s of MuJoCo): the tests that pour share it instead of each calibrating.
+    """
     return str(tmp_path_factory.mktemp("calibration-cache"))

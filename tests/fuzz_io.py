@@ -478,7 +478,8 @@ def _csv_bytes(edit: str, n: int) -> tuple[bytes, str | None]:
 @functools.cache
 def _npz_bomb() -> bytes:
     """An npz whose y.npy is a valid header claiming 1.1 GiB of zeros, deflated to about 1 MB: the
-    deflate stream of 1 MiB of zeros, flushed, repeated (a full flush makes each copy the same)."""
+    deflate stream of 1 MiB of zeros, flushed, repeated (a full flush makes each copy the same).
+    """
     n = 1100 * 2**20
     header = {"descr": "<f8", "fortran_order": False, "shape": (n // 8,)}
     head = io.BytesIO()
@@ -767,7 +768,8 @@ def _poll_size(directory: Path, peak: list[int], done: Any) -> None:
 
 def bombs(timeout: float = 120.0) -> None:
     """Each bomb in a forked child with its own temporary directory: wall time, the child's peak
-    RSS (wait4) and the peak size of its temporary directory (polled), and how it ended."""
+    RSS (wait4) and the peak size of its temporary directory (polled), and how it ended.
+    """
     import shutil
     import threading
     import time

@@ -34,7 +34,8 @@ HANG_S = 5.0
 
 def _issue_examples() -> list[Any]:
     """The inputs the reliability issue reports, as calls (the learners' PI2 ones included: they
-    belong to the learner configuration, not to these fixes, and show what is left)."""
+    belong to the learner configuration, not to these fixes, and show what is left).
+    """
     import numpy as np
 
     import dmprs

@@ -47,7 +47,8 @@ maybe_count = st.one_of(st.integers(2, 40), count, st.sampled_from(_JUNK))
 @st.composite
 def samples(draw: Any, n_dof_max: int = 3, hostile: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Sample times and positions: usually valid, sometimes short, unsorted, huge or NaN (never
-    broken when not ``hostile``)."""
+    broken when not ``hostile``).
+    """
     if not hostile:
         t = np.linspace(0.0, draw(st.floats(0.05, 20.0)), draw(st.integers(3, 60)))
         y = draw(st.floats(-5, 5)) * np.sin(draw(st.floats(0.1, 30.0)) * t / t[-1])
@@ -276,7 +277,8 @@ def run_learner(a: dict[str, Any]) -> list[Any]:
 # --- files and directories: what a hostile directory does to a save, a load, a resume, a plot ------
 def _snapshot(root: Path) -> dict[str, bytes | str]:
     """Every entry under ``root`` with its content (a link: its target; a FIFO or device: its kind),
-    never following a link or opening anything but a regular file."""
+    never following a link or opening anything but a regular file.
+    """
     import os
     import stat
 
@@ -384,7 +386,8 @@ def _orphans(path: Path, scale: float) -> list[str]:
 def run_database_dir(a: dict[str, Any]) -> list[Any]:
     """Saves and loads a database in a directory made hostile; raises AcceptedGarbage if the
     operation wrote outside it, through a link, over a foreign manifest, left a refused save's
-    files, created files on a read, or left the orphans of an interrupted save."""
+    files, created files on a read, or left the orphans of an interrupted save.
+    """
     import os
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -469,7 +472,8 @@ _RUN_TEMPLATE: dict[str, Path] = {}
 
 def _template_run() -> Path:
     """A logged 2-trial run of the analytic task that did not converge (made once per process;
-    matplotlib imported with it, so that a forked child's plot does not spend seconds on it)."""
+    matplotlib imported with it, so that a forked child's plot does not spend seconds on it).
+    """
     from dmprs.plots import pyplot
 
     pyplot()
@@ -527,7 +531,8 @@ def _set_field(text: str, field: str, value: Any) -> str:
 def run_run_log(a: dict[str, Any]) -> list[Any]:
     """``dmprs resume`` or ``dmprs plot`` of a damaged copy of a logged run, in-process. Clean
     refusals (one line, naming the run's file) become a DmprsError; a traceback re-raises the
-    exception; a write outside the run (through a link) is AcceptedGarbage."""
+    exception; a write outside the run (through a link) is AcceptedGarbage.
+    """
     import shutil
 
     from click.testing import CliRunner
@@ -650,7 +655,8 @@ def env_args(draw: Any) -> dict[str, Any]:
 def run_env(a: dict[str, Any]) -> list[Any]:
     """Drives a fresh copy of the environment through the ops; AcceptedGarbage if a garbage
     action is taken, a step after the episode ended needs no reset, or a seeded episode is not
-    reproducible bit for bit."""
+    reproducible bit for bit.
+    """
     env = type(_env(a["kind"]))(_env(a["kind"]).scenario, action=a["kind"])  # fresh, on the built scenario
     valid = np.full(env.action_space.shape, 1.5 if a["kind"] == "query" else 0.1)
     out: list[Any] = []
@@ -732,7 +738,8 @@ def run_arm(a: dict[str, Any]) -> list[Any]:
     """Builds an arm adapter, task or setup from hostile options and runs one short trial with a
     hostile timeout; AcceptedGarbage for a target beyond any throw (a basket more than 20 m from the
     base or inside the pedestal) or a bottle beyond the scene's 1 l, or a timeout of 0.05 s that
-    did not stop the simulation within 1 s. A refusal must name the option it refuses."""
+    did not stop the simulation within 1 s. A refusal must name the option it refuses.
+    """
     with _naming(*a["opts"], "timeout_s", "noise", "desired", "target"):
         return _arm_ops(a)
 

@@ -1,5 +1,6 @@
 """Small LeRobot datasets in the v2.1 and v3.0 on-disk layouts, written with pyarrow as LeRobot
-writes them (float32 features and timestamps, int64 indices, one row per frame)."""
+writes them (float32 features and timestamps, int64 indices, one row per frame).
+"""
 
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ NAMES = ["shoulder", "elbow", "gripper"]
 
 def episode_states(k: int, period: int | None = None, base_s: float = 1.0) -> np.ndarray:
     """Episode k: a min-jerk reach of amplitude 0.2 (k + 1), base_s + 0.2 j s long (j = k, or
-    k % period to keep the lengths of many episodes bounded), float32 like LeRobot."""
+    k % period to keep the lengths of many episodes bounded), float32 like LeRobot.
+    """
     j = k if period is None else k % period
     n = round((base_s + 0.2 * j) * FPS) + 1
     s = np.linspace(0.0, 1.0, n)
@@ -88,7 +90,8 @@ def write_v2(root: Path, n_episodes: int = 3) -> Path:
 def write_v3(root: Path, n_episodes: int = 3, per_file: int | None = None, period: int | None = None,
              base_s: float = 1.0) -> Path:
     """A v3.0 dataset: ``per_file`` episodes per data file (default: episodes 0-1 in the first
-    file, the rest in the second), their metadata in one episodes parquet file per 1000 episodes."""
+    file, the rest in the second), their metadata in one episodes parquet file per 1000 episodes.
+    """
     for d in ("meta/episodes/chunk-000", "data/chunk-000"):
         (root / d).mkdir(parents=True)
     tmpl = "data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet"

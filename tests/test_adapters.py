@@ -135,7 +135,7 @@ def test_recording_and_replay_serve_the_same_outcomes(tmp_path):
     replay = ReplayAdapter(tmp_path / "rec", spec=AnalyticAdapter().spec)
     assert len(replay) == 4
     with replay:
-        for a, o in zip([0.5, 1.0, 1.5], outcomes):
+        for a, o in zip([0.5, 1.0, 1.5], outcomes, strict=True):
             again = replay.execute(bump(a))
             assert again.status is Status.OK
             assert again.signals == o.signals

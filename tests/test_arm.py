@@ -1,5 +1,6 @@
 """The arm scene's pieces: the model's kinematics against the iiwa data sheet, the IK, the
-liquid's geometry and counting. Fast: no pour here (see test_arm_pouring.py)."""
+liquid's geometry and counting. Fast: no pour here (see test_arm_pouring.py).
+"""
 
 import math
 

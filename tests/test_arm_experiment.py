@@ -1,7 +1,8 @@
 """The arm experiment's encoding and generalization, without simulating: the demonstrations as
 CartesianDMPs, their linear generalization against a second method (the library's Generalizer on
 the rotation vector, which for a rotation about one fixed axis is the discrete DMP of the angle),
-and the pose <-> tangent maps. The pours themselves are tested in test_arm_pouring.py."""
+and the pose <-> tangent maps. The pours themselves are tested in test_arm_pouring.py.
+"""
 
 import numpy as np
 import pytest

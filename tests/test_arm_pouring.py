@@ -1,6 +1,7 @@
 """The arm-pouring adapter and task: tracking, conservation, determinism, a short pour, and every
 kind of bad trajectory refused with a clear message. Small bottles (5-60 spheres) keep the module
-to seconds; the settled liquids are cached per process by the code under test."""
+to seconds; the settled liquids are cached per process by the code under test.
+"""
 
 import math
 
@@ -27,7 +28,8 @@ UP = np.array([1, -1, 1, 1, 1, 1, 1])
 
 def joint_move(amplitude, duration=1.0, dt=0.002, joints=range(7)):
     """From home to home + amplitude on ``joints`` (in the directions UP) and back, min-jerk,
-    with exact velocities."""
+    with exact velocities.
+    """
     home = arm_scene.home_configuration()
     t = np.arange(0, 2 * duration + dt / 2, dt)
     s = min_jerk(t / duration) - min_jerk((t - duration) / duration)

@@ -1,6 +1,7 @@
 """The throwing task on the MuJoCo arm (issue 16 item 4): the ball flies as a ballistic body once
 it leaves the cup, the adapter refuses bad trajectories with reasons, throws are deterministic,
-noise comes from the trial's seed, and an unseen basket is learned within the issue's floor."""
+noise comes from the trial's seed, and an unseen basket is learned within the issue's floor.
+"""
 
 from __future__ import annotations
 
@@ -37,7 +38,8 @@ def test_the_released_ball_lands_where_the_closed_form_says(strength: float, yaw
     """Drag off (MuJoCo's default: no medium), the ball's state at the first step after it left
     the cup fixes its landing: z(t) = z0 + vz t - g t^2 / 2 reaches the ball's radius at t*, and
     it lands at p0 + v t*. MuJoCo's semi-implicit Euler makes the ball fall g dt t / 2 (< 4 mm)
-    ahead of the closed form, i.e. < 1 ms early, < 3 mm along the floor at these speeds."""
+    ahead of the closed form, i.e. < 1 ms early, < 3 mm along the floor at these speeds.
+    """
     m = ts.model()
     assert m.opt.density == 0 and m.opt.viscosity == 0  # no drag
     g = -float(m.opt.gravity[2])
@@ -194,9 +196,9 @@ def test_the_adapter_passes_the_conformance_suite() -> None:
 def test_bad_setup_options_are_refused_with_reasons() -> None:
     with pytest.raises(ValueError, match="generalizer = 'gp' is invalid"):
         arm_throwing_setup((1.0, 0.0), "gp")
-    with pytest.raises(ValueError, match="tol = -0.01 is invalid: must be > 0"):
+    with pytest.raises(ValueError, match=r"tol = -0.01 is invalid: must be > 0"):
         ArmThrowing(-0.01)
-    with pytest.raises(ValueError, match="target|desired_query"):
+    with pytest.raises(ValueError, match=r"target|desired_query"):
         arm_throwing_setup((1.0, float("nan")))
     with pytest.raises(ValueError):
         arm_throwing_setup((1.0, 0.0, 0.0))
@@ -223,7 +225,8 @@ def test_timeout_interrupts_the_simulation(adapter: ArmThrowingAdapter) -> None:
 def test_the_reach_bounds_hold_for_the_fastest_legal_throw() -> None:
     """The reach is an upper bound from the joint speed limits: a full-strength throw (peak joint
     speeds at 91-92 % of their limits) lands well inside it and its release speed is below the
-    bound's."""
+    bound's.
+    """
     span = ts.reach()
     r = _run(throw_trajectory(1.0, 0.0))
     assert r.landed and span.low < float(np.hypot(*r.landing)) < span.high

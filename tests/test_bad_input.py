@@ -1,5 +1,6 @@
 """Every kind of bad input gets a DmprsError (also a ValueError) that says what and where.
-One test per case; none may reach Python as a panic."""
+One test per case; none may reach Python as a panic.
+"""
 
 import numpy as np
 import pytest

@@ -1,5 +1,6 @@
 """dmprs.CartesianDMP and dmprs.CartesianTrajectory against independent truth: the discrete DMP of
-a fixed-axis rotation's angle, scipy's rotations, and the invariants of the quaternion DMP."""
+a fixed-axis rotation's angle, scipy's rotations, and the invariants of the quaternion DMP.
+"""
 
 from __future__ import annotations
 

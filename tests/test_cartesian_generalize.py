@@ -1,5 +1,6 @@
 """Pose demonstrations in the Database and the Generalizer: saved, loaded and checksummed like the
-others; "linear" slerps (against scipy's Slerp) and both methods reproduce their demos."""
+others; "linear" slerps (against scipy's Slerp) and both methods reproduce their demos.
+"""
 
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
 """CMA-ES (the cma package) as a one-candidate-at-a-time ask/tell learner: solves smooth
 problems, is deterministic, learns in the query space through dmprs.learn and in the weight space
-as a baseline that logs and resumes like PoWER and PI²."""
+as a baseline that logs and resumes like PoWER and PI².
+"""
 
 import numpy as np
 import pytest

@@ -33,7 +33,7 @@ def db() -> dmprs.Database:
 
 def assert_same(a: dmprs.Database, b: dmprs.Database) -> None:
     assert (a.query_names, a.query_units, len(a)) == (b.query_names, b.query_units, len(b))
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=True):
         assert x.query.tobytes() == y.query.tobytes()
         assert x.trajectory == y.trajectory  # bit-exact arrays, same optional fields
         assert (x.label, dict(x.metadata)) == (y.label, dict(y.metadata))
@@ -234,7 +234,7 @@ def test_a_failed_save_leaves_the_previous_database_loadable(db, tmp_path, monke
 
 def test_bad_records():
     d = dmprs.Database(("q",), ("m",))
-    with pytest.raises(InvalidInputError, match="expected a dmprs.Trajectory"):
+    with pytest.raises(InvalidInputError, match=r"expected a dmprs.Trajectory"):
         d.add([0.0], np.zeros((10, 2)))
     with pytest.raises(InvalidInputError, match="JSON-serializable"):
         d.add([0.0], traj(0), metadata={"x": object()})
@@ -249,7 +249,7 @@ def test_bad_records():
 
 def test_a_saved_database_generalizes_identically(tmp_path):
     d = dmprs.Database(("q",))
-    for k, q in enumerate([0.0, 1.0]):
+    for q in [0.0, 1.0]:
         t = np.linspace(0, 1 + 0.2 * q, 200)
         d.add(q, dmprs.Trajectory(t, np.stack([np.sin(t) * (1 + q), t**2], axis=1)))
     d.save(tmp_path / "db")
@@ -310,7 +310,7 @@ def test_save_keeps_a_users_file_named_like_a_demo_file(tmp_path):
     mine = tmp_path / "db" / "demo_0123456789abcdef.npz"
     mine.parent.mkdir()
     mine.write_bytes(b"my own data")
-    with pytest.raises(DatabaseError, match="without a manifest.json .*demo_0123456789abcdef.npz.*refusing"):
+    with pytest.raises(DatabaseError, match=r"without a manifest.json .*demo_0123456789abcdef.npz.*refusing"):
         _two_demo_db().save(tmp_path / "db")  # its name says dmprs wrote it, its content does not
     mine.unlink()
     _two_demo_db().save(tmp_path / "db")
@@ -432,7 +432,7 @@ def test_devices_fifos_and_directories_are_refused_at_once(tmp_path, kind):
     plant(path / "manifest.json")
     with pytest.raises(DatabaseError, match=rf"manifest\.json: is {what}; a manifest must be a regular file"):
         dmprs.Database.load(path)
-    with pytest.raises(DatabaseError, match="is not a dmprs database's .*refusing"):
+    with pytest.raises(DatabaseError, match=r"is not a dmprs database's .*refusing"):
         _two_demo_db().save(path)
 
 

@@ -105,7 +105,7 @@ def test_rollout_batch_equals_one_by_one(demo):
     dmps = [base.with_tau(0.5 + 0.01 * k).with_goal(base.goal + 0.01 * k) for k in range(100)]
     batch = dmprs.rollout_batch(dmps, dt=0.002)
     assert len(batch) == 100
-    for d, tr in zip(dmps, batch):
+    for d, tr in zip(dmps, batch, strict=True):
         assert tr == d.rollout(dt=0.002)
 
 

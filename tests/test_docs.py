@@ -1,6 +1,7 @@
 """The docs ship with the code: every ``<name>.md §N`` reference in the repository's .py, .rs, .md
 and .toml files names a file in the repository that has a heading numbered N, and every relative
-link in README.md and docs/*.md points to a file that exists."""
+link in README.md and docs/*.md points to a file that exists.
+"""
 
 from __future__ import annotations
 
@@ -47,7 +48,8 @@ class Reference:
 
 def repository_files(root: Path) -> list[Path]:
     """The files of the repository: git's tracked and untracked-but-not-ignored files, or, without
-    git, every file outside build output and caches."""
+    git, every file outside build output and caches.
+    """
     try:
         out = subprocess.run(["git", "ls-files", "--cached", "--others", "--exclude-standard", "-z"],
                              cwd=root, capture_output=True, check=True).stdout
@@ -90,7 +92,8 @@ def _outside_code_fences(text: str) -> list[tuple[int, str]]:
 
 def sections(path: Path) -> dict[str, list[str]]:
     """Numbered headings of a markdown file -> the lines under each (up to the next heading of the
-    same or a higher level)."""
+    same or a higher level).
+    """
     out: dict[str, list[str]] = {}
     open_sections: list[tuple[int, str]] = []
     for _, line in _outside_code_fences(path.read_text(encoding="utf-8")):
@@ -110,7 +113,8 @@ def sections(path: Path) -> dict[str, list[str]]:
 
 def resolve(ref: Reference, root: Path) -> Path | None:
     """The file a reference names: relative to the citing file, the repository root or (for a
-    bare name) docs/, whichever exists inside the repository."""
+    bare name) docs/, whichever exists inside the repository.
+    """
     name = Path(ref.file)
     candidates = [ref.source.parent / name, root / name]
     if len(name.parts) == 1:
@@ -147,7 +151,8 @@ def broken_references(root: Path, files: list[Path]) -> tuple[list[str], int]:
 
 def broken_links(root: Path, markdown_files: list[Path]) -> tuple[list[str], int]:
     """Every relative link of the given markdown files whose target does not exist; and how many
-    relative links were checked."""
+    relative links were checked.
+    """
     problems, n = [], 0
     for md in markdown_files:
         for i, line in _outside_code_fences(md.read_text(encoding="utf-8")):

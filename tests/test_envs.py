@@ -1,5 +1,6 @@
 """The Gymnasium environments: Gymnasium's own checker, determinism, and each step against the
-task pipeline run by hand."""
+task pipeline run by hand.
+"""
 
 from __future__ import annotations
 
@@ -26,7 +27,8 @@ KWARGS = {"dmprs/MatchboxFlip-v0": {}, "dmprs/MatchboxFlipWeights-v0": {},
 @contextlib.contextmanager
 def quiet_checker():
     """The matchbox has one context (the desired angle pi/2): its observation box is a point,
-    which Gymnasium's checkers note; query actions are in task units, not normalized, also noted."""
+    which Gymnasium's checkers note; query actions are in task units, not normalized, also noted.
+    """
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*maximum and minimum values are equal")
         warnings.filterwarnings("ignore", message=".*symmetric and normalized space")

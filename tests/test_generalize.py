@@ -16,7 +16,8 @@ def min_jerk(s):
 
 def trajectory(q, n_dof=2, samples=400, derivatives=False):
     """A demo whose goal, amplitude, shape and duration all depend on the (scalar or vector)
-    query."""
+    query.
+    """
     q = np.atleast_1d(np.asarray(q, dtype=float))
     tau = 1.0 + 0.3 * q[0] + (0.1 * q[1] if q.size > 1 else 0.0)
     t = np.linspace(0.0, tau, samples)
@@ -70,7 +71,7 @@ def test_linear_uses_measured_derivatives():
 def test_linear_on_a_triangle_of_2d_queries():
     queries = [np.array([0.0, 0.0]), np.array([1.0, 0.0]), np.array([0.0, 2.0])]
     gen = dmprs.Generalizer(database(queries), "linear", n_basis=10)
-    for q, d in zip(queries, gen.demo_dmps):
+    for q, d in zip(queries, gen.demo_dmps, strict=True):
         assert gen.predict(q) == d
     # Barycentric coordinates of (0.25, 0.5): 0.5, 0.25, 0.25.
     want = 0.5 * flat(gen.demo_dmps[0]) + 0.25 * flat(gen.demo_dmps[1]) + 0.25 * flat(gen.demo_dmps[2])
@@ -123,7 +124,7 @@ def test_lwr_gp_reproduces_its_demos_to_ridge_precision(kernel):
     queries = [0.0, 0.3, 0.9, 1.4, 2.0]  # 5 demos: ML-II for the GPs
     db = database(queries)
     gen = dmprs.Generalizer(db, "lwr-gp", n_basis=20, kernel=kernel)
-    for demo, own in zip(db, gen.demo_dmps):
+    for demo, own in zip(db, gen.demo_dmps, strict=True):
         got, want = flat(gen.predict(demo.query)), flat(own)
         # Weights: the demo's own fit (same ridge), exactly. tau, g, y0: to GP-noise precision.
         assert np.array_equal(gen.predict(demo.query).weights, own.weights)
@@ -178,7 +179,7 @@ def test_lwr_gp_with_an_affine_trend_extrapolates_like_linear_on_affine_data(que
         assert np.abs(aff.parameters(q) - want).max() < 1e-6 * np.abs(want).max(), q
     far = [2.4] * n  # the constant trend cannot get there
     assert np.abs(plain.parameters(far) - lin.parameters(far)).max() > 0.05 * np.abs(lin.parameters(far)).max()
-    for demo, own in zip(db, plain.demo_dmps):  # the demos as the default reproduces them
+    for demo, own in zip(db, plain.demo_dmps, strict=True):  # the demos as the default reproduces them
         assert np.array_equal(aff.predict(demo.query).weights, own.weights)
 
 
@@ -309,7 +310,7 @@ def test_bad_options():
         dmprs.Generalizer(db, "lwr-gp", kernel="box")
     with pytest.raises(InvalidInputError, match="bandwidth = 1 is invalid"):
         dmprs.Generalizer(db, "lwr-gp", bandwidth=1.0)
-    with pytest.raises(InvalidInputError, match="expected a dmprs.Database"):
+    with pytest.raises(InvalidInputError, match=r"expected a dmprs.Database"):
         dmprs.Generalizer([(0.0, trajectory(0.0))], "linear")
 
 

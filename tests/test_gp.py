@@ -1,5 +1,6 @@
 """dmprs.GaussianProcess against scikit-learn's GaussianProcessRegressor (an independent
-implementation): same kernel, same data, same hyperparameters -> same predictions."""
+implementation): same kernel, same data, same hyperparameters -> same predictions.
+"""
 
 import numpy as np
 import pytest
@@ -24,7 +25,8 @@ def problem(seed: int, m: int = 30, n: int = 2):
 
 def sklearn_fixed(X, y, length_scale, signal_var, noise_var):
     """Our model is sklearn's on centred outputs (constant prior mean = the training mean).
-    alpha = noise_var (no WhiteKernel) makes sklearn's std the latent std, as ours."""
+    alpha = noise_var (no WhiteKernel) makes sklearn's std the latent std, as ours.
+    """
     k = C(signal_var, "fixed") * RBF(length_scale, "fixed")
     return sk_gp.GaussianProcessRegressor(k, alpha=noise_var, optimizer=None).fit(X, y - y.mean())
 

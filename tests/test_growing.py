@@ -1,6 +1,7 @@
 """The "learning gets faster as the database grows" reproduction part: its plan, floors, table and
 figure (the runs themselves are the reproduction's job, minutes of pouring), and the pouring
-task's sub-stepped rollout it uses."""
+task's sub-stepped rollout it uses.
+"""
 
 import pickle
 
@@ -14,7 +15,7 @@ from dmprs.tasks.pouring import Pouring, tilt_profile
 def sequence(gen, trials, first_errors, seed=0):
     runs = [{"volume": 0.3 + 0.05 * k, "n_demos": 2 + k, "converged": True, "trials_to_success": t,
              "n_trials": t, "first_error_ml": e, "first_success": abs(e) < 10, "stop_reason": ""}
-            for k, (t, e) in enumerate(zip(trials, first_errors))]
+            for k, (t, e) in enumerate(zip(trials, first_errors, strict=True))]
     return {"kind": "growing", "generalizer": gen, "order_seed": seed, "learner": "secant", "max_trials": 12,
             "options": {}, "runs": runs}
 

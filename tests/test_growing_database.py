@@ -1,5 +1,6 @@
 """A database that grows: what Database.add does with a query already present, and learn(...,
-database=) never losing a finished run to it."""
+database=) never losing a finished run to it.
+"""
 
 import numpy as np
 import pytest

@@ -1,7 +1,8 @@
 """Bags checked before rosbags opens them (dmprs.io.bagcheck): compressed bags of every kind rosbags
 writes read back exactly, compression bombs of every kind are refused after a bounded amount of
 work (nothing written to the temporary directory), and FIFOs, devices and crafted metadata are
-refused at once, naming the file."""
+refused at once, naming the file.
+"""
 
 from __future__ import annotations
 
@@ -35,7 +36,8 @@ def bag(tmp_path, fmt, compression):
 @pytest.fixture
 def small_limits(monkeypatch, tmp_path):
     """Pieces may inflate to 1 MiB + 100 x their size; rosbags' temporary files go to a fresh
-    directory, which must stay empty."""
+    directory, which must stay empty.
+    """
     monkeypatch.setattr(bagcheck, "INFLATE_FLOOR_BYTES", 2**20)
     tmp = tmp_path / "tmpdir"
     tmp.mkdir()
@@ -67,7 +69,7 @@ def test_compression_bombs_are_refused_before_rosbags_inflates_them(tmp_path, sm
         read_joint_states(path)
     bagcheck.INFLATE_FLOOR_BYTES = 64 * 2**20  # within the default limits (monkeypatch restores them)
     if make is message_bomb:  # rosbags inflates the padded message, and CDR refuses the padding
-        with pytest.raises(InvalidInputError, match="not a readable ROS bag.*CDR message size mismatch"):
+        with pytest.raises(InvalidInputError, match=r"not a readable ROS bag.*CDR message size mismatch"):
             read_joint_states(path)
     else:  # the padding is ignored (sqlite pages, empty MCAP records, bytes after the ROS 1 messages)
         assert len(read_joint_states(path).trajectory) == 50

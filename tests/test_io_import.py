@@ -1,5 +1,6 @@
 """``dmprs demos import`` and the readers behind it (bags, LeRobot, CSV, npz), and the export of a
-rolled-out trajectory to a ROS 2 bag and CSV."""
+rolled-out trajectory to a ROS 2 bag and CSV.
+"""
 
 from __future__ import annotations
 
@@ -145,7 +146,7 @@ def test_import_poses_from_tf_into_a_database_of_pose_demonstrations(tmp_path):
     poses = np.hstack([np.stack([0.3 * s, 0.1 * s, 0 * s], axis=1), rot])
     bag = bag_path(tmp_path, "ros1", "pour")
     with BagWriter(bag, "ros1") as w:
-        for tk, pk in zip(t, poses):
+        for tk, pk in zip(t, poses, strict=True):
             ns = T0 + round(tk * 1e9)
             w.write("/tf", w.tf_message(ns, [("world", "tool", pk)]), ns)
     table = tmp_path / "q.csv"
@@ -166,7 +167,7 @@ def test_import_poses_from_tf_into_a_database_of_pose_demonstrations(tmp_path):
 
 def _err(res):
     """The CLI failed with exactly one line, 'Error: ...', and no traceback."""
-    assert res.exit_code != 0 and res.exception is None or isinstance(res.exception, SystemExit), res.output
+    assert (res.exit_code != 0 and res.exception is None) or isinstance(res.exception, SystemExit), res.output
     lines = [line for line in res.output.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("Error: "), res.output
     return lines[0]

@@ -29,7 +29,8 @@ JOINTS = ("shoulder", "elbow", "wrist")
 def recording(rate: float = 100.0) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float]]]:
     """Two movements separated by rests: 0.5 s rest, 1 s move, 1 s rest, 1.2 s move back, 0.5 s
     rest. Returns times (s, slightly jittered as a real clock), positions (T, 3) and the true
-    movement ranges."""
+    movement ranges.
+    """
     t = np.arange(0.0, 4.2, 1.0 / rate)
     t = t + np.random.default_rng(0).uniform(-1e-4, 1e-4, t.shape)
     t[0] = 0.0
@@ -43,7 +44,7 @@ def recording(rate: float = 100.0) -> tuple[np.ndarray, np.ndarray, list[tuple[f
 def write_joint_bag(tmp_path, fmt, t, y):
     path = bag_path(tmp_path, fmt)
     with BagWriter(path, fmt) as w:
-        for k, (tk, yk) in enumerate(zip(t, y)):
+        for k, (tk, yk) in enumerate(zip(t, y, strict=True)):
             ns = T0 + round(tk * 1e9)
             # the arm's publisher sends its joints in its own order, with an extra one
             w.write("/joint_states", w.joint_state(ns, ["wrist", "finger", "elbow", "shoulder"],
@@ -67,7 +68,7 @@ def test_joint_states_round_trip_exactly_and_segment(tmp_path, fmt):
     np.testing.assert_array_equal(rec.trajectory.y, y)  # float64 round trip, reordered by name
     ranges = motion_ranges(rec.trajectory.t, rec.trajectory.y, speed_tol=0.02)
     assert len(ranges) == 2
-    for (a, b), (ta, tb) in zip(ranges, truth):
+    for (a, b), (ta, tb) in zip(ranges, truth, strict=True):
         assert abs(a - ta) < 0.05 and abs(b - tb) < 0.05
     demos = split_at_rest(rec.trajectory, speed_tol=0.02)
     assert [d.t[0] for d in demos] == [0.0, 0.0]
@@ -124,7 +125,7 @@ def test_tf_chain_and_pose_topic(tmp_path, fmt):
     path = bag_path(tmp_path, fmt)
     with BagWriter(path, fmt) as w:
         w.write("/tf_static", w.tf_message(T0, [("world", "base", base)]), T0)
-        for tk, pk in zip(t, tool):
+        for tk, pk in zip(t, tool, strict=True):
             ns = T0 + round(tk * 1e9)
             w.write("/tf", w.tf_message(ns, [("base", "tool", pk)]), ns)
             w.write("/tool_pose", w.pose_stamped(ns, "world", pk), ns)
@@ -146,7 +147,7 @@ def test_tf_chain_and_pose_topic(tmp_path, fmt):
     half = resample_poses(poses, 40.0)  # interpolates between samples (every 50 ms) at 25 ms
     mid = Rotation.from_euler("x", 0.8 * half.t[:, None])
     assert np.all(np.abs(np.sum(half.quaternion * mid.as_quat(scalar_first=True), axis=1)) > 1 - 1e-12)
-    with pytest.raises(InvalidInputError, match="no frame 'hand'.*base, tool, world"):
+    with pytest.raises(InvalidInputError, match=r"no frame 'hand'.*base, tool, world"):
         read_tf(path, "world", "hand")
 
 
@@ -176,7 +177,7 @@ def test_a_tf_recording_fitted_by_a_cartesian_dmp(tmp_path):
     path = bag_path(tmp_path, "ros2-mcap")
     with BagWriter(path, "ros2-mcap") as w:
         w.write("/tf_static", w.tf_message(T0, [("world", "base", base)]), T0)
-        for tk, pk in zip(t, tool):
+        for tk, pk in zip(t, tool, strict=True):
             ns = T0 + round(tk * 1e9)
             w.write("/tf", w.tf_message(ns, [("base", "tool", pk)]), ns)
     demo = read_tf(path, "world", "tool")
@@ -197,7 +198,7 @@ def write_stamped(tmp_path, fmt, stamps_ns, positions, names=("a",), name="odd")
     tmp_path.mkdir(parents=True, exist_ok=True)
     path = bag_path(tmp_path, fmt, name)
     with BagWriter(path, fmt) as w:
-        for k, (ns, p) in enumerate(zip(stamps_ns, positions)):
+        for k, (ns, p) in enumerate(zip(stamps_ns, positions, strict=True)):
             w.write("/joint_states", w.joint_state(ns, names, p), T0 + k * 10_000_000)
     return path
 
@@ -230,7 +231,8 @@ def test_recordings_that_cannot_be_meant_are_refused_naming_bag_topic_and_messag
 
 def test_out_of_order_and_repeated_stamps_are_sorted_and_deduplicated(tmp_path):
     """Repaired, not refused: two publishers interleave, so bag order is not stamp order, and a
-    repeated stamp keeps its first message."""
+    repeated stamp keeps its first message.
+    """
     stamps = [T0 + k * 10_000_000 for k in (0, 2, 1, 3, 3, 4)]
     rec = read_joint_states(write_stamped(tmp_path, "ros2-mcap", stamps, [[float(k)] for k in range(6)]))
     np.testing.assert_allclose(rec.trajectory.t, [0.0, 0.01, 0.02, 0.03, 0.04], atol=1e-12)

@@ -1,5 +1,6 @@
 """Real human demonstrations: all 210 of the LASA handwriting data set, fitted and reproduced by
-``DMP.fit``, and the closed-form response of the DMP to a change of goal or start."""
+``DMP.fit``, and the closed-form response of the DMP to a change of goal or start.
+"""
 
 from __future__ import annotations
 
@@ -46,7 +47,8 @@ def closed_form(t, tau, alpha_z):
     """With beta_z = alpha_z / 4 the DMP (eqs. 1-2) is a critically damped spring with
     omega = alpha_z / (2 tau), driven by a forcing term that does not depend on y, g or y0; so
     moving the goal by dg moves the path by dg (1 - (1 + w t) e^{-w t}) and moving the start by
-    dy0 moves it by dy0 (1 + w t) e^{-w t}."""
+    dy0 moves it by dy0 (1 + w t) e^{-w t}.
+    """
     w = alpha_z / (2 * tau)
     decay = (1 + w * t) * np.exp(-w * t)
     return 1 - decay, decay

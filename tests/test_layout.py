@@ -1,6 +1,7 @@
 """The package's layout keeps its promises: no module imports one that imports it back (not even
 lazily, inside a function), and ``import dmprs`` loads no simulator, file format, middleware or
-framework (they load where they are used)."""
+framework (they load where they are used).
+"""
 
 from __future__ import annotations
 
@@ -30,7 +31,8 @@ def _modules() -> dict[str, Path]:
 
 def _imports(module: str, path: Path, known: set[str]) -> set[str]:
     """The package's modules ``module`` imports anywhere in its body (functions included; not
-    under ``if TYPE_CHECKING``, which never runs)."""
+    under ``if TYPE_CHECKING``, which never runs).
+    """
     package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
     found: set[str] = set()
     for node in ast.walk(ast.parse(path.read_text())):

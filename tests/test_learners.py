@@ -207,7 +207,7 @@ def test_pi2_terminal_only_without_projection_is_pi_bb():
     c = np.array([s for _, s in samples])
     w = np.exp(-10 * (c - c.min()) / (c.max() - c.min()))
     w /= w.sum()
-    expected = theta + sum(wk * (th - theta) for wk, (th, _) in zip(w, samples))
+    expected = theta + sum(wk * (th - theta) for wk, (th, _) in zip(w, samples, strict=True))
     np.testing.assert_allclose(p.theta, expected, rtol=0, atol=1e-12)
 
 
@@ -263,11 +263,11 @@ def test_low_not_below_high(cls, low, high):
 def test_error_learning_limits_and_parameters():
     with pytest.raises(InvalidInputError, match="must be < high"):
         L.ErrorLearning([0.5, 0.5], low=[0.0, 1.0], high=[1.0, 0.5])
-    with pytest.raises(InvalidInputError, match="q0 = 2 .* must lie within"):
+    with pytest.raises(InvalidInputError, match=r"q0 = 2 .* must lie within"):
         L.ErrorLearning(2.0, low=0.0, high=1.0)
     with pytest.raises(InvalidInputError, match="q0\\[1\\] is NaN"):
         L.ErrorLearning([0.0, np.nan])
-    with pytest.raises(InvalidInputError, match="jacobian = 'newton'|jacobian = \"newton\""):
+    with pytest.raises(InvalidInputError, match=r"jacobian = 'newton'|jacobian = \"newton\""):
         L.ErrorLearning(0.0, jacobian="newton")
     with pytest.raises(InvalidInputError, match="invertible"):
         L.ErrorLearning([0.0, 0.0], jacobian=np.zeros((2, 2)))
@@ -277,14 +277,14 @@ def test_error_learning_limits_and_parameters():
         L.ErrorLearning(0.0, scale=0.0)
     with pytest.raises(InvalidInputError, match="max_trials = 0"):
         L.ErrorLearning(0.0, max_trials=0)
-    with pytest.raises(InvalidInputError, match="mode = 'fast'|mode = \"fast\""):
+    with pytest.raises(InvalidInputError, match=r"mode = 'fast'|mode = \"fast\""):
         L.GoldenSection(0.5, low=0.0, high=1.0, mode="fast")
 
 
 def test_baseline_bad_input():
     with pytest.raises(InvalidInputError, match="sigma has 3 entries, expected 1 or 4"):
         L.PoWER(np.zeros(4), [0.1, 0.1, 0.1])
-    with pytest.raises(InvalidInputError, match="sigma = -0.1"):
+    with pytest.raises(InvalidInputError, match=r"sigma = -0.1"):
         L.PoWER(np.zeros(4), -0.1)
     p = L.PoWER(np.zeros(4), 0.1)
     th = p.ask()
@@ -366,7 +366,7 @@ def test_a_learner_never_asks_a_non_finite_query():
     p = L.PoWER(np.zeros(3), 0.3)
     p.tell(p.ask(), 1e308)  # a finite return: divided by the largest, it cannot overflow the mean
     assert p.status == "running" and np.isfinite(p.mean).all() and np.isfinite(p.ask()).all()
-    with pytest.raises(InvalidInputError, match="sigma = 1e200 .* overflows"):
+    with pytest.raises(InvalidInputError, match=r"sigma = 1e200 .* overflows"):
         L.PoWER(np.zeros(3), 1e200)
     el = L.ErrorLearning(1.0, gain=1e308)
     el.tell(el.ask(), 10.0)

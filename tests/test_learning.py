@@ -1,5 +1,6 @@
 """The learning loop end to end on the analytic task: convergence, the trial log, crash safety,
-resume, faults, and the database growing with experience."""
+resume, faults, and the database growing with experience.
+"""
 
 import json
 
@@ -124,7 +125,7 @@ def test_an_unreadable_run_directory(tmp_path):
     with pytest.raises(RunLogError, match="not a run directory"):
         RunLog(tmp_path / "missing").read()
     (tmp_path / "run.json").write_text("{not json")
-    with pytest.raises(RunLogError, match="run.json is not a readable run description"):
+    with pytest.raises(RunLogError, match=r"run.json is not a readable run description"):
         RunLog(tmp_path).meta()
     (tmp_path / "run.json").write_text('{"schema_version": 99}')
     with pytest.raises(RunLogError, match="schema version 99"):

@@ -1,6 +1,7 @@
 """Error learning over n-D queries (docs/method.md §5.4): J from numerical derivatives through
 trials, refined by Broyden's update, and a trust region for maps far from linear; checked on maps
-whose roots are known in closed form."""
+whose roots are known in closed form.
+"""
 
 import numpy as np
 import pytest

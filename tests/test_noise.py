@@ -1,5 +1,6 @@
 """A noisy robot: execution, contact and measurement noise drawn from the trial's seed, off by
-default (then nothing changes), reproducible per seed."""
+default (then nothing changes), reproducible per seed.
+"""
 
 import math
 
@@ -68,9 +69,9 @@ def test_pouring_measurement_noise_is_on_the_reading_not_the_liquid():
 
 
 def test_bad_noise_levels():
-    with pytest.raises(InvalidInputError, match="noise.execution"):
+    with pytest.raises(InvalidInputError, match=r"noise.execution"):
         Noise(execution=-1.0)
-    with pytest.raises(InvalidInputError, match="noise.measurement"):
+    with pytest.raises(InvalidInputError, match=r"noise.measurement"):
         Noise(measurement=float("nan"))
 
 
@@ -93,7 +94,7 @@ def test_outliers_are_drawn_only_when_on_and_then_from_the_seed():
     share = np.mean(np.abs(readings) > 0.1)  # an outlier of scale 10 is beyond 0.1 in 99 % of draws
     assert 0.45 < share < 0.55
     for bad in ({"outliers": 0.1}, {"outlier_scale": 1.0}, {"outliers": 1.5, "outlier_scale": 1.0}):
-        with pytest.raises(InvalidInputError, match="noise.outlier"):
+        with pytest.raises(InvalidInputError, match=r"noise.outlier"):
             Noise(**bad)
 
 

@@ -276,11 +276,11 @@ def test_bad_bottle_volumes_raise(volume, words):
 
 
 def test_other_bad_input_raises():
-    with pytest.raises(dmprs.InvalidInputError, match="target_volume = 0.4 l exceeds"):
+    with pytest.raises(dmprs.InvalidInputError, match=r"target_volume = 0.4 l exceeds"):
         Pouring(0.3, target_volume=0.4)
     with pytest.raises(dmprs.InvalidInputError, match="peak"):
         tilt_profile(float("nan"))
-    with pytest.raises(dmprs.InvalidInputError, match="desired_query = -0.5 l"):
+    with pytest.raises(dmprs.InvalidInputError, match=r"desired_query = -0.5 l"):
         Pouring(0.5).validate_query([-0.5])
     with pytest.raises(dmprs.InvalidInputError, match="bracket"):
         calibrate_peak_tilt(0.3, bracket=(1.0, 3.0))

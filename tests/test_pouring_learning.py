@@ -1,6 +1,7 @@
 """Pouring learned as in the paper (Fig. 9): golden-section error learning pours 0.2 l +- 10 ml
 from bottles of 0.4, 0.5 and 0.7 l within 7 trials. The demonstrations' calibration (about 15 s
-of simulation) runs once per process."""
+of simulation) runs once per process.
+"""
 
 import pytest
 

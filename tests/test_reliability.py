@@ -1,5 +1,6 @@
 """Regressions for the reliability issue: each input here once panicked, aborted, hung, leaked a
-non-dmprs exception type or returned garbage; now each gives a finite result or a clear error."""
+non-dmprs exception type or returned garbage; now each gives a finite result or a clear error.
+"""
 
 from __future__ import annotations
 

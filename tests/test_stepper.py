@@ -1,6 +1,7 @@
 """dmprs.stepper against independent truth: the offline rollout (sample for sample, to 1e-12),
 the rollout at a finer step (sub-steps), the limits it must meet, a goal change, a sphere on the
-path, and the invariants of the online clock."""
+path, and the invariants of the online clock.
+"""
 
 from __future__ import annotations
 
@@ -269,7 +270,8 @@ def test_bad_step_inputs_name_the_argument() -> None:
 )
 def test_the_clock_only_ever_slows(held, offset, v_scale) -> None:
     """Invariants under any measurement and limit: the phase decreases and stays in (0, 1], the
-    time scale never drops below the nominal tau, and velocities stay within their limits."""
+    time scale never drops below the nominal tau, and velocities stay within their limits.
+    """
     dmp = reach(2)
     v_max = np.abs(dmp.rollout(0.001).yd).max(axis=0) / v_scale
     stepper = dmp.stepper(0.001, velocity_max=v_max)
@@ -285,7 +287,8 @@ def test_the_clock_only_ever_slows(held, offset, v_scale) -> None:
 
 def test_a_constant_coupling_term_shifts_the_rest_point_by_c_over_the_spring() -> None:
     """At rest eq. 1 with a coupling C reads alpha_z beta_z (g - y) + C = 0: y = g + C / (alpha_z
-    beta_z), for a joint DMP and the position and orientation of a Cartesian one."""
+    beta_z), for a joint DMP and the position and orientation of a Cartesian one.
+    """
     dmp = reach(2)
     stepper = dmp.stepper(0.001)
     c = np.array([5.76, -2.88])

@@ -1,6 +1,7 @@
 """One trial runner for every loop: bad adapter output becomes a logged error trial that never
 reaches the learner, the run stops cleanly and can be resumed; the weight-space baselines log
-through the same runner and resume bit for bit."""
+through the same runner and resume bit for bit.
+"""
 
 import json
 

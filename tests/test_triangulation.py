@@ -1,6 +1,7 @@
 """The triangulated "linear" generalizer (dmprs.triangulation) over more than n + 1 demos:
 exact at every demo, continuous across simplices, equal to scipy's LinearNDInterpolator inside the
-hull, affine extrapolation outside, repeats averaged."""
+hull, affine extrapolation outside, repeats averaged.
+"""
 
 import numpy as np
 import pytest
@@ -69,7 +70,7 @@ def test_agrees_with_scipy_inside_the_hull(gen2d):
     expected = truth(pts)
     inside = ~np.isnan(expected[:, 0])
     assert inside.sum() > 50
-    for p, e in zip(pts[inside], expected[inside]):
+    for p, e in zip(pts[inside], expected[inside], strict=True):
         np.testing.assert_allclose(gen2d.parameters(p), e, rtol=1e-9, atol=1e-9)
 
 

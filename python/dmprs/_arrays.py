@@ -85,7 +85,8 @@ def as_count(value: Any, name: str, minimum: int) -> int:
 
 def as_scalar(value: Any, name: str, *, positive: bool = False) -> float:
     """A finite real scalar (strictly positive if asked). Numbers only: a string such as
-    ``"0.01"`` is refused rather than parsed, and so are booleans."""
+    ``"0.01"`` is refused rather than parsed, and so are booleans.
+    """
     numeric = isinstance(value, (int, float, np.number)) or (
         isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "fiu"
     )

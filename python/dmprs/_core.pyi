@@ -121,7 +121,8 @@ _CartesianArrays: TypeAlias = tuple[
 class CartesianDmp(_Primitive):
     """Position + unit-quaternion DMP of crates/dmp-core/src/cartesian.rs; documented by
     dmprs.cartesian. Rollouts give (t, position, quaternion, velocity, angular_velocity,
-    acceleration, angular_acceleration)."""
+    acceleration, angular_acceleration).
+    """
 
     def __new__(
         cls,
@@ -611,7 +612,8 @@ _PoseDemoArrays: TypeAlias = tuple[
 @final
 class CartesianGeneralizer:
     """crates/dmp-core/src/cartesian_generalize.rs; built and documented by dmprs.Generalizer.
-    Demos are (t, pose, velocity, acceleration, angular_velocity, angular_acceleration)."""
+    Demos are (t, pose, velocity, acceleration, angular_velocity, angular_acceleration).
+    """
 
     def __new__(
         cls,

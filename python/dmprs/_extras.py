@@ -1,5 +1,6 @@
 """The optional packages dmprs can use, and the extra of ``pyproject.toml`` that installs each:
-one table, so that every "needs X" message names the same install command."""
+one table, so that every "needs X" message names the same install command.
+"""
 
 from __future__ import annotations
 

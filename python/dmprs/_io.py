@@ -69,7 +69,8 @@ def open_regular(path: str | os.PathLike[str], *, what: str = "file",
     """Opens ``path`` for reading if it is a regular file (a link to one is fine) and returns the
     binary file and its size. A FIFO, a device, a socket or a directory (or a link to one) is
     refused at once: the open does not block (``O_NONBLOCK``) and the check is made on the opened
-    file, so nothing can be swapped in between."""
+    file, so nothing can be swapped in between.
+    """
     try:
         fd = os.open(path, os.O_RDONLY | _O_NONBLOCK | _O_CLOEXEC)
     except FileNotFoundError:
@@ -77,21 +78,28 @@ def open_regular(path: str | os.PathLike[str], *, what: str = "file",
     except OSError as exc:
         raise error(f"{path}: cannot open the {what} ({exc.strerror or exc})") from None
     try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise error(f"{path}: is {_kind(st.st_mode)}; a {what} must be a regular file")
-        if _O_NONBLOCK and fcntl is not None:  # regular files ignore it; keep reads plain
-            fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) & ~_O_NONBLOCK)
-        return os.fdopen(fd, "rb"), st.st_size
+        return _regular(fd, path, what, error)
     except BaseException:
         os.close(fd)
         raise
 
 
+def _regular(fd: int, path: str | os.PathLike[str], what: str,
+             error: ErrorClass) -> tuple[IO[bytes], int]:
+    """The opened descriptor ``fd`` as a binary file and its size, if it is a regular file."""
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"{path}: is {_kind(st.st_mode)}; a {what} must be a regular file")
+    if _O_NONBLOCK and fcntl is not None:  # regular files ignore it; keep reads plain
+        fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) & ~_O_NONBLOCK)
+    return os.fdopen(fd, "rb"), st.st_size
+
+
 def check_regular(path: str | os.PathLike[str], *, what: str = "file",
                   error: ErrorClass = InvalidInputError) -> int:
     """Raises unless ``path`` is a regular file (see :func:`open_regular`); returns its size. For
-    paths that a third-party reader opens itself."""
+    paths that a third-party reader opens itself.
+    """
     f, size = open_regular(path, what=what, error=error)
     f.close()
     return size
@@ -116,7 +124,8 @@ def check_directory(path: str | os.PathLike[str], *, what: str = "directory",
 def read_bytes(path: str | os.PathLike[str], *, limit: int, what: str = "file",
                error: ErrorClass = InvalidInputError) -> bytes:
     """The contents of the regular file ``path``, refused (before reading) if larger than
-    ``limit`` bytes."""
+    ``limit`` bytes.
+    """
     f, size = open_regular(path, what=what, error=error)
     with f:
         if size > limit:
@@ -133,7 +142,8 @@ def read_bytes(path: str | os.PathLike[str], *, limit: int, what: str = "file",
 def read_text(path: str | os.PathLike[str], *, limit: int, what: str = "file",
               error: ErrorClass = InvalidInputError, encoding: str = "utf-8") -> str:
     """The text of ``path`` (see :func:`read_bytes`); a byte that is not ``encoding`` is an error
-    naming the encoding and the offset."""
+    naming the encoding and the offset.
+    """
     data = read_bytes(path, limit=limit, what=what, error=error)
     try:
         return data.decode(encoding)
@@ -173,7 +183,8 @@ def _depth(value: Any) -> int:
 def parse_json(text: str, where: str, *, error: ErrorClass = InvalidInputError,
                max_depth: int = JSON_MAX_DEPTH) -> Any:
     """Strict, bounded JSON: no bare NaN or Infinity, integers within 64 bits, floats finite,
-    nesting at most ``max_depth`` deep. ``where`` names the file (and line) in the error."""
+    nesting at most ``max_depth`` deep. ``where`` names the file (and line) in the error.
+    """
     try:
         value = json.loads(text, parse_int=_bounded_int, parse_float=_finite_float,
                            parse_constant=_refuse_constant)
@@ -200,7 +211,8 @@ def load_npz(source: str | os.PathLike[str] | bytes, where: str, *, limit: int,
     """The arrays of an .npz (a path or its bytes), reading every array's header before its data:
     an array whose header claims more than ``limit`` bytes, or whose dtype kind is not in
     ``kinds`` (object arrays never are), is refused before anything is allocated or inflated.
-    Zip members are read through their declared size, so a deflate bomb stops there."""
+    Zip members are read through their declared size, so a deflate bomb stops there.
+    """
     data = source if isinstance(source, bytes) else read_bytes(source, limit=limit, what="npz file", error=error)
     out: dict[str, np.ndarray] = {}
     total = 0
@@ -241,7 +253,8 @@ _INFLATE_PIECE = MiB
 def open_inflated(source: IO[bytes], codec: str) -> tuple[IO[bytes], tuple[type[Exception], ...]]:
     """A file object inflating ``source`` (zstd frames, bz2 streams or lz4 frames, several
     concatenated as the one-shot decompressors of these formats accept) and the exceptions it
-    raises on corrupt or cut data."""
+    raises on corrupt or cut data.
+    """
     if codec == "zstd":
         import sys
 
@@ -267,7 +280,8 @@ def inflate_bounded(source: IO[bytes] | bytes, codec: str, *, limit: int, where:
     time and refuses it as soon as it passes ``limit`` bytes, so a compression bomb costs at most
     ``limit`` bytes of work and no memory beyond one piece (unless ``keep``). Returns the inflated
     size and, with ``keep``, the inflated bytes. Corrupt data is an error naming ``where``; ``why``
-    follows the limit in the error (where it comes from)."""
+    follows the limit in the error (where it comes from).
+    """
     stream = io.BytesIO(source) if isinstance(source, bytes) else source
     pieces: list[bytes] = []
     total = 0
@@ -309,7 +323,8 @@ LOCK_FILE = ".dmprs.lock"
 
 def _open_for_writing(path: Path, flags: int) -> int:
     """``os.open`` for writing that never follows a link and refuses anything but a regular file
-    (a FIFO would block, a device would swallow the data); raises OSError saying which."""
+    (a FIFO would block, a device would swallow the data); raises OSError saying which.
+    """
     try:
         fd = os.open(path, flags | _O_NOFOLLOW | _O_NONBLOCK | _O_CLOEXEC, 0o644)
     except OSError as exc:
@@ -337,7 +352,8 @@ def directory_lock(directory: Path, *, shared: bool) -> Iterator[None]:
 
     Only a writer creates the lock file (a read never creates a file); a reader finding none
     reads without it, as nobody has saved there yet. The lock file is never followed through a
-    link: a writer refuses one (OSError), a reader ignores it."""
+    link: a writer refuses one (OSError), a reader ignores it.
+    """
     if fcntl is None:
         yield
         return
@@ -395,7 +411,8 @@ _NON_FINITE = {"NaN": float("nan"), "Infinity": float("inf"), "-Infinity": float
 
 def strict_json(value: Any) -> Any:
     """``value`` with every NaN or infinity replaced by the string ``"NaN"``, ``"Infinity"`` or
-    ``"-Infinity"``: strict JSON parsers reject the bare tokens Python writes for them."""
+    ``"-Infinity"``: strict JSON parsers reject the bare tokens Python writes for them.
+    """
     if isinstance(value, float) and not np.isfinite(value):
         return "NaN" if np.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
     if isinstance(value, Mapping):
@@ -412,7 +429,8 @@ def float_from_json(value: Any) -> Any:
 
 def append_jsonl(path: Path, record: Mapping[str, Any]) -> None:
     """Appends one JSON object as one line (strict JSON: see :func:`strict_json`) and forces it
-    to disk. Never through a link, never into anything but a regular file."""
+    to disk. Never through a link, never into anything but a regular file.
+    """
     line = json.dumps(strict_json(record), separators=(",", ":"), allow_nan=False) + "\n"
     fd = _open_for_writing(Path(path), os.O_WRONLY | os.O_APPEND | os.O_CREAT)
     with os.fdopen(fd, "w", encoding="utf-8") as f:
@@ -473,28 +491,32 @@ _ATOMIC_TEMP = re.compile(r"^\.(?P<target>.+)\.[a-z0-9_]{8}\.tmp$")
 
 def atomic_temp_target(name: str) -> str | None:
     """The file a temporary file of :func:`write_atomic` named ``name`` was to become, or None
-    if ``name`` is not such a name."""
+    if ``name`` is not such a name.
+    """
     m = _ATOMIC_TEMP.match(name)
     return m["target"] if m else None
 
 
 def regular_files(directory: Path) -> list[str]:
     """The names of the regular files directly in ``directory`` (a link, a FIFO, a device or a
-    subdirectory is not one: nothing here follows a link), sorted."""
+    subdirectory is not one: nothing here follows a link), sorted.
+    """
     with os.scandir(directory) as entries:
         return sorted(e.name for e in entries if e.is_file(follow_symlinks=False))
 
 
 def create_empty(path: Path) -> None:
     """Creates ``path`` as an empty regular file if it does not exist; never through a link, never
-    anything but a regular file (see :func:`append_jsonl`)."""
+    anything but a regular file (see :func:`append_jsonl`).
+    """
     os.close(_open_for_writing(Path(path), os.O_WRONLY | os.O_CREAT))
 
 
 def remove_if(path: Path, owned: Callable[[bytes], bool], *, limit: int) -> bool:
     """Removes the regular file ``path`` (not a link: its entry is checked first) if ``owned``
     says its contents are ours; a file larger than ``limit`` bytes, or one that cannot be read,
-    is left alone. Returns whether it was removed."""
+    is left alone. Returns whether it was removed.
+    """
     try:
         if not stat.S_ISREG(os.lstat(path).st_mode):
             return False
@@ -509,7 +531,8 @@ def remove_if(path: Path, owned: Callable[[bytes], bool], *, limit: int) -> bool
 def remove_stale_temp_files(directory: Path, targets: Callable[[str], bool]) -> list[str]:
     """Removes the temporary files an interrupted :func:`write_atomic` left in ``directory`` for
     the files ``targets`` accepts (by name); returns their names. Call it only under the
-    directory's exclusive :func:`directory_lock`: a running writer's temporary file would go too."""
+    directory's exclusive :func:`directory_lock`: a running writer's temporary file would go too.
+    """
     removed = []
     for name in regular_files(directory):
         target = atomic_temp_target(name)

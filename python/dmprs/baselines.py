@@ -29,8 +29,10 @@ from numpy.typing import NDArray
 from dmprs import experiments
 from dmprs._core import __version__
 from dmprs.adapters.spec import Status
+from dmprs.cmaes import CMAES
 from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError, RunLogError
+from dmprs.learners import PI2, PoWER
 from dmprs.loop import AskTell
 from dmprs.runlog import RunLog, TrialRecord
 from dmprs.trial import run_trial
@@ -67,13 +69,11 @@ class _Method:
 
 
 def _power(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
-    from dmprs.learners import PoWER
 
     return PoWER(dmp0.weights, sigma, seed=spec.seed, max_trials=spec.budget)
 
 
 def _pi2(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
-    from dmprs.learners import PI2
 
     n_updates = max(1, (spec.budget - 11) // 6 + 1)
     return PI2(dmp0.weights, sigma, seed=spec.seed, n_updates=n_updates, max_trials=spec.budget,
@@ -86,7 +86,6 @@ CMA_BUDGET_OPTIONS = {"tolflatfitness": 10**9, "tolfun": 0, "tolfunhist": 0}
 
 
 def _cma(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
-    from dmprs.cmaes import CMAES
 
     # sigma per weight as PoWER's exploration; the cost of PI²; theta0 executed first, as PoWER
     return CMAES(dmp0.weights.ravel(), sigma, seed=spec.seed, max_trials=spec.budget, feedback="cost",
@@ -115,7 +114,8 @@ def run_baseline(spec: BaselineSpec, log_dir: str | Path | None = None, *,
                  resume: bool = False) -> dict[str, Any]:
     """Runs one baseline until an evaluation rollout succeeds or the budget is spent; returns
     the trial count and history. With ``log_dir`` every rollout is logged (and ``resume=True``
-    continues a logged run)."""
+    continues a logged run).
+    """
     if spec.method not in METHODS:
         raise InvalidInputError(f"unknown baseline {spec.method!r}; choose from {', '.join(METHODS)}")
     method = METHODS[spec.method]

@@ -1,5 +1,6 @@
 """Cartesian-space DMPs: position and orientation (unit quaternion) on one phase, fitted and rolled
-out by the Rust core (``crates/dmp-core/src/cartesian.rs``; docs/cartesian.md)."""
+out by the Rust core (``crates/dmp-core/src/cartesian.rs``; docs/cartesian.md).
+"""
 
 from __future__ import annotations
 
@@ -109,14 +110,21 @@ class CartesianDMP(Primitive):
             t: sample times (T,), strictly increasing, possibly non-uniform; T >= 3.
             pose: (T, 7) ``x, y, z, qw, qx, qy, qz``; quaternions unit to 1e-6.
             n_basis: kernels N >= 2.
-            velocity, acceleration: measured linear derivatives (T, 3); computed with
-                second-order finite differences when omitted (as :meth:`dmprs.DMP.fit`).
-            angular_velocity, angular_acceleration: measured, world frame (T, 3). When omitted,
-                ``omega_j`` is the same second-order scheme applied in the tangent space at
-                sample j (``sum_i c_ji 2 log(q_i * conj(q_j))``) and ``omegadot`` that scheme on
+            velocity: measured linear velocity (T, 3); computed with second-order finite
+                differences when omitted (as :meth:`dmprs.DMP.fit`).
+            angular_velocity: measured, world frame (T, 3). When omitted, ``omega_j`` is the
+                same second-order scheme applied in the tangent space at sample j
+                (``sum_i c_ji 2 log(q_i * conj(q_j))``).
+            acceleration: measured linear acceleration (T, 3); when omitted, the scheme on the
+                velocity.
+            angular_acceleration: measured, world frame (T, 3); when omitted, the scheme on
                 ``omega``.
             normalize: scale every quaternion to unit norm instead of refusing one whose norm is
                 off by more than 1e-6 (the zero quaternion is refused either way).
+            alpha_z: the transformation system's gain, as :meth:`dmprs.DMP.fit`.
+            beta_z: its damping, ``alpha_z / 4`` when None.
+            alpha_x: the phase decay, at most ln 1e8.
+            width_factor: kernel width relative to the spacing of the kernel centres.
         """
         derivatives = {
             "velocity": _derivative(velocity, "velocity"),
@@ -166,12 +174,14 @@ class CartesianDMP(Primitive):
         """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
         period returning ``(pose, velocity, acceleration)``, with phase stopping, goal changes,
         limits, position limits and sphere ``obstacles``; ``options`` as
-        :class:`dmprs.stepper.CartesianStepper`."""
+        :class:`dmprs.stepper.CartesianStepper`.
+        """
         return CartesianStepper(self, dt, **options)
 
     def with_goal(self, pose: ArrayLike) -> CartesianDMP:
         """The same movement towards a new goal pose (7,). The quaternion's sign is taken on the
-        side of the current goal, so ``q`` and ``-q`` give the same movement."""
+        side of the current goal, so ``q`` and ``-q`` give the same movement.
+        """
         return CartesianDMP._wrap(self._core.with_goal(_pose(pose, "goal")))
 
     def with_start(self, pose: ArrayLike) -> CartesianDMP:

@@ -8,9 +8,14 @@ from typing import Any
 
 import click
 
-from dmprs import experiments
+from dmprs import demo, experiments
 from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.experiments import learner_help
+from dmprs.io.importer import build_database, load_demos
+from dmprs.loop import LearningResult, learn
+from dmprs.plots import plot_run
+from dmprs.reproduce import reproduce, skipped
+from dmprs.runlog import RunLog
 
 
 def _progress(console: Any) -> Any:
@@ -64,8 +69,8 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
               volume: float | None, demos: str | None, target: tuple[float, float] | None,
               generalizer: str | None) -> None:
     """Learn TASK (analytic, matchbox, pouring, arm-pouring, arm-throwing) from its
-    demonstrations, one trial at a time."""
-
+    demonstrations, one trial at a time.
+    """
     options: dict[str, Any] = {k: v for k, v in {
         "desired": desired, "noise": noise, "bottle_volume": volume, "demos": demos,
         "target": target, "generalizer": generalizer}.items() if v is not None}
@@ -84,7 +89,8 @@ _MISSING = object()
 
 def _field(meta: dict[str, Any], name: str, kind: Any, where: Path, default: Any = _MISSING) -> Any:
     """``meta[name]`` if it has the type ``kind`` (booleans are not numbers here), else an error
-    naming the file and the field; ``default`` when it is absent (or null, for optional ones)."""
+    naming the file and the field; ``default`` when it is absent (or null, for optional ones).
+    """
     value = meta.get(name, _MISSING)
     if value is _MISSING or (value is None and default is not _MISSING):
         if default is _MISSING:
@@ -101,49 +107,52 @@ def _field(meta: dict[str, Any], name: str, kind: Any, where: Path, default: Any
 @click.option("--max-trials", type=click.IntRange(min=1), default=None, help="raise the trial cap of the run")
 def resume_cmd(run: Path, max_trials: int | None) -> None:
     """Continue the run logged in RUN where it stopped."""
-    from dmprs.loop import learn
-    from dmprs.runlog import RunLog
-
     console = _console()
     try:
-        meta = RunLog(run).meta()
-        where = run / "run.json"
-        if "experiment" not in meta:
-            raise DmprsError(f"{where} was not written by 'dmprs learn': resume it from Python")
-        experiment = _field(meta, "experiment", str, where)
-        if experiment not in experiments.EXPERIMENTS:
-            raise DmprsError(f"{where}: experiment {experiment!r} is unknown; "
-                             f"known: {', '.join(sorted(experiments.EXPERIMENTS))}")
-        setup_options = _field(meta, "setup_options", dict, where, {})
-        learner_options = _field(meta, "learner_options", dict, where, {})
-        learner_name = _field(meta, "learner_name", str, where)
-        logged_cap = _field(meta, "max_trials", int, where)
-        tol = _field(meta, "tol", (int, float), where, None)
-        seed = _field(meta, "seed", int, where, 0)
-        # A logged option that does not fit is the log's fault: say which field of which file.
-        try:
-            setup = experiments.make(experiment, **setup_options)
-        except (TypeError, ValueError) as exc:
-            raise DmprsError(f"{where}: setup_options {setup_options!r:.80} do not fit {experiment!r} ({exc})") from None
-        try:
-            learner = setup.make_learner(learner_name, **learner_options)
-        except (TypeError, ValueError) as exc:
-            raise DmprsError(f"{where}: learner_options do not fit {learner_name!r} ({exc})") from None
-        try:
-            result = learn(setup.task, setup.generalizer, setup.desired_query, learner,
-                           max_trials=logged_cap if max_trials is None else max_trials, tol=tol,
-                           log_dir=run, resume=True, seed=seed, on_trial=_progress(console))
-        except InvalidInputError as exc:
-            raise DmprsError(f"{where}: {exc}") from None
+        result = _resume(run, max_trials, console)
     except DmprsError as exc:
         raise click.ClickException(str(exc)) from None
     _report(console, result)
     sys.exit(0 if result.converged else 1)
 
 
+def _resume(run: Path, max_trials: int | None, console: Any) -> LearningResult:
+    """The run logged in ``run``, continued; every fault of the log is a DmprsError naming it."""
+    meta = RunLog(run).meta()
+    where = run / "run.json"
+    if "experiment" not in meta:
+        raise DmprsError(f"{where} was not written by 'dmprs learn': resume it from Python")
+    experiment = _field(meta, "experiment", str, where)
+    if experiment not in experiments.EXPERIMENTS:
+        raise DmprsError(f"{where}: experiment {experiment!r} is unknown; "
+                         f"known: {', '.join(sorted(experiments.EXPERIMENTS))}")
+    setup_options = _field(meta, "setup_options", dict, where, {})
+    learner_options = _field(meta, "learner_options", dict, where, {})
+    learner_name = _field(meta, "learner_name", str, where)
+    logged_cap = _field(meta, "max_trials", int, where)
+    tol = _field(meta, "tol", (int, float), where, None)
+    seed = _field(meta, "seed", int, where, 0)
+    # A logged option that does not fit is the log's fault: say which field of which file.
+    try:
+        setup = experiments.make(experiment, **setup_options)
+    except (TypeError, ValueError) as exc:
+        raise DmprsError(f"{where}: setup_options {setup_options!r:.80} do not fit {experiment!r} ({exc})") from None
+    try:
+        learner = setup.make_learner(learner_name, **learner_options)
+    except (TypeError, ValueError) as exc:
+        raise DmprsError(f"{where}: learner_options do not fit {learner_name!r} ({exc})") from None
+    try:
+        return learn(setup.task, setup.generalizer, setup.desired_query, learner,
+                     max_trials=logged_cap if max_trials is None else max_trials, tol=tol,
+                     log_dir=run, resume=True, seed=seed, on_trial=_progress(console))
+    except InvalidInputError as exc:
+        raise DmprsError(f"{where}: {exc}") from None
+
+
 class _RecordByDefault(click.Group):
     """``dmprs demos TASK`` still records TASK's demonstrations: a first word that is not a
-    subcommand is taken as ``record``'s argument."""
+    subcommand is taken as ``record``'s argument.
+    """
 
     def resolve_command(self, ctx: click.Context, args: list[str]) -> Any:
         if args and args[0] not in self.commands and not args[0].startswith("-"):
@@ -186,7 +195,8 @@ def _names(text: str | None) -> list[str] | None:
 class _ImportProgress:
     """A rich progress bar on stderr while ``dmprs demos import`` reads (fed by load_demos'
     progress callback, :attr:`callback`) and while it writes the database (between :meth:`start`
-    and :meth:`stop`); nothing when not shown."""
+    and :meth:`stop`); nothing when not shown.
+    """
 
     def __init__(self, show: bool) -> None:
         self.bar: Any = None
@@ -256,8 +266,6 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
                      ranges: str | None, rest_speed: float | None, rest_angular_speed: float,
                      rate: float | None, show_progress: bool | None) -> None:
     """Build a database from SOURCES: ROS bags, LeRobot datasets, CSV or npz files."""
-    from dmprs.io.importer import build_database, load_demos
-
     tf = None
     if tf_frames is not None:
         frame, _, child = tf_frames.partition(":")
@@ -295,8 +303,6 @@ def demos_import_cmd(sources: tuple[Path, ...], out: Path, queries: Path | None,
                    "(default RUN/learning.png)")
 def plot_cmd(run: Path, out: Path | None) -> None:
     """Plot error and query per trial of RUN (like the paper's Figs. 4 and 9)."""
-    from dmprs.plots import plot_run
-
     try:
         path = plot_run(run, out)
     except DmprsError as exc:
@@ -317,7 +323,6 @@ def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None) -> 
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from dmprs.reproduce import reproduce, skipped
 
     # Said before any work, not after minutes of it: what an optional package would add.
     for note in skipped(quick):
@@ -347,8 +352,6 @@ def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None) -> 
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 def demo_cmd(out: Path) -> None:
     """Fit, reproduce and adapt a 7-DOF DMP (a quick look at the core)."""
-    from dmprs import demo
-
     demo.run(out)
 
 

@@ -47,7 +47,8 @@ class CMAES:
     ``x0`` itself (the generalized query, as for the paper's learners), recorded but not part of
     a population. ``options`` are passed to ``cma.CMAEvolutionStrategy`` (e.g.
     ``{"tolflatfitness": 5}``: by default cma stops after one generation of equal costs, which a
-    saturated outcome such as an over-flipped matchbox gives)."""
+    saturated outcome such as an over-flipped matchbox gives).
+    """
 
     def __init__(self, x0: ArrayLike, sigma0: ArrayLike, *, seed: int = 0, popsize: int | None = None,
                  max_trials: int = 200, lower: ArrayLike | None = None, upper: ArrayLike | None = None,
@@ -150,38 +151,47 @@ class CMAES:
     # --- what the loops read ----------------------------------------------------------------
     @property
     def done(self) -> bool:
+        """Whether CMA-ES stopped: it asks nothing more."""
         return self._status != "running"
 
     @property
     def converged(self) -> bool:
+        """Whether a told trial succeeded."""
         return self._status == "converged"
 
     @property
     def status(self) -> str:
+        """``running``, ``converged``, ``trial-cap`` or ``stopped`` (cma's own criteria)."""
         return self._status
 
     @property
     def status_detail(self) -> str:
+        """Why it stopped, in words."""
         return self._detail
 
     @property
     def history(self) -> list[Trial]:
+        """Every told trial, in order."""
         return list(self._history)
 
     @property
     def best(self) -> Trial | None:
+        """The told trial with the lowest score, or None before any."""
         return min(self._history, key=lambda t: t.score) if self._history else None
 
     @property
     def n_trials(self) -> int:
+        """How many trials were told."""
         return len(self._history)
 
     @property
     def popsize(self) -> int:
+        """cma's population size."""
         return int(self._es.popsize)
 
     @property
     def dim(self) -> int:
+        """The dimension of the searched vector."""
         return int(self._x0.size)
 
     def __repr__(self) -> str:

@@ -83,7 +83,8 @@ DUPLICATE_POLICIES = ("refuse", "replace", "keep")
 @dataclass(frozen=True, eq=False)
 class Demo:
     """One demonstration: its task ``query`` (n,), its ``trajectory`` (joint space, or a pose
-    trajectory), an optional ``label`` and JSON-safe ``metadata``."""
+    trajectory), an optional ``label`` and JSON-safe ``metadata``.
+    """
 
     query: NDArray[np.float64]
     trajectory: Trajectory | CartesianTrajectory
@@ -131,10 +132,12 @@ class Database:
 
     @property
     def query_names(self) -> tuple[str, ...]:
+        """The names of the query's components."""
         return self._names
 
     @property
     def query_units(self) -> tuple[str, ...]:
+        """The units of the query's components ('' where none)."""
         return self._units
 
     @property
@@ -239,7 +242,8 @@ class Database:
         """A new database with the ``k`` demonstrations whose queries are nearest ``query``
         (Euclidean distance in query units; ties keep database order). With ``"linear"``
         generalization, which takes n + 1 demos, this gives piecewise-linear generalization
-        over a growing database."""
+        over a growing database.
+        """
         q = self._check_query(query)
         k = as_count(k, "k", 1)
         if k > len(self):
@@ -250,14 +254,15 @@ class Database:
         return out
 
     def __repr__(self) -> str:
-        dims = ", ".join(f"{n} [{u}]" if u else n for n, u in zip(self._names, self._units))
+        dims = ", ".join(f"{n} [{u}]" if u else n for n, u in zip(self._names, self._units, strict=True))
         return f"Database({len(self)} demos, query=({dims}), n_dof={self.n_dof})"
 
     # --- persistence ------------------------------------------------------------------------
     def save(self, path: str | os.PathLike[str]) -> None:
         """Writes the database to the directory ``path`` (created if missing) atomically; see the
         module docs. Refuses a non-empty directory that is not a dmprs database, leaving nothing
-        in it."""
+        in it.
+        """
         root = Path(path)
         try:
             root.mkdir(parents=True, exist_ok=True)
@@ -302,7 +307,8 @@ class Database:
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Database:
         """Reads a database written by :meth:`save`, verifying every file. A read writes
-        nothing (not even the lock file)."""
+        nothing (not even the lock file).
+        """
         root = Path(path)
         if not root.is_dir():
             raise DatabaseError(f"{root / _MANIFEST}: cannot read the manifest (no directory {root})")
@@ -324,10 +330,10 @@ class Database:
         try:
             db = cls(manifest["query_names"], manifest["query_units"])
             entries = manifest["demos"]
-            if not isinstance(entries, list):
-                raise TypeError("'demos' is not a list")
         except (KeyError, TypeError, DmprsError) as exc:
             raise DatabaseError(f"{mpath}: malformed manifest ({exc})") from None
+        if not isinstance(entries, list):
+            raise DatabaseError(f"{mpath}: malformed manifest ('demos' is not a list)")
         for k, entry in enumerate(entries):
             demo = _read_demo(root, mpath, k, entry, db.n_query)
             try:
@@ -374,7 +380,8 @@ def _named_by_content(name: str, data: bytes) -> bool:
 
 def _is_own_demo(path: Path, digest: str | None = None) -> bool:
     """Whether ``path`` is a regular file (not a link) holding the content of ``digest``, or (without
-    one) the content its name was made from."""
+    one) the content its name was made from.
+    """
     try:
         if not stat.S_ISREG(os.lstat(path).st_mode):
             return False
@@ -387,7 +394,8 @@ def _is_own_demo(path: Path, digest: str | None = None) -> bool:
 def _refuse_foreign(root: Path) -> None:
     """Raises unless ``root`` may hold this database: empty, a dmprs database (its manifest says
     so), or only the files of an interrupted first save (content-named demo files whose content
-    matches their name, our temporary files). Anything else is somebody else's: never overwritten."""
+    matches their name, our temporary files). Anything else is somebody else's: never overwritten.
+    """
     names = [e.name for e in os.scandir(root) if e.name != LOCK_FILE]
     if not names:
         return

@@ -1,5 +1,6 @@
 """A quick look at the DMP core (``dmprs demo``): fit a 7-DOF reaching movement, reproduce it,
-and adapt it to a new goal and speed."""
+and adapt it to a new goal and speed.
+"""
 
 from __future__ import annotations
 
@@ -12,12 +13,14 @@ from dmprs._core import __version__
 from dmprs.batch import rollout_batch
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError
+from dmprs.plots import pyplot
 from dmprs.profiles import min_jerk
 
 
 def reaching_demo(n_samples: int = 1000, duration: float = 1.0, n_dof: int = 7):
     """A smooth synthetic arm movement: minimum-jerk reaches with a mid-course bump per joint,
-    starting and ending at rest."""
+    starting and ending at rest.
+    """
     t = np.linspace(0.0, duration, n_samples)
     s = t / duration
     mj = min_jerk(s)[0]
@@ -29,6 +32,7 @@ def reaching_demo(n_samples: int = 1000, duration: float = 1.0, n_dof: int = 7):
 
 
 def run(out: Path | None) -> dict[str, float]:
+    """Fits, reproduces and adapts a 7-DOF demonstration, printing the timings; writes a figure into ``out``."""
     t, y = reaching_demo()
     t0 = time.perf_counter()
     dmp = DMP.fit(t, y, n_basis=50)
@@ -55,7 +59,6 @@ def run(out: Path | None) -> dict[str, float]:
 
 
 def _plot(out: Path, t, y, repro, adapted) -> None:
-    from dmprs.plots import pyplot
 
     try:
         plt = pyplot()

@@ -1,5 +1,6 @@
 """Dynamic Movement Primitives: the discrete DMP of paper eqs. 1-4, fitted and rolled out by the
-Rust core."""
+Rust core.
+"""
 
 from __future__ import annotations
 
@@ -97,10 +98,17 @@ class DMP(Primitive):
             t: sample times (T,), strictly increasing, possibly non-uniform; T >= 3.
             y: positions (T,) or (T, D).
             n_basis: number of kernels N >= 2 (25 for short strikes, 40 for a 3 s profile).
-            yd, ydd: measured velocities and accelerations, shaped like y. When omitted they are
-                computed with second-order finite differences on the (non-uniform) grid, exactly
-                the scheme of ``numpy.gradient(y, t, edge_order=2)``, applied twice. Smooth noisy
-                data first: differentiation amplifies noise.
+            yd: measured velocities, shaped like y. When omitted they are computed with
+                second-order finite differences on the (non-uniform) grid, exactly the scheme of
+                ``numpy.gradient(y, t, edge_order=2)``. Smooth noisy data first: differentiation
+                amplifies noise.
+            ydd: measured accelerations, shaped like y; when omitted, the same scheme applied
+                to ``yd``.
+            alpha_z: the transformation system's gain (eq. 1).
+            beta_z: its damping, ``alpha_z / 4`` (critical damping) when None.
+            alpha_x: the phase decay (eq. 3); at most ln 1e8, beyond which the phase underflows
+                the basis functions and the fit is refused.
+            width_factor: kernel width relative to the spacing of the kernel centres.
         """
         tt = as_float_array(t, "t", 1)
         yy = as_float_array(y, "y", (1, 2))
@@ -139,7 +147,8 @@ class DMP(Primitive):
         """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
         period, with phase stopping, goal changes, limits and coupling terms; ``options`` as
         :class:`dmprs.stepper.JointStepper` (``substeps``, ``alpha_e``, ``goal_filter``,
-        ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...)."""
+        ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...).
+        """
         return JointStepper(self, dt, **options)
 
     def with_goal(self, goal: ArrayLike) -> DMP:

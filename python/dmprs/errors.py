@@ -28,29 +28,34 @@ class DmprsError(Exception):
 
 class InvalidInputError(DmprsError, ValueError):
     """An argument is malformed: wrong shape or dtype, NaN or inf, non-increasing time, a
-    parameter outside its domain. The message says what and where."""
+    parameter outside its domain. The message says what and where.
+    """
 
 
 class NumericalError(DmprsError, ArithmeticError):
     """The input was valid but a computation failed (e.g. a matrix that is not positive
-    definite, a rollout that does not come to rest)."""
+    definite, a rollout that does not come to rest).
+    """
 
 
 class LearnerStateError(DmprsError, RuntimeError):
     """A learner was driven out of order: ``tell`` without a pending ``ask``, ``tell`` of a query
     other than the one ``ask`` returned, or ``ask`` after the learner stopped (see its
-    ``status``)."""
+    ``status``).
+    """
 
 
 class ExtrapolationError(InvalidInputError):
     """A query too far from the demonstrations: its generalized DMP would be invalid (e.g. tau
     would leave (0.2 x the shortest, 5 x the longest demonstration's duration); docs/method.md §3.3).
-    The message names the query and the tau it would get."""
+    The message names the query and the tau it would get.
+    """
 
 
 class DatabaseError(DmprsError):
     """A movement database on disk that cannot be read or written: a missing, corrupted,
-    truncated or foreign file, or one written by a newer dmprs. The message names the file."""
+    truncated or foreign file, or one written by a newer dmprs. The message names the file.
+    """
 
 
 class RunLogError(DmprsError, OSError):
@@ -63,7 +68,8 @@ class AdapterError(DmprsError, RuntimeError):
 
 class AdapterConformanceError(DmprsError, AssertionError):
     """An adapter broke the adapter contract (:func:`dmprs.adapters.check_adapter`); the message
-    lists every failed check."""
+    lists every failed check.
+    """
 
 
 class ParallelError(DmprsError, RuntimeError):

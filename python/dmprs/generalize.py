@@ -1,5 +1,6 @@
 """Generalization from several demonstrations: the paper's G(q; Z) -> DMP (eq. 6, docs/method.md §3),
-computed by the Rust core."""
+computed by the Rust core.
+"""
 
 from __future__ import annotations
 
@@ -180,7 +181,8 @@ class Generalizer:
 
     def predict(self, q: ArrayLike) -> DMP | CartesianDMP:
         """The DMP for query ``q`` (n,) (a scalar for n = 1): a :class:`~dmprs.CartesianDMP`
-        when the demonstrations are poses."""
+        when the demonstrations are poses.
+        """
         if isinstance(self._core, _core.CartesianGeneralizer):
             return CartesianDMP._wrap(self._core.predict(self._query(q)))
         return DMP._wrap(self._core.predict(self._query(q)))
@@ -190,7 +192,8 @@ class Generalizer:
         goal (D), y0 (D)]``, without the tau validity check. For poses: ``[w.ravel() (6*N),
         tau, goal position (3), goal rotation vector (3), start position (3), start rotation
         vector (3)]``, the rotation vectors in the tangent space of demonstration 0's goal and
-        start orientations (docs/cartesian.md)."""
+        start orientations (docs/cartesian.md).
+        """
         return self._core.parameters(self._query(q))
 
     def jacobian(self, q: ArrayLike, rel_step: float = 1e-4) -> NDArray[np.float64]:
@@ -212,22 +215,27 @@ class Generalizer:
 
     @property
     def method(self) -> str:
+        """The generalization method ('lwr', 'gp' or 'linear')."""
         return self._core.method
 
     @property
     def n_query(self) -> int:
+        """Dimension of the query."""
         return self._core.n_query
 
     @property
     def n_dof(self) -> int:
+        """Degrees of freedom of the predicted DMPs."""
         return self._core.n_dof
 
     @property
     def n_basis(self) -> int:
+        """Kernels per degree of freedom of the predicted DMPs."""
         return self._core.n_basis
 
     @property
     def n_demos(self) -> int:
+        """Number of demonstrations generalized over."""
         return self._core.n_demos
 
     @property

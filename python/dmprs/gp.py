@@ -102,7 +102,8 @@ class GaussianProcess:
 
     def fit(self, X: ArrayLike, y: ArrayLike, optimize: bool = True) -> GaussianProcess:
         """Fits to inputs ``X`` (m, n) (a 1-D X is m samples of one input) and outputs ``y``
-        (m,). Returns self."""
+        (m,). Returns self.
+        """
         x = as_float_array(X, "X", (1, 2))
         x = x.reshape(-1, 1) if x.ndim == 1 else x
         yy = as_float_array(y, "y", 1)
@@ -148,7 +149,8 @@ class GaussianProcess:
         self, theta: ArrayLike | None = None, eval_gradient: bool = False
     ) -> float | tuple[float, NDArray[np.float64]]:
         """log p(y | X) at the fitted hyperparameters, or at ``theta = [ln l_1 .. ln l_n,
-        ln signal_var, ln noise_var]``; with ``eval_gradient`` also its gradient w.r.t. theta."""
+        ln signal_var, ln noise_var]``; with ``eval_gradient`` also its gradient w.r.t. theta.
+        """
         core = self._fitted()
         if theta is None and not eval_gradient:
             return core.log_marginal_likelihood
@@ -169,10 +171,12 @@ class GaussianProcess:
 
     @property
     def signal_var(self) -> float:
+        """The signal variance of the kernel (after a fit: ML-II's)."""
         return self._fitted().signal_var
 
     @property
     def noise_var(self) -> float:
+        """The observation noise variance (after a fit: ML-II's)."""
         return self._fitted().noise_var
 
     @property

@@ -70,7 +70,8 @@ __all__ = [
 class Trial(NamedTuple):
     """One executed trial: the query (or weight vector), what was told about it, and the
     learner's figure of merit (lower is better: max |eps_i| for query learners, the total cost for
-    PI², ``-R`` for PoWER)."""
+    PI², ``-R`` for PoWER).
+    """
 
     q: NDArray[np.float64]
     feedback: NDArray[np.float64]
@@ -167,7 +168,8 @@ class _Learner:
 
     def ask(self) -> NDArray[np.float64]:
         """The next query (1-D float64) to execute. Asking again before :meth:`tell` returns
-        the same query."""
+        the same query.
+        """
         return self._core.ask()
 
     def tell(self, q: ArrayLike, feedback: ArrayLike) -> None:
@@ -177,7 +179,8 @@ class _Learner:
     @property
     def status(self) -> str:
         """``"running"``, ``"converged"``, ``"bracketed"``, ``"trial-cap"``, ``"hit-bound"`` or
-        ``"diverged"``."""
+        ``"diverged"``.
+        """
         return self._core.status
 
     @property
@@ -198,7 +201,8 @@ class _Learner:
     @property
     def best(self) -> Trial | None:
         """The executed trial with the lowest score (None before the first tell). When
-        converged it is the last executed trial (docs/method.md §6.2 fix 2)."""
+        converged it is the last executed trial (docs/method.md §6.2 fix 2).
+        """
         b = self._core.best
         return None if b is None else Trial(*b)
 
@@ -600,5 +604,6 @@ class PI2(_Learner):
     @property
     def asked_evaluation(self) -> bool:
         """Whether the query :meth:`ask` returned last is an update's noiseless evaluation
-        rollout of the current theta (success is judged on those), not an exploration one."""
+        rollout of the current theta (success is judged on those), not an exploration one.
+        """
         return self._core.asked_evaluation

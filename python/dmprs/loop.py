@@ -34,29 +34,38 @@ from dmprs.trial import run_trial
 
 class AskTell(Protocol):
     """What the loops read of a learner (the cma / optuna / nevergrad convention); every learner
-    of :mod:`dmprs.learners` has it."""
+    of :mod:`dmprs.learners` has it.
+    """
 
-    def ask(self) -> Any: ...
-    def tell(self, q: Any, feedback: Any) -> None: ...
+    def ask(self) -> Any:
+        """The next query to try."""
+    def tell(self, q: Any, feedback: Any) -> None:
+        """The feedback (eps) of the query just asked."""
     @property
     def done(self) -> bool:
         """The learner stopped: it asks nothing more."""
     @property
-    def converged(self) -> bool: ...
+    def converged(self) -> bool:
+        """Whether a told trial succeeded."""
     @property
-    def status(self) -> str: ...
+    def status(self) -> str:
+        """Why it stopped (``running`` while it asks)."""
     @property
-    def status_detail(self) -> str: ...
+    def status_detail(self) -> str:
+        """The status in words."""
 
 
 class GeneralizerLike(Protocol):
-    def predict(self, q: Any) -> DMP | CartesianDMP: ...
+    """What the loop reads of a generalizer (:class:`dmprs.Generalizer` has it)."""
+    def predict(self, q: Any) -> DMP | CartesianDMP:
+        """The DMP for query ``q``."""
 
 
 @dataclass(frozen=True)
 class LearningResult:
     """What a run did. ``learned_query`` is the last executed query of a successful trial (or,
-    if none succeeded, the executed query with the smallest |eps|)."""
+    if none succeeded, the executed query with the smallest |eps|).
+    """
 
     trials: list[TrialRecord]
     converged: bool

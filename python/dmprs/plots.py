@@ -1,7 +1,8 @@
 """Figures. matplotlib is an optional extra (``pip install 'dmprs[plot]'``), imported lazily.
 
 A figure is rendered in memory and written with :func:`dmprs._io.write_atomic`: never through a
-link, never half-written."""
+link, never half-written.
+"""
 
 from __future__ import annotations
 

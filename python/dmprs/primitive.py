@@ -25,7 +25,8 @@ CONSTANTS = ("alpha_z", "beta_z", "alpha_x", "width_factor")
 
 def constants(alpha_z: Any, beta_z: Any, alpha_x: Any, width_factor: Any) -> dict[str, float]:
     """The constants, validated, as the core takes them (``beta_z=None``: ``alpha_z / 4``,
-    critically damped)."""
+    critically damped).
+    """
     az = as_scalar(alpha_z, "alpha_z", positive=True)
     bz = az / 4.0 if beta_z is None else as_scalar(beta_z, "beta_z", positive=True)
     return {
@@ -56,7 +57,8 @@ class Primitive:
     """The shared half of :class:`dmprs.DMP` and :class:`dmprs.CartesianDMP`: an immutable
     wrapper of the Rust core's primitive (``_core``), its parameters, ``with_tau``, ``==``,
     pickling and :meth:`to_dict` / :meth:`from_dict`. Subclasses add how to build, fit and roll
-    out, and how a goal and a start are given."""
+    out, and how a goal and a start are given.
+    """
 
     __slots__ = ("_core",)
     _core: _core.Dmp | _core.CartesianDmp
@@ -76,7 +78,8 @@ class Primitive:
     @property
     def weights(self) -> NDArray[np.float64]:
         """Shape weights ``(D, N)``, one row per coordinate, in its units (no (g - y0) factor in
-        eq. 4, so weights of demonstrations with different goals can be interpolated)."""
+        eq. 4, so weights of demonstrations with different goals can be interpolated).
+        """
         return self._core.weights
 
     @property

@@ -1,6 +1,7 @@
 """The minimum-jerk profile, the one smooth point-to-point movement every scripted demonstrator
 of dmprs is built from (the matchbox strike, the pouring tilt, the analytic bump, the demo reach;
-docs/method.md §8.3, §9.3)."""
+docs/method.md §8.3, §9.3).
+"""
 
 from __future__ import annotations
 

@@ -33,7 +33,8 @@ def product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float6
 
 def conjugate(q: NDArray[np.float64]) -> NDArray[np.float64]:
     """The conjugate, which is the inverse of a unit quaternion."""
-    return q * _CONJUGATE
+    inverse: NDArray[np.float64] = q * _CONJUGATE
+    return inverse
 
 
 def rotate(q: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -43,8 +44,9 @@ def rotate(q: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64
 
 
 def log(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The rotation vector ``2 log(q)`` (axis times angle, rad) of ``(..., 4)`` unit quaternions,
-    the short way round (an angle of at most pi)."""
+    """The rotation vector, twice the quaternion logarithm (axis times angle, rad), of
+    ``(..., 4)`` unit quaternions, the short way round (an angle of at most pi).
+    """
     q = np.where(q[..., :1] < 0, -q, q)
     v = q[..., 1:]
     norm = np.linalg.norm(v, axis=-1)
@@ -56,7 +58,8 @@ def log(q: NDArray[np.float64]) -> NDArray[np.float64]:
 def exp(r: NDArray[np.float64]) -> NDArray[np.float64]:
     """The quaternion of the rotation vector ``r`` (``(..., 3)``, rad), the inverse of :func:`log`:
     ``(cos(|r| / 2), sin(|r| / 2) r / |r|)``, unit to rounding (not renormalized, so that a
-    product with it can be normalized once)."""
+    product with it can be normalized once).
+    """
     theta = np.linalg.norm(r, axis=-1)
     scale = np.where(theta > 1e-12, np.sin(theta / 2) / np.maximum(theta, 1e-300), 0.5)
     return np.concatenate([np.cos(theta / 2)[..., None], r * scale[..., None]], axis=-1)
@@ -64,12 +67,14 @@ def exp(r: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def angle(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """The angle (rad) of the rotation between unit quaternions ``a`` and ``b``, either sign."""
-    return 2.0 * np.arccos(np.minimum(1.0, np.abs(np.sum(a * b, axis=-1))))
+    theta: NDArray[np.float64] = 2.0 * np.arccos(np.minimum(1.0, np.abs(np.sum(a * b, axis=-1))))
+    return theta
 
 
 def slerp(q0: NDArray[np.float64], q1: NDArray[np.float64], s: NDArray[np.float64]) -> NDArray[np.float64]:
     """Spherical linear interpolation between rows of ``(M, 4)`` unit quaternions at fractions
-    ``s`` (M,), the short way round."""
+    ``s`` (M,), the short way round.
+    """
     dot = np.sum(q0 * q1, axis=-1)
     q1 = np.where(dot[:, None] < 0, -q1, q1)
     dot = np.abs(dot).clip(-1.0, 1.0)
@@ -79,12 +84,14 @@ def slerp(q0: NDArray[np.float64], q1: NDArray[np.float64], s: NDArray[np.float6
     w0 = np.where(small, 1.0 - s, np.sin((1.0 - s) * theta) / sin)
     w1 = np.where(small, s, np.sin(s * theta) / sin)
     out = w0[:, None] * q0 + w1[:, None] * q1
-    return out / np.linalg.norm(out, axis=1, keepdims=True)
+    unit: NDArray[np.float64] = out / np.linalg.norm(out, axis=1, keepdims=True)
+    return unit
 
 
 def continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(T, 4)`` quaternions with signs flipped so that consecutive ones are on the same
-    hemisphere (a flip between samples would look like a jump of 2 pi to a derivative)."""
+    hemisphere (a flip between samples would look like a jump of 2 pi to a derivative).
+    """
     out = q.copy()
     for j in range(1, len(out)):
         if np.dot(out[j], out[j - 1]) < 0:
@@ -95,7 +102,8 @@ def continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
 def check_unit(q: NDArray[np.float64], name: str, normalize: bool = False) -> NDArray[np.float64]:
     """``q`` (T, 4) checked to be unit quaternions: the zero quaternion is refused, and so is a
     norm off by more than :data:`UNIT_TOLERANCE` unless ``normalize`` (then every row is scaled
-    to unit norm). Raises naming the first offending sample."""
+    to unit norm). Raises naming the first offending sample.
+    """
     norms = np.linalg.norm(q, axis=1)
     zero = norms == 0.0
     off = zero if normalize else np.abs(norms - 1.0) > UNIT_TOLERANCE

@@ -52,6 +52,7 @@ class TrialRecord:
     message: str = ""
 
     def to_json(self, npz_name: str | None) -> dict[str, Any]:
+        """The trial's line of ``trials.jsonl`` (its arrays go to ``npz_name``)."""
         return {
             "trial": self.index,
             "query": self.query.tolist(),
@@ -68,7 +69,8 @@ class TrialRecord:
                   n_eps: int | None = None) -> TrialRecord:
         """The record a log line holds, every field checked (types, finite numbers, an error for
         every ok trial); a bad field raises :class:`RunLogError` naming ``where`` and the field.
-        ``n_query``, ``n_eps``: the lengths the query and the error must have (any when None)."""
+        ``n_query``, ``n_eps``: the lengths the query and the error must have (any when None).
+        """
         index = d.get("trial")
         if type(index) is not int or index < 0:
             raise RunLogError(f"{where}: 'trial' is {_shown(index)}, expected a trial number (an integer >= 0)")
@@ -103,7 +105,8 @@ def _shown(value: Any) -> str:
 
 def _numbers(value: Any, name: str, where: str, n: int | None) -> np.ndarray:
     """A logged list of ``n`` finite numbers, or a RunLogError naming the field (NaN and
-    infinities are logged as strings, see ``_io.strict_json``: they are read, then refused)."""
+    infinities are logged as strings, see ``_io.strict_json``: they are read, then refused).
+    """
     if isinstance(value, list):
         value = [float_from_json(v) for v in value]
     if not isinstance(value, list) or not all(
@@ -127,6 +130,7 @@ class RunLog:
 
     @classmethod
     def create(cls, directory: str | Path, meta: dict[str, Any]) -> RunLog:
+        """Starts the log of a new run in ``directory`` (a new or empty one) with its description ``meta``."""
         log = cls(directory)
         try:
             log.directory.mkdir(parents=True, exist_ok=True)
@@ -179,7 +183,8 @@ class RunLog:
         """The complete trials, and a note if the last line was cut mid-write. Every record is
         checked (see :meth:`TrialRecord.from_json`); queries and errors must have one value per
         query dimension of ``run.json`` when it names them (a learning run), else as many as the
-        first trial's (a baseline's weights and error)."""
+        first trial's (a baseline's weights and error).
+        """
         if not self.directory.is_dir():
             raise RunLogError(f"{self.directory} is not a run directory")
         names = self.meta().get("query_names") if os.path.lexists(self.meta_path) else None
@@ -203,7 +208,8 @@ class RunLog:
     def _check_trial_files(self, raw: list[dict[str, Any]]) -> None:
         """Damage that would otherwise pass in silence: a trial file the log lists but the
         directory lacks, or trial files beyond the log (an emptied or cut trials.jsonl; only the
-        next trial's file may exist, written just before a crash and before its line)."""
+        next trial's file may exist, written just before a crash and before its line).
+        """
         for r in raw:
             name = r.get("file")
             if isinstance(name, str) and not (self.directory / name).is_file():

@@ -57,7 +57,8 @@ def _core_of(dmp: Any, core_type: type, expected: str) -> Any:
 
 def _per_coordinate(value: Any, name: str, n: int, what: str) -> NDArray[np.float64]:
     """A scalar for every coordinate, or one value each; no NaN (infinities are the caller's
-    to allow)."""
+    to allow).
+    """
     arr = np.atleast_1d(as_float_array(value, name, (0, 1)))
     if arr.shape == (1,):
         arr = np.repeat(arr, n)
@@ -78,7 +79,7 @@ def _gains(value: Any, name: str, n: int, what: str) -> list[float]:
     arr = _per_coordinate(value, name, n, what)
     check_finite(arr, name)
     _refuse(arr, arr < 0, name, "must be >= 0")
-    return arr.tolist()
+    return _floats(arr)
 
 
 def _limits(value: Any, name: str, n: int, what: str) -> list[float] | None:
@@ -87,12 +88,12 @@ def _limits(value: Any, name: str, n: int, what: str) -> list[float] | None:
         return None
     arr = _per_coordinate(value, name, n, what)
     _refuse(arr, ~(arr > 0), name, "must be > 0 (inf for no limit)")
-    return arr.tolist()
+    return _floats(arr)
 
 
 def _positions(value: Any, name: str, n: int) -> list[float] | None:
     """Position limits: any number, ``-inf`` / ``inf`` for none."""
-    return None if value is None else _per_coordinate(value, name, n, "position coordinate").tolist()
+    return None if value is None else _floats(_per_coordinate(value, name, n, "position coordinate"))
 
 
 def _margins(value: Any, n: int) -> list[float] | None:
@@ -101,7 +102,13 @@ def _margins(value: Any, n: int) -> list[float] | None:
     arr = _per_coordinate(value, "limit_margin", n, "position coordinate")
     check_finite(arr, "limit_margin")
     _refuse(arr, arr <= 0, "limit_margin", "must be > 0")
-    return arr.tolist()
+    return _floats(arr)
+
+
+def _floats(arr: NDArray[np.float64]) -> list[float]:
+    """The array as the list of floats the core's options take."""
+    values: list[float] = arr.tolist()
+    return values
 
 
 def _options(
@@ -124,7 +131,8 @@ def _options(
     rest_tol: Any,
 ) -> tuple[float, dict[str, Any]]:
     """The options both steppers share, validated: ``n`` coordinates, ``n_position`` of them
-    positions (the ones position limits act on)."""
+    positions (the ones position limits act on).
+    """
     return as_scalar(dt, "dt", positive=True), {
         "substeps": None if substeps is None else as_count(substeps, "substeps", 1),
         "alpha_e": _gains(alpha_e, "alpha_e", n, what),
@@ -211,6 +219,7 @@ class JointStepper(_core.Stepper):
         eps: float = _DEFAULTS["eps"],
         rest_tol: float = _DEFAULTS["rest_tol"],
     ) -> Self:
+        """A stepper for ``dmp`` at control period ``dt`` (s); options as the class docs."""
         core = _core_of(dmp, _core.Dmp, "dmprs.DMP")
         n = core.n_dof
         period, opts = _options(
@@ -262,6 +271,7 @@ class CartesianStepper(_core.CartesianStepper):
         obstacle_gain: float = _DEFAULTS["obstacle_gain"],
         obstacle_beta: float = _DEFAULTS["obstacle_beta"],
     ) -> Self:
+        """A stepper for ``dmp`` at control period ``dt`` (s); options as the class docs."""
         core = _core_of(dmp, _core.CartesianDmp, "dmprs.CartesianDMP")
         period, opts = _options(
             6, 3, _COORDINATES, dt, substeps, alpha_e, goal_filter, velocity_max, acceleration_max,

@@ -71,14 +71,17 @@ class Trajectory:
 
     @property
     def n_samples(self) -> int:
+        """The number of samples T."""
         return int(self.t.shape[0])
 
     @property
     def n_dof(self) -> int:
+        """The number of degrees of freedom D."""
         return int(self.y.shape[1])
 
     @property
     def duration(self) -> float:
+        """``t[-1] - t[0]`` (s)."""
         return float(self.t[-1] - self.t[0])
 
     def __len__(self) -> int:
@@ -86,7 +89,8 @@ class Trajectory:
 
     def to_arrays(self, prefix: str = "") -> dict[str, NDArray[np.float64]]:
         """Its arrays by field name (``t``, ``y`` and the known derivatives), each name prefixed:
-        what the database, the run logs and the recordings store (:func:`from_arrays` reads it)."""
+        what the database, the run logs and the recordings store (:func:`from_arrays` reads it).
+        """
         return {f"{prefix}{name}": getattr(self, name) for name in _JOINT_FIELDS if getattr(self, name) is not None}
 
     def __eq__(self, other: object) -> bool:
@@ -175,7 +179,8 @@ class CartesianTrajectory:
         angular_acceleration: Any = None,
     ) -> CartesianTrajectory:
         """From a (T, 7) ``pose`` array ``x, y, z, qw, qx, qy, qz``; ``normalize=True`` scales
-        each quaternion to unit norm instead of refusing one off by more than 1e-6."""
+        each quaternion to unit norm instead of refusing one off by more than 1e-6.
+        """
         p = as_float_array(pose, "pose", 2)
         if p.shape[1] != 7:
             raise InvalidInputError(
@@ -189,7 +194,8 @@ class CartesianTrajectory:
     def unchecked(cls, t: Any, pose: Any) -> CartesianTrajectory:
         """A pose trajectory from ``t`` and ``pose`` (T, 7) built without any check, for testing
         what its consumers refuse (a NaN, a non-unit quaternion, a start elsewhere); never for
-        data. Every consumer checks it with :func:`dmprs.adapters.spec.pose_problems`."""
+        data. Every consumer checks it with :func:`dmprs.adapters.spec.pose_problems`.
+        """
         t = np.asarray(t, dtype=np.float64)
         pose = np.asarray(pose, dtype=np.float64)
         return cls._trusted(t, pose[:, :3], pose[:, 3:], None, None, None, None)
@@ -197,7 +203,8 @@ class CartesianTrajectory:
     @classmethod
     def _trusted(cls, *arrays: Any) -> CartesianTrajectory:
         """Wraps arrays fresh from the core (already valid and read-only) without re-checking
-        them."""
+        them.
+        """
         self = object.__new__(cls)
         self.__dict__.update(zip(_CARTESIAN_FIELDS, arrays, strict=True))  # one call: rollouts are hot
         return self
@@ -211,6 +218,7 @@ class CartesianTrajectory:
 
     @property
     def n_samples(self) -> int:
+        """The number of samples T."""
         return int(self.t.shape[0])
 
     @property
@@ -220,6 +228,7 @@ class CartesianTrajectory:
 
     @property
     def duration(self) -> float:
+        """``t[-1] - t[0]`` (s)."""
         return float(self.t[-1] - self.t[0])
 
     def __len__(self) -> int:
@@ -227,7 +236,8 @@ class CartesianTrajectory:
 
     def to_arrays(self, prefix: str = "") -> dict[str, NDArray[np.float64]]:
         """Its arrays by field name (``t``, ``position``, ``quaternion`` and the known
-        derivatives), each name prefixed (see :meth:`Trajectory.to_arrays`)."""
+        derivatives), each name prefixed (see :meth:`Trajectory.to_arrays`).
+        """
         return {f"{prefix}{name}": getattr(self, name) for name in _CARTESIAN_FIELDS
                 if getattr(self, name) is not None}
 
@@ -259,7 +269,8 @@ AnyTrajectory = Trajectory | CartesianTrajectory
 def from_arrays(arrays: Mapping[str, NDArray[np.float64]], prefix: str = "") -> AnyTrajectory | None:
     """The trajectory :meth:`Trajectory.to_arrays` or :meth:`CartesianTrajectory.to_arrays` wrote
     under ``prefix`` (a pose trajectory when there is a ``position``), validated as on
-    construction; None when there is no ``t``. Any other name under the prefix is an error."""
+    construction; None when there is no ``t``. Any other name under the prefix is an error.
+    """
     fields = {name[len(prefix):]: arr for name, arr in arrays.items() if name.startswith(prefix)}
     if "t" not in fields:
         return None

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +39,7 @@ class TrialResult:
 
     @property
     def ok(self) -> bool:
+        """Whether the execution ran to its end (status OK)."""
         return self.record.status == Status.OK.value
 
 
@@ -107,29 +108,34 @@ def _execute(task: Task, command: AnyTrajectory, seed: int, timeout_s: float | N
     return outcome
 
 
+T = TypeVar("T")
+
 class _BadOutcome(Exception):
     """An ok outcome the task cannot score."""
 
 
 def _score(task: Task, desired_query: NDArray[np.float64], outcome: Outcome,
            tol: float | None) -> tuple[NDArray[np.float64], bool]:
+    eps = _scoring(task, outcome, lambda: np.atleast_1d(np.asarray(task.error(desired_query, outcome),
+                                                                    dtype=float)))
+    if eps.shape != desired_query.shape:
+        raise _BadOutcome(f"{task.name}: the error has shape {eps.shape}; the query has "
+                          f"{desired_query.shape}")
+    if not np.isfinite(eps).all():
+        raise _BadOutcome(f"{task.name}: the measured error is not finite (eps = {eps.tolist()}); "
+                          f"signals {_describe(outcome.signals)}")
+    if tol is not None:
+        return eps, bool(np.all(np.abs(eps) < tol))
+    return eps, _scoring(task, outcome, lambda: bool(task.success(desired_query, outcome)))
+
+
+def _scoring(task: Task, outcome: Outcome, score: Callable[[], T]) -> T:
+    """``score()``, the task's own code; whatever it raises becomes a _BadOutcome naming it."""
     try:
-        raw = task.error(desired_query, outcome)
-        eps = np.atleast_1d(np.asarray(raw, dtype=float))
-        if eps.shape != desired_query.shape:
-            raise _BadOutcome(f"{task.name}: the error has shape {eps.shape}; the query has "
-                              f"{desired_query.shape}")
-        if not np.isfinite(eps).all():
-            raise _BadOutcome(f"{task.name}: the measured error is not finite (eps = {eps.tolist()}); "
-                              f"signals {_describe(outcome.signals)}")
-        success = bool(np.all(np.abs(eps) < tol)) if tol is not None else bool(
-            task.success(desired_query, outcome))
-    except _BadOutcome:
-        raise
+        return score()
     except Exception as exc:  # noqa: BLE001 - whatever the signals did to the scoring, log it
         raise _BadOutcome(f"{task.name} cannot score the outcome ({type(exc).__name__}: {exc}); "
                           f"signals {_describe(outcome.signals)}") from None
-    return eps, success
 
 
 def _scalars(signals: Mapping[str, Any]) -> dict[str, Any]:

@@ -49,7 +49,8 @@ def _flatten(dmp: DMP) -> NDArray[np.float64]:
 class PiecewiseLinear:
     """The generalizer with the core ``Generalizer``'s interface (``predict``, ``parameters``,
     ``jacobian``, ...; DMPs as core objects), over ``queries`` (M, n) and the demos' fitted
-    DMPs, so :class:`dmprs.Generalizer` can hold either."""
+    DMPs, so :class:`dmprs.Generalizer` can hold either.
+    """
 
     method = "linear"
 
@@ -140,6 +141,7 @@ class PiecewiseLinear:
         return theta
 
     def predict(self, q: NDArray[np.float64]) -> _core.Dmp:
+        """The DMP for query ``q``: the barycentric blend of its simplex's demonstrations."""
         q = self._check_query(q)
         theta = self.parameters(q)
         d, n = self.n_dof, self.n_basis
@@ -157,7 +159,8 @@ class PiecewiseLinear:
 
     def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]:
         """Central differences, step ``rel_step x`` the demos' query range per dimension (as the
-        core): exact inside a simplex, the mean of the two slopes on a shared facet."""
+        core): exact inside a simplex, the mean of the two slopes on a shared facet.
+        """
         q = self._check_query(q)
         lo, hi = self._queries.min(axis=0), self._queries.max(axis=0)
         scale = np.where(hi > lo, hi - lo, np.maximum(np.abs(q), 1.0))
@@ -177,28 +180,35 @@ class PiecewiseLinear:
     # --- the core Generalizer's properties --------------------------------------------------
     @property
     def demo_dmps(self) -> list[_core.Dmp]:
+        """The demonstrations' DMPs."""
         return [d._core for d in self._dmps]
 
     @property
     def n_query(self) -> int:
+        """Dimension of the query."""
         return int(self._queries.shape[1])
 
     @property
     def n_dof(self) -> int:
+        """Degrees of freedom of the predicted DMPs."""
         return self._template.n_dof
 
     @property
     def n_basis(self) -> int:
+        """Kernels per degree of freedom."""
         return self._template.n_basis
 
     @property
     def n_demos(self) -> int:
+        """Number of demonstrations."""
         return len(self._dmps)
 
     @property
     def n_parameters(self) -> int:
+        """Length of the parameter vector (weights, tau, goal, start)."""
         return self.n_dof * self.n_basis + 1 + 2 * self.n_dof
 
     @property
     def tau_bounds(self) -> tuple[float, float]:
+        """The range of tau over the demonstrations."""
         return self._tau_valid

@@ -36,24 +36,30 @@ class Adapter(abc.ABC, Generic[TrajectoryT]):
     spec: AdapterSpec
 
     @abc.abstractmethod
-    def connect(self) -> None: ...
+    def connect(self) -> None:
+        """Opens the session with the robot or simulation; idempotent."""
 
     @abc.abstractmethod
-    def disconnect(self) -> None: ...
+    def disconnect(self) -> None:
+        """Closes the session; idempotent."""
 
     @abc.abstractmethod
-    def reset(self, seed: int | None = None) -> None: ...
+    def reset(self, seed: int | None = None) -> None:
+        """Puts the world back in its initial state, drawing anything random from ``seed``."""
 
     @abc.abstractmethod
-    def check(self, trajectory: TrajectoryT) -> list[str]: ...
+    def check(self, trajectory: TrajectoryT) -> list[str]:
+        """Every reason ``trajectory`` would be rejected, as sentences; empty if none. Moves nothing."""
 
     @abc.abstractmethod
     def execute(
         self, trajectory: TrajectoryT, dry_run: bool = False, timeout_s: float | None = None
-    ) -> Outcome: ...
+    ) -> Outcome:
+        """Runs ``trajectory`` once (or only checks it, with ``dry_run``) and returns its outcome."""
 
     @abc.abstractmethod
-    def stop(self) -> None: ...
+    def stop(self) -> None:
+        """Halts motion at once; safe from any thread, any number of times."""
 
     def __enter__(self) -> Self:
         self.connect()
@@ -90,15 +96,19 @@ class BaseAdapter(Adapter[TrajectoryT]):
 
     @property
     def connected(self) -> bool:
+        """Whether a session is open."""
         return self._connected
 
     def connect(self) -> None:
+        """Opens the session."""
         self._connected = True
 
     def disconnect(self) -> None:
+        """Closes the session."""
         self._connected = False
 
     def reset(self, seed: int | None = None) -> None:
+        """Clears a stop and restores the initial state through :meth:`_reset`."""
         self._stop.clear()
         self._reset(seed)
 
@@ -106,6 +116,7 @@ class BaseAdapter(Adapter[TrajectoryT]):
         """Hook: restore the initial state. Simulations re-seed here."""
 
     def check(self, trajectory: TrajectoryT) -> list[str]:
+        """The spec's checks, then the adapter's own (:meth:`_extra_checks`)."""
         return self.spec.check(trajectory) + self._extra_checks(trajectory)
 
     def _extra_checks(self, trajectory: TrajectoryT) -> list[str]:
@@ -113,6 +124,7 @@ class BaseAdapter(Adapter[TrajectoryT]):
         return []
 
     def stop(self) -> None:
+        """Asks :meth:`_execute` to return at its next poll of :meth:`_interrupted`."""
         self._stop.set()
 
     def _interrupted(self) -> bool:
@@ -128,6 +140,7 @@ class BaseAdapter(Adapter[TrajectoryT]):
     def execute(
         self, trajectory: TrajectoryT, dry_run: bool = False, timeout_s: float | None = None
     ) -> Outcome:
+        """Checks, then runs :meth:`_execute` under ``timeout_s``; anything it raises becomes an ``error`` outcome."""
         if not self._connected:
             raise AdapterError(f"{self.spec.name}: execute() before connect()")
         problems = self.check(trajectory)

@@ -1,5 +1,6 @@
 """``check_adapter``: the conformance suite any adapter implementer can run, in the spirit of
-scikit-learn's ``check_estimator`` and Gymnasium's ``check_env``."""
+scikit-learn's ``check_estimator`` and Gymnasium's ``check_env``.
+"""
 
 from __future__ import annotations
 

@@ -41,23 +41,29 @@ class RecordingAdapter(Adapter):
         self._n = len(read_jsonl(index)[0]) if index.exists() else 0
 
     def connect(self) -> None:
+        """Connects the wrapped adapter."""
         self.inner.connect()
 
     def disconnect(self) -> None:
+        """Disconnects the wrapped adapter."""
         self.inner.disconnect()
 
     def reset(self, seed: int | None = None) -> None:
+        """Resets the wrapped adapter."""
         self.inner.reset(seed=seed)
 
     def check(self, trajectory: Trajectory) -> list[str]:
+        """The wrapped adapter's checks."""
         return self.inner.check(trajectory)
 
     def stop(self) -> None:
+        """Stops the wrapped adapter."""
         self.inner.stop()
 
     def execute(
         self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
     ) -> Outcome:
+        """Executes through the wrapped adapter and records the trial before returning its outcome."""
         outcome = self.inner.execute(trajectory, dry_run=dry_run, timeout_s=timeout_s)
         name = f"trial_{self._n:04d}.npz"
         arrays = {**trajectory.to_arrays("cmd_"), **({} if outcome.executed is None else outcome.executed.to_arrays("exe_"))}
@@ -96,23 +102,28 @@ class ReplayAdapter(Adapter):
         return len(self._records)
 
     def connect(self) -> None:
+        """Opens the replay."""
         self._connected = True
 
     def disconnect(self) -> None:
+        """Closes the replay."""
         self._connected = False
 
     def reset(self, seed: int | None = None) -> None:
+        """Rewinds to the first recorded trial."""
         self._next = 0
 
     def check(self, trajectory: Trajectory) -> list[str]:
+        """The recorded adapter's spec's checks."""
         return self.spec.check(trajectory)
 
     def stop(self) -> None:
-        pass
+        """Nothing moves in a replay: nothing to stop."""
 
     def execute(
         self, trajectory: Trajectory, dry_run: bool = False, timeout_s: float | None = None
     ) -> Outcome:
+        """The next recorded outcome, if ``trajectory`` is the one recorded for it."""
         if not self._connected:
             raise AdapterError("ReplayAdapter: execute() before connect()")
         if dry_run:

@@ -31,6 +31,7 @@ BUILTIN: dict[str, str] = {
 
 
 def available_adapters() -> list[str]:
+    """The names of every adapter :func:`load_adapter` can load, built in and registered."""
     names = set(BUILTIN) | {ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)}
     return sorted(names)
 

@@ -1,5 +1,6 @@
 """What an adapter declares about itself: degrees of freedom, control period, limits and the
-outcome signals it measures."""
+outcome signals it measures.
+"""
 
 from __future__ import annotations
 
@@ -99,6 +100,7 @@ class AdapterSpec:
 
     @property
     def n_dof(self) -> int:
+        """Number of degrees of freedom (the length of ``dof_names``)."""
         return len(self.dof_names)
 
     def check(self, trajectory: AnyTrajectory) -> list[str]:
@@ -149,7 +151,8 @@ class AdapterSpec:
     def signal_problems(self, signals: Any) -> list[str]:
         """Every way measured ``signals`` break this spec (empty when they are fine): not a
         mapping, a declared signal missing, an undeclared one, a value that is not a real number
-        or array of them (a string, None, a bool), or a NaN or infinity."""
+        or array of them (a string, None, a bool), or a NaN or infinity.
+        """
         if not isinstance(signals, Mapping):
             return [f"signals is a {type(signals).__name__}, not a mapping of signal names to values"]
         declared = [s.name for s in self.signals]
@@ -233,7 +236,8 @@ def _derivative(t: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def _angular_velocity(t: np.ndarray, q: np.ndarray) -> np.ndarray:
     """World-frame angular velocity (T, 3) of sampled unit quaternions, by finite differences of
-    consecutive rotations: ``2 log(q_{j+1} conj(q_j)) / dt`` at the midpoints, interpolated."""
+    consecutive rotations: ``2 log(q_{j+1} conj(q_j)) / dt`` at the midpoints, interpolated.
+    """
     if len(t) < 2:
         return np.zeros((len(t), 3))
     mid = quaternion.log(quaternion.product(q[1:], quaternion.conjugate(q[:-1]))) / np.diff(t)[:, None]
@@ -246,7 +250,8 @@ def pose_problems(tr: CartesianTrajectory, *, min_samples: int) -> list[str]:
     (an adapter's spec, an adapter that turns poses into joints): too few samples, a value that
     is not finite, times that do not increase, a quaternion that is not unit. A validated
     :class:`~dmprs.CartesianTrajectory` can only have too few samples; one built
-    :meth:`~dmprs.CartesianTrajectory.unchecked` may break any. Empty when none."""
+    :meth:`~dmprs.CartesianTrajectory.unchecked` may break any. Empty when none.
+    """
     t = tr.t
     if len(t) < min_samples:
         return [f"trajectory has {len(t)} samples; at least {min_samples} are needed"]
@@ -272,7 +277,8 @@ def pose_problems(tr: CartesianTrajectory, *, min_samples: int) -> list[str]:
 def start_problems(tr: CartesianTrajectory, start_pose: tuple[float, ...], tolerance: float) -> list[str]:
     """Where a usable pose trajectory (:func:`pose_problems`) starts away from ``start_pose``
     (x, y, z, qw, qx, qy, qz): beyond ``tolerance`` m in position or ``tolerance`` rad in
-    orientation. Empty when it starts there."""
+    orientation. Empty when it starts there.
+    """
     start = np.asarray(start_pose, dtype=float)
     problems = []
     off = float(np.linalg.norm(tr.position[0] - start[:3]))
@@ -317,4 +323,5 @@ class Outcome:
 
     @property
     def ok(self) -> bool:
+        """Whether the execution ran to its end (status OK)."""
         return self.status is Status.OK

@@ -48,18 +48,22 @@ ENV_IDS = ("dmprs/MatchboxFlip-v0", "dmprs/MatchboxFlipWeights-v0", "dmprs/Pouri
 
 
 def make_matchbox(action: str = "query", **options: Any) -> TaskEnv:
+    """The matchbox flip-up as a one-step environment (``action``: ``"query"`` or ``"weights"``)."""
     return TaskEnv(matchbox_scenario(**options), action=action)
 
 
 def make_pouring(action: str = "query", **options: Any) -> TaskEnv:
+    """2-D pouring from a bottle of random volume as a one-step environment."""
     return TaskEnv(pouring_scenario(**options), action=action)
 
 
 def make_arm_pouring(action: str = "query", **options: Any) -> TaskEnv:
+    """Pouring with the 7-DOF arm from a bottle of random volume as a one-step environment."""
     return TaskEnv(arm_pouring_scenario(**options), action=action)
 
 
 def make_throwing(action: str = "query", **options: Any) -> TaskEnv:
+    """Throwing into a basket at a random place with the 7-DOF arm as a one-step environment."""
     return TaskEnv(throwing_scenario(**options), action=action)
 
 

@@ -50,7 +50,8 @@ RESET_OPTIONS = ("context",)
 class ResetNeeded(DmprsError, gym.error.ResetNeeded):
     """``step`` before ``reset`` or after the episode ended. It lives here, not in
     :mod:`dmprs.errors`, because it derives from Gymnasium's class (importing dmprs does not
-    import Gymnasium)."""
+    import Gymnasium).
+    """
 
 
 class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
@@ -79,7 +80,8 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None,
               ) -> tuple[NDArray[np.float64], dict[str, Any]]:
         """Draws a context from the generator seeded with ``seed`` (a non-negative integer, or None
-        to keep the current stream), or takes ``options["context"]``."""
+        to keep the current stream), or takes ``options["context"]``.
+        """
         if seed is not None and (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer))
                                  or seed < 0):
             raise InvalidInputError(f"seed = {short(seed)} is invalid: use a non-negative integer or None")
@@ -104,7 +106,8 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
     @staticmethod
     def _checked(value: Any, name: str, box: gym.spaces.Space[Any], clip: bool = False) -> NDArray[np.float64]:
         """``value`` as a finite float64 array of ``box``'s shape, or an InvalidInputError naming
-        ``name`` and ``box``; within ``box`` unless ``clip`` (then the caller clips)."""
+        ``name`` and ``box``; within ``box`` unless ``clip`` (then the caller clips).
+        """
         assert isinstance(box, gym.spaces.Box)
         space = f"the space is {box}"
         try:
@@ -137,6 +140,7 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
         return dmp, desired
 
     def step(self, action: Any) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
+        """Executes the DMP the action chooses; the episode ends after this one trial."""
         if self._context is None:
             raise ResetNeeded(f"{self.scenario.name}: step() before reset()")
         if self._done:
@@ -165,6 +169,7 @@ class TaskEnv(gym.Env[NDArray[np.float64], NDArray[np.float64]]):
         return ctx.copy(), reward, True, False, info
 
     def close(self) -> None:
+        """Disconnects the current task's adapter."""
         if self._context is not None:
             self.scenario.make_task(self._context).adapter.disconnect()
         super().close()

@@ -29,7 +29,8 @@ class Scenario:
     shows), ``make_task(context)`` builds the task for it, ``desired_query(context)`` is the query
     it asks for, and queries range over ``[query_low, query_high]`` (the demonstrations' span, where
     the generalizer is valid). ``failure_reward`` is the reward of a trial without a measurement
-    (rejected trajectory, simulation error): below that of any measured trial."""
+    (rejected trajectory, simulation error): below that of any measured trial.
+    """
 
     name: str
     generalizer: Generalizer
@@ -43,6 +44,7 @@ class Scenario:
     failure_reward: float
 
     def sample_context(self, rng: np.random.Generator) -> NDArray[np.float64]:
+        """A context drawn uniformly from its range with ``rng``."""
         return rng.uniform(self.context_low, self.context_high)
 
 
@@ -50,7 +52,8 @@ def matchbox_scenario(demos: str = "default", **config: float) -> Scenario:
     """Stand the matchbox upright (``dmprs.tasks.matchbox``): one context, the desired outcome
     angle pi/2; the query is the outcome angle the generalizer is asked for, between the
     demonstrations' labels. A measured trial scores ``-|eps|`` (rad) with eps = pi/2 - q_a, at
-    most pi/2 in size, so a trial without a measurement scores -pi."""
+    most pi/2 in size, so a trial without a measurement scores -pi.
+    """
     setup = matchbox.setup(demos, noise=None, **config)
     task = setup.task
     desired = np.array([math.pi / 2])
@@ -71,7 +74,8 @@ def pouring_scenario(volume_range: Sequence[float] = (0.3, 1.0), demo_volumes: S
     (:func:`dmprs.experiments.pouring.setup`) pour the target from bottles of ``demo_volumes``
     with the liquid of ``liquid_seed``. The query is the assumed bottle volume, between the
     demonstrations' volumes; a measured trial scores ``-|V_poured - V*|`` (l), a trial without a
-    measurement minus the largest volume."""
+    measurement minus the largest volume.
+    """
     lo, hi = (float(v) for v in volume_range)
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
         raise InvalidInputError(f"volume_range = {tuple(volume_range)!r} must be 0 < low <= high (l)")
@@ -102,7 +106,8 @@ def throwing_scenario(generalizer: str = "linear", tol: float = throwing_task.SU
     ``robot`` extra): the context is the basket's position (x, y in m), drawn at each reset from
     the box the demonstrations landed in; the query is the landing point the generalizer is asked
     for, within that box. A measured trial scores ``-|eps|`` (m), a trial without a landing minus
-    the box's diagonal."""
+    the box's diagonal.
+    """
     labels = np.array([label for label, _ in arm_throwing.demonstrations()])
     lo, hi = labels.min(axis=0), labels.max(axis=0)
     setup = arm_throwing.setup(tuple((lo + hi) / 2), generalizer, tol=tol)
@@ -120,7 +125,8 @@ def arm_pouring_scenario(volume_range: Sequence[float] = (0.4, 0.9), cache_dir: 
     calibrated pose demonstrations of 0.3 and 1.0 l (cached on disk with ``cache_dir`` or
     ``DMPRS_CACHE_DIR``), generalized linearly as Cartesian DMPs; the query is the assumed bottle
     volume. A measured trial scores ``-|V_poured - V*|`` (l), a trial without a measurement -1.
-    One step is a few seconds of MuJoCo."""
+    One step is a few seconds of MuJoCo.
+    """
     lo, hi = (float(v) for v in volume_range)
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo <= hi):
         raise InvalidInputError(f"volume_range = {tuple(volume_range)!r} must be 0 < low <= high (l)")

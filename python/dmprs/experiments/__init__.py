@@ -40,7 +40,8 @@ def run(name: str, *, learner: str | None = None, learner_options: dict[str, Any
         seed: int = 0, on_trial: Callable[[TrialRecord], None] | None = None,
         **setup_options: Any) -> LearningResult:
     """Sets up experiment ``name`` and learns it; the run log records how, so that ``dmprs
-    resume`` can rebuild it."""
+    resume`` can rebuild it.
+    """
     setup = make(name, **setup_options)
     learner_name = learner or setup.default_learner
     lrn = setup.make_learner(learner_name, **(learner_options or {}))

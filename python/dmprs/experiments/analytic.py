@@ -1,5 +1,6 @@
 """The analytic task (:mod:`dmprs.tasks.analytic`): two demonstrated bumps labelled with their
-outcomes, linear generalization, a physics-free check of the learning loop."""
+outcomes, linear generalization, a physics-free check of the learning loop.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +12,8 @@ from dmprs.tasks.noise import Noise
 def setup(noise: float | Noise = 0.0, tol: float = 0.01, desired: float = 1.5,
           amplitudes: tuple[float, float] = (0.5, 2.5), execution_noise: float = 0.0) -> ExperimentSetup:
     """Two demonstrations (bumps of the given amplitudes, labelled with their outcomes), linear
-    generalization, desired outcome ``desired``."""
+    generalization, desired outcome ``desired``.
+    """
     task = AnalyticTask(noise=noise, tol=tol, execution_noise=execution_noise)
     demos = [task.demonstration(a) for a in amplitudes]
     labels = [float(q[0]) for q, _ in demos]

@@ -50,7 +50,8 @@ def demonstrations(target_volume: float = TARGET_VOLUME, liquid_seed: int = 0, c
                    ) -> tuple[tuple[NDArray[np.float64], CartesianTrajectory, Calibration], ...]:
     """The calibrated demonstrations: ((query, pose trajectory, calibration), ...) for the
     bottles of :data:`~dmprs.tasks.arm_pouring.DEMO_VOLUMES` (calibrations cached on disk in
-    ``cache_dir`` or ``$DMPRS_CACHE_DIR`` when given)."""
+    ``cache_dir`` or ``$DMPRS_CACHE_DIR`` when given).
+    """
     out = []
     for volume in DEMO_VOLUMES:
         cal = calibrate_peak_tilt(volume, target_volume, liquid_seed=liquid_seed, bracket=DEMO_BRACKET,
@@ -66,7 +67,8 @@ def setup(bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME, tol:
     calibrated pose demonstrations generalized linearly as :class:`~dmprs.CartesianDMP` s with
     N = 40 kernels (weights, tau and positions linear in the volume, the orientations by slerp),
     the desired query = the true volume; learners ``golden`` (default, paper mode, bracket
-    [0.3, 1.0] l), ``root`` (Illinois) and the other scalar query learners."""
+    [0.3, 1.0] l), ``root`` (Illinois) and the other scalar query learners.
+    """
     task = ArmPouring(bottle_volume, target_volume=target_volume, tol=tol, liquid_seed=liquid_seed,
                       reseed_liquid=reseed_liquid)
     seed = as_count(demo_seed, "demo_seed", 0)
@@ -86,7 +88,8 @@ def noise_floor(bottle_volume: float = 0.6, offsets: tuple[float, ...] = (-0.01,
                 liquid_seeds: tuple[int, ...] = (0,)) -> list[dict[str, float]]:
     """Poured volume of the generalized movement at queries ``bottle_volume + offset`` (l), for
     each liquid seed: the granular outcome's response to a small change of the query, whose
-    scatter about a straight line is the noise floor the success tolerance must exceed."""
+    scatter about a straight line is the noise floor the success tolerance must exceed.
+    """
     rows = []
     for seed in liquid_seeds:
         experiment = setup(bottle_volume, liquid_seed=seed, reseed_liquid=False)
@@ -108,7 +111,8 @@ def frame_strip(out: str | Path, bottle_volume: float = 0.6, learner_query: floa
     """A frame strip ``out/arm_pouring_strip.png`` of the generalized pour for ``bottle_volume``
     (at the assumed volume ``learner_query``, default the true one) through MuJoCo's offscreen
     renderer; None, with a one-line note on stderr, where no OpenGL backend is available (set
-    ``MUJOCO_GL=egl`` or ``osmesa``)."""
+    ``MUJOCO_GL=egl`` or ``osmesa``).
+    """
     experiment = setup(bottle_volume)
     q = experiment.desired_query if learner_query is None else np.array([learner_query])
     task = experiment.task

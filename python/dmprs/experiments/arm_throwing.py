@@ -44,7 +44,8 @@ def demonstrations(n_basis: int = N_BASIS) -> tuple[tuple[NDArray[np.float64], T
     """((landing point, scripted joint trajectory), ...) for :data:`~dmprs.tasks.arm_throwing.DEMOS`.
     The label is **measured**: where the ball lands when the arm executes the demonstration's DMP
     (``n_basis`` kernels, the DMP every generalizer returns at the demo's own query), noise off.
-    Raises if a demonstration does not land."""
+    Raises if a demonstration does not land.
+    """
     task = ArmThrowing()
     out = []
     with task.adapter as adapter:

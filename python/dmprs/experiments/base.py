@@ -36,7 +36,8 @@ class LearnerSettings:
     the policy gradient, Broyden's trust region and, without limits, CMA-ES; ``probe`` the
     finite-difference step; ``weighted_jacobian`` the J of the weighted learner; ``cma_sigma``
     CMA-ES's first step (default: a quarter of the search range, else ``task_scale``); ``gain``
-    the fixed K of the ``fixed`` learner."""
+    the fixed K of the ``fixed`` learner.
+    """
 
     max_trials: int = 50
     low: float | None = None
@@ -60,7 +61,8 @@ class LearnerSettings:
 @dataclass(frozen=True)
 class LearnerKind:
     """A learner by name: what it is (the command line's help) and how an experiment builds one
-    from its settings, the first query q0 and the caller's options."""
+    from its settings, the first query q0 and the caller's options.
+    """
 
     name: str
     summary: str
@@ -140,7 +142,8 @@ def learner_help() -> str:
 @dataclass
 class ExperimentSetup:
     """Everything :func:`dmprs.learn` needs, and the learners this experiment offers with its
-    settings. ``make_learner(name)`` builds one starting from the desired query."""
+    settings. ``make_learner(name)`` builds one starting from the desired query.
+    """
 
     task: Task
     database: Database
@@ -152,15 +155,18 @@ class ExperimentSetup:
 
     @property
     def low(self) -> float | None:
+        """The lower bound of the query, or None."""
         return self.settings.low
 
     @property
     def high(self) -> float | None:
+        """The upper bound of the query, or None."""
         return self.settings.high
 
     def make_learner(self, name: str | None = None, q0: ArrayLike | None = None, **options: Any) -> AskTell:
         """The learner ``name`` (default: the experiment's) from ``q0`` (default: the desired
-        query), with ``options`` passed on to its class."""
+        query), with ``options`` passed on to its class.
+        """
         name = name or self.default_learner
         if name not in self.learner_names:
             raise InvalidInputError(
@@ -171,7 +177,8 @@ class ExperimentSetup:
 
 def database_of(task: Task, demos: Iterable[tuple[ArrayLike, AnyTrajectory]]) -> Database:
     """The database of ``task``'s demonstrations ``(query, trajectory)``, with its query names
-    and units."""
+    and units.
+    """
     db = Database(query_names=task.query_names, query_units=task.query_units)
     for query, trajectory in demos:
         db.add(query, trajectory)
@@ -184,7 +191,8 @@ def build(task: Task, demos: Callable[[], Iterable[tuple[ArrayLike, AnyTrajector
     """The one way from a task's demonstrations to an experiment: their database, its
     generalizer (``Generalizer(db, **generalizer)``) and the desired query. The task checks the
     desired query first, under the caller's name for it, and only then are the demonstrations
-    asked for (``demos()``): a refusal costs no demonstration."""
+    asked for (``demos()``): a refusal costs no demonstration.
+    """
     desired = task.validate_query(desired_query, desired_name)
     db = database_of(task, demos())
     return ExperimentSetup(task, db, Generalizer(db, **generalizer), desired, default_learner, learner_names,

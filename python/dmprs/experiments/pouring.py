@@ -1,5 +1,6 @@
 """Pouring 0.2 l from a bottle of unknown volume (paper section 5.2, docs/method.md §9), in the
-2-D pymunk simulation."""
+2-D pymunk simulation.
+"""
 
 from __future__ import annotations
 

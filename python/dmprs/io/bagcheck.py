@@ -68,7 +68,8 @@ def _why(size: int, cap: int) -> str:
 def check_bag(path: Path) -> None:
     """Raises :class:`~dmprs.errors.InvalidInputError` naming the file unless rosbags can open
     the bag ``path`` (a ROS 2 directory or a ROS 1 ``.bag``) without blocking on a FIFO or
-    device and without inflating a compressed piece beyond :func:`inflate_limit`."""
+    device and without inflating a compressed piece beyond :func:`inflate_limit`.
+    """
     if path.is_dir():
         _ros2(path)
     elif path.suffix == ".mcap":  # rosbags also reads a ROS 2 storage file on its own
@@ -85,7 +86,8 @@ def check_bag(path: Path) -> None:
 
 def _read(f: IO[bytes], n: int, where: str) -> bytes:
     """Exactly ``n`` bytes, read a piece at a time (a crafted length cannot allocate more than
-    the file holds)."""
+    the file holds).
+    """
     pieces, got = [], 0
     while got < n:
         piece = f.read(min(_PIECE, n - got))
@@ -195,7 +197,8 @@ def _mcap(f: IO[bytes], where: str, *, messages: bool, limit: int) -> None:
     """Every chunk of an MCAP stream (and with ``messages`` every message, zstd-compressed by a
     message-compressed ROS 2 bag) inflates within bounds, and what rosbags seeks by (the footer
     at the end, the summary it points at, the chunk index there) points at those chunks only.
-    Records are read forward, so the stream may be an inflating one."""
+    Records are read forward, so the stream may be an inflating one.
+    """
     if f.read(len(_MCAP_MAGIC)) != _MCAP_MAGIC:
         raise InvalidInputError(f"{where}: not an MCAP file (no MCAP magic at its start)")
     chunks: dict[int, tuple[str, int, int]] = {}
@@ -297,7 +300,7 @@ def _ros2(directory: Path) -> None:
     sizes = [check_regular(p, what="bag storage file") for p in paths]
     if mode == "file":
         total = 0
-        for p, size in zip(paths, sizes):
+        for p, size in zip(paths, sizes, strict=True):
             total += _inflated_file(p, size, storage)
         tmp = tempfile.gettempdir()
         free = shutil.disk_usage(tmp).free
@@ -306,7 +309,7 @@ def _ros2(directory: Path) -> None:
                 f"{directory}: its compressed files inflate to {total} bytes, which rosbags writes into "
                 f"the temporary directory {tmp}: it has {free} bytes free (set TMPDIR elsewhere)")
         return
-    for p, size in zip(paths, sizes):
+    for p, size in zip(paths, sizes, strict=True):
         if storage == "mcap":
             f, _ = open_regular(p, what="bag storage file")
             with f:

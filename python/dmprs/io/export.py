@@ -35,7 +35,8 @@ def write_joint_trajectory_bag(path: str | Path, trajectory: Trajectory, joint_n
                                stamp_ns: int = 0, frame_id: str = "") -> Path:
     """Writes ``trajectory`` as one ``JointTrajectory`` message (every sample a point with its
     ``time_from_start``, positions, and velocities and accelerations when the trajectory has
-    them) into a new ROS 2 bag directory ``path`` (``storage``: ``"sqlite3"`` or ``"mcap"``)."""
+    them) into a new ROS 2 bag directory ``path`` (``storage``: ``"sqlite3"`` or ``"mcap"``).
+    """
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import Stores, get_typestore
 
@@ -71,7 +72,8 @@ def write_joint_trajectory_bag(path: str | Path, trajectory: Trajectory, joint_n
 def write_trajectory_csv(path: str | Path, trajectory: Trajectory, joint_names: Sequence[str]) -> Path:
     """Writes ``time`` (s) and one column per joint, then ``<joint>.velocity`` and
     ``<joint>.acceleration`` columns when known; values with 17 significant digits (they read
-    back exactly). The file is replaced atomically."""
+    back exactly). The file is replaced atomically.
+    """
     names = _names(trajectory, joint_names)
     header = ["time", *names]
     cols = [trajectory.t[:, None], trajectory.y]

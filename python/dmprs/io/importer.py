@@ -43,7 +43,8 @@ POSE_NAMES = ("x", "y", "z", "qw", "qx", "qy", "qz")
 @dataclass(frozen=True)
 class ImportedDemo:
     """A demonstration read from a file: its name, trajectory (times from 0), labels that can
-    serve as its query, and where it came from (JSON-safe, kept as the database's metadata)."""
+    serve as its query, and where it came from (JSON-safe, kept as the database's metadata).
+    """
 
     name: str
     trajectory: Trajectory | CartesianTrajectory
@@ -176,7 +177,8 @@ def _pieces(traj: Trajectory | CartesianTrajectory, ranges: Sequence[tuple[float
 
 def _resampled(traj: Any, rate: float | None, where: str) -> Any:
     """The demonstration, resampled at ``rate`` if given; one of fewer than MIN_SAMPLES samples
-    is refused (DMP.fit differentiates twice)."""
+    is refused (DMP.fit differentiates twice).
+    """
     try:
         if rate is not None:
             traj = resample_poses(traj, rate) if isinstance(traj, CartesianTrajectory) else resample(traj, rate)
@@ -196,7 +198,8 @@ def build_database(
     query_units: Sequence[str] | None = None,
 ) -> Database:
     """A database of ``demos`` whose queries come from the table ``queries`` (by demonstration
-    name) or from the label fields ``query_fields``. ``query_units`` overrides the table's units."""
+    name) or from the label fields ``query_fields``. ``query_units`` overrides the table's units.
+    """
     if (queries is None) == (query_fields is None):
         raise InvalidInputError("give the queries as a table or as label fields (exactly one of them)")
     if not demos:
@@ -230,7 +233,7 @@ def build_database(
     if query_units is not None:
         units = tuple(query_units)
     db = Database(names, units)
-    for d, q in zip(demos, values):
+    for d, q in zip(demos, values, strict=True):
         try:
             db.add(q, d.trajectory, label=d.name, metadata=dict(d.metadata))
         except DmprsError as exc:

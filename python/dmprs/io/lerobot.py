@@ -63,7 +63,8 @@ class Episode:
 
 def _arrow_errors() -> tuple[type[BaseException], ...]:
     """What pyarrow raises for a file it cannot read: its own classes (ArrowInvalid, ...,
-    all ArrowException) and OSError (a thrift footer it cannot decode, an I/O error)."""
+    all ArrowException) and OSError (a thrift footer it cannot decode, an I/O error).
+    """
     import pyarrow as pa
 
     return (pa.ArrowException, OSError)
@@ -98,7 +99,8 @@ def _read(f: Any, path: Path, columns: Sequence[str]) -> Any:
 
 def _files(directory: Path) -> list[Path]:
     """The parquet files under ``directory``, sorted; links to directories are not followed (a
-    loop of them would never end)."""
+    loop of them would never end).
+    """
     out = []
     for d, dirs, names in os.walk(directory, followlinks=False):
         dirs.sort()
@@ -112,7 +114,8 @@ def _exists(path: Path) -> bool:
 
 def _jsonl(path: Path, what: str) -> list[dict[str, Any]]:
     """The records of a JSON-lines metadata file, or none if there is no such file (a directory,
-    a FIFO or a bad line is an error naming the file and line)."""
+    a FIFO or a bad line is an error naming the file and line).
+    """
     if not _exists(path):
         return []
     text = read_text(path, limit=METADATA_MAX_BYTES, what=what)
@@ -187,7 +190,8 @@ def _metadata(root: Path, version: str) -> tuple[dict[int, dict[str, Any]], dict
 
 def _matrix(col: Any, path: Path, column: str) -> np.ndarray:
     """A frame column as (frames, components) float64: a list column of equal-length lists, or a
-    numeric scalar column."""
+    numeric scalar column.
+    """
     import pyarrow as pa
     import pyarrow.compute as pc
 
@@ -226,7 +230,8 @@ def _integers(col: Any, path: Path, column: str) -> np.ndarray:
 
 def _scalar_labels(record: dict[str, Any]) -> dict[str, Any]:
     """The JSON-safe scalar fields of an episode record (v3's per-file bookkeeping and
-    statistics, "data/chunk_index", "stats/...", are left out; so are non-finite numbers)."""
+    statistics, "data/chunk_index", "stats/...", are left out; so are non-finite numbers).
+    """
     out: dict[str, Any] = {}
     for k, v in record.items():
         if "/" in k or isinstance(v, bool):
@@ -259,7 +264,7 @@ def _episodes_of(path: Path, f: Any, column: str, index: list[int] | None) -> It
     order = np.lexsort((frame_of, ep_of))  # by episode, then frame
     ep_of, frame_of, values, times, task_of = ep_of[order], frame_of[order], values[order], times[order, 0], task_of[order]
     starts = np.flatnonzero(np.concatenate([[True], np.diff(ep_of) != 0])) if len(ep_of) else np.zeros(0, int)
-    for a, b in zip(starts, [*starts[1:], len(ep_of)]):
+    for a, b in zip(starts, [*starts[1:], len(ep_of)], strict=True):
         ep = int(ep_of[a])
         where = f"{path}, episode {ep}"
         if b - a < MIN_SAMPLES:

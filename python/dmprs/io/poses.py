@@ -36,7 +36,8 @@ def interpolate_poses(t: NDArray[np.float64], poses: NDArray[np.float64],
 
 def pose_trajectory(t: ArrayLike, poses: ArrayLike) -> CartesianTrajectory:
     """A :class:`~dmprs.CartesianTrajectory` from recorded poses (T, 7) ``x, y, z, qw, qx, qy,
-    qz``: quaternions normalized (recordings store them to a few digits) and made sign-continuous."""
+    qz``: quaternions normalized (recordings store them to a few digits) and made sign-continuous.
+    """
     tt = as_float_array(t, "t", 1)
     check_increasing(tt)
     p = as_float_array(poses, "poses", 2)
@@ -53,7 +54,8 @@ def pose_trajectory(t: ArrayLike, poses: ArrayLike) -> CartesianTrajectory:
 
 def resample_poses(trajectory: CartesianTrajectory, rate: float) -> CartesianTrajectory:
     """Uniform samples at ``rate`` Hz from the first one (positions linearly, orientations by
-    slerp), times from 0; recorded velocities are dropped."""
+    slerp), times from 0; recorded velocities are dropped.
+    """
     n = uniform_count(trajectory.duration, rate, 7)
     t = trajectory.t
     t_new = t[0] + np.arange(n) * (1.0 / float(rate))
@@ -73,7 +75,8 @@ def poses_between(trajectory: CartesianTrajectory, start: float, stop: float) ->
 
 def angular_speed(t: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
     """|omega| (rad/s) per sample from consecutive unit quaternions: the rotation angle between
-    neighbours over their time step (averaged at inner samples)."""
+    neighbours over their time step (averaged at inner samples).
+    """
     step = 2 * np.arccos(np.abs(np.sum(q[1:] * q[:-1], axis=1)).clip(0.0, 1.0)) / np.diff(t)
     return np.concatenate([[step[0]], (step[1:] + step[:-1]) / 2, [step[-1]]])
 
@@ -82,7 +85,8 @@ def split_poses_at_rest(poses: CartesianTrajectory, *, speed_tol: float, angular
                         min_rest: float = 0.2, min_duration: float = 0.3) -> list[CartesianTrajectory]:
     """The movements of a long pose recording: where the linear speed exceeds ``speed_tol`` (m/s)
     or the angular speed ``angular_speed_tol`` (rad/s), cut as :func:`dmprs.io.split_at_rest`
-    cuts joint recordings; each with times from 0."""
+    cuts joint recordings; each with times from 0.
+    """
     tol = as_scalar(speed_tol, "speed_tol", positive=True)
     ang = as_scalar(angular_speed_tol, "angular_speed_tol", positive=True)
     if poses.n_samples < 3:

@@ -53,7 +53,8 @@ _MAX_START_NS = 2**62
 @dataclass(frozen=True)
 class JointRecording:
     """Joint positions read from a bag: ``trajectory.y[:, k]`` is joint ``names[k]``; times in s
-    since the bag's start."""
+    since the bag's start.
+    """
 
     names: tuple[str, ...]
     trajectory: Trajectory
@@ -76,7 +77,8 @@ def _rosbags_errors() -> tuple[type[BaseException], ...]:
 @contextmanager
 def _reader(path: str | Path) -> Iterator[Any]:
     """An open AnyReader; whatever rosbags raises in the ``with`` block (opening, listing,
-    iterating, deserializing) becomes an InvalidInputError naming the bag."""
+    iterating, deserializing) becomes an InvalidInputError naming the bag.
+    """
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 
@@ -165,7 +167,8 @@ class _Samples:
 
 def _times(samples: _Samples, start: int, where: str) -> NDArray[np.float64]:
     """Header stamps if any is set, else receive times, in s since the bag's start. A zero stamp
-    among set ones is refused (a publisher that does not stamp, mixed with one that does)."""
+    among set ones is refused (a publisher that does not stamp, mixed with one that does).
+    """
     stamps = np.array(samples.stamps, dtype=np.int64)
     if not stamps.any():
         stamps = np.array(samples.received, dtype=np.int64)
@@ -180,7 +183,8 @@ def _times(samples: _Samples, start: int, where: str) -> NDArray[np.float64]:
 
 def _increasing(t: NDArray[np.float64], index: Sequence[int], where: str) -> NDArray[np.intp]:
     """Indices that sort ``t`` and drop samples not later than the one kept before them; a gap
-    longer than MAX_STAMP_GAP_S between kept samples is refused."""
+    longer than MAX_STAMP_GAP_S between kept samples is refused.
+    """
     order = np.argsort(t, kind="stable")
     ts = t[order]
     keep = np.concatenate([[True], np.diff(ts) > 0])

@@ -30,7 +30,8 @@ MAX_RESAMPLED_VALUES = 50_000_000
 def uniform_count(duration: float, rate: float, n_dof: int) -> int:
     """The number of samples of a uniform grid of ``rate`` Hz over ``duration`` s (from the first
     sample, up to the last grid point at or before the end), refused before anything is allocated
-    if it would exceed MAX_RESAMPLED_VALUES or fall short of MIN_SAMPLES."""
+    if it would exceed MAX_RESAMPLED_VALUES or fall short of MIN_SAMPLES.
+    """
     hz = as_scalar(rate, "rate", positive=True)
     with np.errstate(over="ignore"):
         steps = np.float64(duration) / (1.0 / hz)
@@ -49,7 +50,8 @@ def uniform_count(duration: float, rate: float, n_dof: int) -> int:
 def resample(trajectory: Trajectory, rate: float, *, start_at_zero: bool = True) -> Trajectory:
     """Linear interpolation of positions (and velocities, if known) onto a uniform grid of
     ``rate`` Hz from the first sample; times start at 0 unless ``start_at_zero=False``. The last
-    sample is the last grid point at or before the recording's end."""
+    sample is the last grid point at or before the recording's end.
+    """
     n = uniform_count(trajectory.duration, rate, trajectory.n_dof)
     t = trajectory.t
     t_new = t[0] + np.arange(n) * (1.0 / float(rate))
@@ -68,7 +70,8 @@ def from_zero(trajectory: Trajectory) -> Trajectory:
 
 def cut(trajectory: Trajectory, ranges: Sequence[tuple[float, float]]) -> list[Trajectory]:
     """The parts of ``trajectory`` with ``start <= t <= stop`` for each ``(start, stop)``, in the
-    recording's own times (absolute), each with times from 0."""
+    recording's own times (absolute), each with times from 0.
+    """
     out = []
     for k, rng in enumerate(ranges):
         start, stop = (as_scalar(v, f"ranges[{k}]") for v in rng)
@@ -87,7 +90,8 @@ def motion_ranges(t: NDArray[np.float64], y: NDArray[np.float64], *, speed_tol: 
     """Time ranges of the movements in a recording: where the speed ``|dy/dt|`` (Euclidean over
     the columns of ``y``) exceeds ``speed_tol``, with pauses shorter than ``min_rest`` s bridged
     and movements shorter than ``min_duration`` s dropped. Each range is widened by one sample on
-    either side, so it starts and ends at rest."""
+    either side, so it starts and ends at rest.
+    """
     tt = as_float_array(t, "t", 1)
     yy = as_float_array(y, "y", (1, 2))
     yy = yy.reshape(-1, 1) if yy.ndim == 1 else yy
@@ -105,7 +109,7 @@ def moving_ranges(tt: NDArray[np.float64], is_moving: NDArray[np.bool_], rest: f
     """The ranges of :func:`motion_ranges` from a per-sample moving flag."""
     moving = np.concatenate([[False], is_moving, [False]])
     edges = np.flatnonzero(np.diff(moving.astype(np.int8)))
-    runs = [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2])]  # inclusive indices
+    runs = [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]  # inclusive indices
     merged: list[tuple[int, int]] = []
     for a, b in runs:
         if merged and tt[a] - tt[merged[-1][1]] < rest:
@@ -123,7 +127,8 @@ def moving_ranges(tt: NDArray[np.float64], is_moving: NDArray[np.bool_], rest: f
 def split_at_rest(trajectory: Trajectory, *, speed_tol: float, min_rest: float = 0.2,
                   min_duration: float = 0.3) -> list[Trajectory]:
     """The movements of one long recording, cut where it rests (see :func:`motion_ranges`),
-    each with times from 0. ``speed_tol`` is in the units of y per second (joint speeds: rad/s)."""
+    each with times from 0. ``speed_tol`` is in the units of y per second (joint speeds: rad/s).
+    """
     ranges = motion_ranges(trajectory.t, trajectory.y, speed_tol=speed_tol, min_rest=min_rest,
                            min_duration=min_duration)
     if not ranges:

@@ -43,7 +43,8 @@ _HEADER_UNIT = re.compile(r"^\s*(?P<name>[^\[\]]+?)\s*(\[(?P<unit>[^\[\]]*)\])?\
 
 def _rows(path: Path, limit: int, what: str) -> tuple[list[str], Iterator[tuple[int, list[str]]]]:
     """The header of a CSV file (read whole, within ``limit`` bytes, as UTF-8) and its non-blank
-    rows with their line numbers; a malformed row is an error naming the line."""
+    rows with their line numbers; a malformed row is an error naming the line.
+    """
     text = read_text(path, limit=limit, what=what)
     reader = csv.reader(io.StringIO(text, newline=""))
 
@@ -161,7 +162,7 @@ def read_query_table(path: str | Path) -> QueryTable:
     cols = [i for i, h in enumerate(header) if h != "demo"]
     if not cols:
         raise InvalidInputError(f"{p}: no query column besides 'demo'")
-    names, units = zip(*(_split_unit(header[i]) for i in cols))
+    names, units = zip(*(_split_unit(header[i]) for i in cols), strict=True)
     d = header.index("demo")
     queries: dict[str, tuple[float, ...]] = {}
     for line, row in rows:

@@ -7,13 +7,14 @@ from typing import Any
 
 import numpy as np
 
+from dmprs.experiments.arm_pouring import frame_strip
+from dmprs.plots import pyplot, save_figure
 from dmprs.reproduce.parts import PARTS
 
 
 def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
     """Figs. 4, 7, 9 in the paper's style and a baseline comparison (needs matplotlib)."""
     try:
-        from dmprs.plots import pyplot, save_figure
 
         plt = pyplot()
     except Exception:  # noqa: BLE001 - the report is written without figures
@@ -60,7 +61,6 @@ def write_figures(results: list[dict[str, Any]], out: Path) -> list[Path]:
         ax[0].legend(fontsize=7)
         paths.append(save_figure(fig, out / fname))
     if any(r["kind"] == "learn" and r["part"] == "arm_pouring" for r in results):
-        from dmprs.experiments.arm_pouring import frame_strip
 
         strip = frame_strip(out)  # None, with a one-line note, where no OpenGL backend is available
         if strip is not None:

@@ -21,7 +21,12 @@ from typing import Any
 
 import numpy as np
 
+from dmprs.experiments import pouring
+from dmprs.generalize import Generalizer
+from dmprs.loop import learn
+from dmprs.plots import pyplot, save_figure
 from dmprs.reproduce.part import Part
+from dmprs.tasks.pouring import Pouring
 
 #: the sequence's bottle volumes (l): 12, inside the demos' 0.3-1.0 l, whole 2 ml discs
 VOLUMES = tuple(round(float(v) * 0.002, 3) for v in np.round(np.linspace(0.34, 0.94, 12) / 0.002))
@@ -52,6 +57,7 @@ class GrowingSpec:
 
     @property
     def label(self) -> str:
+        """The run's name in progress lines and errors."""
         return f"growing pouring / {self.generalizer} / order {self.order_seed}"
 
 
@@ -64,11 +70,6 @@ def plan_growing(quick: bool = False) -> list[GrowingSpec]:
 
 def run_growing(spec: GrowingSpec) -> dict[str, Any]:
     """Learns the volumes of ``spec`` in its random order, growing the database; plain data."""
-    from dmprs.experiments import pouring
-    from dmprs.generalize import Generalizer
-    from dmprs.loop import learn
-    from dmprs.tasks.pouring import Pouring
-
     base = pouring.setup()
     db = base.database
     order = [spec.volumes[i] for i in np.random.default_rng(spec.order_seed).permutation(len(spec.volumes))]
@@ -102,7 +103,8 @@ def _trials(run: dict[str, Any], cap: int) -> int:
 
 def floors(result: dict[str, Any]) -> dict[str, Any]:
     """The issue's floors for one sequence: first-trial successes with >= 8 demos, and mean
-    trials over the last third against the first third."""
+    trials over the last third against the first third.
+    """
     runs = result["runs"]
     third = max(1, len(runs) // 3)
     trials = [_trials(r, result["max_trials"]) for r in runs]
@@ -113,7 +115,8 @@ def floors(result: dict[str, Any]) -> dict[str, Any]:
 
 def summarize_growing(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per generalizer and database size: mean trials to success, first-trial |error| (ml) and
-    first-trial success rate over the orders; then per generalizer the floors over all orders."""
+    first-trial success rate over the orders; then per generalizer the floors over all orders.
+    """
     rows: list[dict[str, Any]] = []
     for gen in sorted({r["generalizer"] for r in results if r.get("kind") == "growing"}):
         seqs = [r for r in results if r.get("kind") == "growing" and r["generalizer"] == gen]
@@ -161,9 +164,8 @@ def markdown_growing(rows: list[dict[str, Any]]) -> str:
 
 def figure_growing(results: list[dict[str, Any]], out: str | Path) -> Path:
     """Trials to success and first-trial |error| against database size, per generalizer
-    (mean over the orders, and every run as a dot); written to ``out/growing_pouring.png``."""
-    from dmprs.plots import pyplot, save_figure
-
+    (mean over the orders, and every run as a dot); written to ``out/growing_pouring.png``.
+    """
     plt = pyplot()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -178,7 +180,7 @@ def figure_growing(results: list[dict[str, Any]], out: str | Path) -> Path:
         errs = [[max(abs(run["first_error_ml"]), 1.0) for run, _ in runs
                  if run["n_demos"] == n and run["first_error_ml"] is not None] for n in sizes]
         line, = ax[0].plot(sizes, [np.mean(t) for t in trials], "o-", label=gen)
-        for n, t, e in zip(sizes, trials, errs):
+        for n, t, e in zip(sizes, trials, errs, strict=True):
             ax[0].plot([n + jitter] * len(t), t, ".", color=line.get_color(), alpha=0.35)
             ax[1].plot([n + jitter] * len(e), e, ".", color=line.get_color(), alpha=0.35)
         ax[1].plot(sizes, [np.mean(e) if e else np.nan for e in errs], "o-", color=line.get_color())

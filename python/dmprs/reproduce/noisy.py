@@ -21,7 +21,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from dmprs import experiments
+from dmprs.experiments import analytic
+from dmprs.learners import GoldenSection
+from dmprs.loop import learn
+from dmprs.plots import pyplot, save_figure
 from dmprs.reproduce.part import Part
+from dmprs.tasks.noise import Noise
+from dmprs.trial import run_trial
 
 #: noise levels per experiment: (execution, measurement, contact). Matchbox: 0.5 mm fingertip
 #: tracking, 1 deg on the measured angle, 5 % friction and restitution; pouring: 0.01 rad tilt
@@ -53,6 +60,7 @@ class NoisySpec:
 
     @property
     def label(self) -> str:
+        """The run's name in progress lines and errors."""
         return f"noisy {self.experiment} / {self.learner} / seed {self.noise_seed}"
 
 
@@ -61,7 +69,8 @@ class BracketSpec:
     """Golden section (robust mode) on the analytic task with measurement noise and a share
     ``outliers`` of outlier readings, with or without its noise guard, over ``seeds`` noise
     seeds. Each seed runs twice: spending ``max_trials`` with the tolerance off, so that what is
-    measured is the bracket; and as a user would, stopping on a reading within the tolerance."""
+    measured is the bracket; and as a user would, stopping on a reading within the tolerance.
+    """
 
     outliers: float
     guard: bool
@@ -71,12 +80,14 @@ class BracketSpec:
 
     @property
     def label(self) -> str:
+        """The run's name in progress lines and errors."""
         return f"noisy bracket / outliers {self.outliers:g} / {'guarded' if self.guard else 'unguarded'}"
 
 
 def plan_noisy(quick: bool = False) -> list[NoisySpec | BracketSpec]:
     """10 noise seeds per experiment and learner, and the bracket study; ``quick``: 2 matchbox
-    seeds with the paper's learner, and the bracket study at twice the tolerance."""
+    seeds with the paper's learner, and the bracket study at twice the tolerance.
+    """
     if quick:
         return [*(NoisySpec("matchbox", "error", s) for s in range(2)), BracketSpec(0.1, False),
                 BracketSpec(0.1, True)]
@@ -86,11 +97,8 @@ def plan_noisy(quick: bool = False) -> list[NoisySpec | BracketSpec]:
 
 def run_bracket(spec: BracketSpec) -> dict[str, Any]:
     """Per seed: how far the root q* of the noise-free map lies outside the final bracket, and
-    whether the run stopped on a reading whose noise-free error is within the tolerance; plain data."""
-    from dmprs.experiments import analytic
-    from dmprs.learners import GoldenSection
-    from dmprs.loop import learn
-    from dmprs.tasks.noise import Noise
+    whether the run stopped on a reading whose noise-free error is within the tolerance; plain data.
+    """
 
     def golden(noise: Noise, guard: float | None, max_trials: int, tol: float, seed: int) -> tuple[Any, Any]:
         setup = analytic.setup(noise=noise)
@@ -134,8 +142,6 @@ def _true_eps(experiment: str, signals: dict[str, Any]) -> float | None:
 
 def _exact_error(setup: Any, q: Any) -> float:
     """The noise-free eps of query q on an experiment setup's task."""
-    from dmprs.trial import run_trial
-
     with setup.task.adapter:
         t = run_trial(setup.task, 0, q, lambda: setup.generalizer.predict(q), setup.desired_query, seed=0)
     assert t.record.eps is not None  # the exact analytic task always scores
@@ -144,10 +150,8 @@ def _exact_error(setup: Any, q: Any) -> float:
 
 def run_noisy(spec: NoisySpec | BracketSpec) -> dict[str, Any]:
     """Learns ``spec``'s experiment on the noisy robot (trial k is reset with seed
-    ``1000 noise_seed + k``), or runs a bracket study; plain data."""
-    from dmprs import experiments
-    from dmprs.tasks.noise import Noise
-
+    ``1000 noise_seed + k``), or runs a bracket study; plain data.
+    """
     if isinstance(spec, BracketSpec):
         return run_bracket(spec)
     execution, measurement, contact = NOISE[spec.experiment]
@@ -171,7 +175,8 @@ def run_noisy(spec: NoisySpec | BracketSpec) -> dict[str, Any]:
 
 def summarize_noisy(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per experiment and learner: successes, median and range of trials to success, and the
-    runs that saw a wrong-signed error (and how many of them still succeeded)."""
+    runs that saw a wrong-signed error (and how many of them still succeeded).
+    """
     rows: list[dict[str, Any]] = []
     learning = [r for r in results if r.get("kind") == "noisy" and r.get("study") != "bracket"]
     keys = sorted({(r["experiment"], r["learner"]) for r in learning})
@@ -202,6 +207,7 @@ def summarize_noisy(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def markdown_noisy(rows: list[dict[str, Any]]) -> str:
+    """The noisy-robot table of the report."""
     lines = [("| experiment | learner | noise (execution, measurement, contact) | succeeded | trials to success "
              "median [range] | success also without the reading's noise | runs with a wrong-signed error (of them "
              "succeeded) |"), "|---|---|---|---|---|---|---|"]
@@ -227,16 +233,15 @@ def markdown_noisy(rows: list[dict[str, Any]]) -> str:
 
 def figure_noisy(results: list[dict[str, Any]], out: str | Path) -> Path:
     """The measured error per trial of every noisy run (the paper's Figs. 6 and 11 way),
-    one panel per experiment; written to ``out/noisy_robot.png``."""
-    from dmprs.plots import pyplot, save_figure
-
+    one panel per experiment; written to ``out/noisy_robot.png``.
+    """
     plt = pyplot()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     results = [r for r in results if r.get("study") != "bracket"]
     exps = sorted({r["experiment"] for r in results if r.get("kind") == "noisy"})
     fig, axes = plt.subplots(len(exps), 1, figsize=(6.5, 2.8 * len(exps)), squeeze=False)
-    for ax, exp in zip(axes[:, 0], exps):
+    for ax, exp in zip(axes[:, 0], exps, strict=True):
         runs = [r for r in results if r.get("kind") == "noisy" and r["experiment"] == exp]
         learners = sorted({r["learner"] for r in runs})
         colors = {lrn: f"C{i}" for i, lrn in enumerate(learners)}

@@ -1,5 +1,6 @@
 """What a part of the reproduction beyond the paper's three experiments is: its plan, its runner,
-its Markdown section and its figure, and the optional package it may need."""
+its Markdown section and its figure, and the optional package it may need.
+"""
 
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ from dmprs._extras import available
 @dataclass(frozen=True)
 class Part:
     """One part of the reproduction. Its specs carry ``kind``, which
-    :func:`dmprs.reproduce.run.dispatch` sends to :attr:`run`."""
+    :func:`dmprs.reproduce.run.dispatch` sends to :attr:`run`.
+    """
 
     kind: str
     title: str
@@ -27,7 +29,9 @@ class Part:
     needs: str | None = None
 
     def available(self) -> bool:
+        """Whether the packages this part needs are installed."""
         return self.needs is None or available(self.needs)
 
     def markdown(self, results: list[dict[str, Any]]) -> str:
+        """This part's section of the report, from the runs' results."""
         return self.markdown_of(self.summarize(results))

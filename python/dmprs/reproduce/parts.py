@@ -1,5 +1,6 @@
 """The reproduction's parts beyond the paper's three experiments, in one table, in the order the
-report appends their sections."""
+report appends their sections.
+"""
 
 from __future__ import annotations
 

@@ -23,6 +23,7 @@ class LearnSpec:
 
     @property
     def label(self) -> str:
+        """The run's name in progress lines and errors."""
         opts = ", ".join(f"{k}={v}" for k, v in self.setup)
         return f"{self.experiment}({opts}) / {self.learner}"
 
@@ -71,7 +72,8 @@ def _paper_specs(quick: bool) -> list[Any]:
 def plan(quick: bool = False) -> list[Any]:
     """The runs of the job; ``quick`` runs every part at small scale. Runs whose optional package
     is missing are left out (:func:`skipped` says which); the parts of
-    :data:`dmprs.reproduce.parts.PARTS` whose extra is installed follow the paper's experiments."""
+    :data:`dmprs.reproduce.parts.PARTS` whose extra is installed follow the paper's experiments.
+    """
     specs = [s for s in _paper_specs(quick) if (need := _needs(s)) is None or available(need)]
     for extra in PARTS:
         if extra.available():

@@ -57,6 +57,7 @@ def _cell(row: dict[str, Any]) -> str:
 
 
 def markdown(report: dict[str, Any], figures: list[Path]) -> str:
+    """The whole report as markdown, figures linked."""
     lines = ["# dmprs reproduction of Nemec, Vuga, Ude (2013)", "",
              (f"Run {'--quick' if report.get('quick') else 'in full'} with backend "
               f"`{report.get('backend')}` in {report.get('seconds')} s. Trials count every executed "

@@ -5,15 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from dmprs import experiments
 from dmprs.baselines import BaselineSpec, run_baseline
+from dmprs.experiments.arm_pouring import demonstrations
 from dmprs.reproduce.parts import BY_KIND
 from dmprs.reproduce.plan import LearnSpec
+from dmprs.tasks.pouring import DEMO_VOLUMES, demonstration
 
 
 def run_learning(spec: LearnSpec) -> dict[str, Any]:
     """Runs one learning experiment; returns its trials as plain data."""
-    from dmprs import experiments
-
     r = experiments.run(spec.experiment, learner=spec.learner, max_trials=spec.max_trials,
                         **dict(spec.setup))
     trials = [{
@@ -50,11 +51,9 @@ def _prepare_pouring(specs: list[Any], cache_dir: Path) -> None:
     """Calibrates the pouring demonstrations once, before workers start, into the disk cache."""
     experiments = {getattr(s, "experiment", "") for s in specs}
     if "pouring" in experiments:
-        from dmprs.tasks.pouring import DEMO_VOLUMES, demonstration
 
         for v in DEMO_VOLUMES:
             demonstration(v, cache_dir=str(cache_dir))
     if "arm-pouring" in experiments:
-        from dmprs.experiments.arm_pouring import demonstrations
 
         demonstrations(cache_dir=str(cache_dir))

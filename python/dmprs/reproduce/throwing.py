@@ -22,8 +22,13 @@ from typing import Any
 
 import numpy as np
 
+from dmprs.experiments import arm_throwing
+from dmprs.experiments.arm_throwing import demonstrations
+from dmprs.loop import learn
+from dmprs.plots import pyplot, save_figure
 from dmprs.reproduce.part import Part
 from dmprs.reproduce.stats import trial_stats
+from dmprs.tasks.noise import Noise
 
 MAX_TRIALS = 15
 #: the issue's floors: median trials to success for baskets inside / up to 20 % outside the demos
@@ -48,14 +53,13 @@ class ThrowingSpec:
 
     @property
     def label(self) -> str:
+        """The run's name in progress lines and errors."""
         noise = "" if self.noise_seed is None else f" / noise seed {self.noise_seed}"
         return f"throwing {self.region} {self.target} / {self.generalizer} / {self.learner} / tol {self.tol}{noise}"
 
 
 def baskets(n: int, seed: int = 0) -> dict[str, list[tuple[float, float]]]:
     """``n`` unseen baskets inside the demos' landing box and ``n`` up to 20 % outside it."""
-    from dmprs.experiments.arm_throwing import demonstrations
-
     labels = np.array([label for label, _ in demonstrations()])
     lo, hi = labels.min(axis=0), labels.max(axis=0)
     size = hi - lo
@@ -78,7 +82,8 @@ def baskets(n: int, seed: int = 0) -> dict[str, list[tuple[float, float]]]:
 def plan_throwing(quick: bool = False) -> list[ThrowingSpec]:
     """Full: 10 inside and 10 outside baskets x the three generalizers x the secant (Broyden), fixed
     (J = I) and CMA-ES learners, and the noisy robot over 10 noise seeds at two baskets
-    (linear, secant and error). Quick: two inside baskets and one outside, linear, secant."""
+    (linear, secant and error). Quick: two inside baskets and one outside, linear, secant.
+    """
     if quick:
         b = baskets(2)
         return [ThrowingSpec(t, region, "linear", "secant") for region in ("inside", "outside")
@@ -97,10 +102,6 @@ def plan_throwing(quick: bool = False) -> list[ThrowingSpec]:
 
 def run_throwing(spec: ThrowingSpec) -> dict[str, Any]:
     """Learns ``spec``; plain data (every trial's query, landing and error)."""
-    from dmprs.experiments import arm_throwing
-    from dmprs.loop import learn
-    from dmprs.tasks.noise import Noise
-
     noise = None if spec.noise_seed is None else Noise(execution=NOISE[0], measurement=NOISE[1])
     setup = arm_throwing.setup(spec.target, spec.generalizer, tol=spec.tol, noise=noise)
     r = learn(setup.task, setup.generalizer, setup.desired_query, setup.make_learner(spec.learner),
@@ -117,7 +118,8 @@ def run_throwing(spec: ThrowingSpec) -> dict[str, Any]:
 
 def summarize_throwing(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per region, generalizer, learner and robot (exact / noisy): trials to success (median,
-    range, successes) against the issue's floor."""
+    range, successes) against the issue's floor.
+    """
     runs = [r for r in results if r.get("kind") == "throwing"]
     def key(r: dict[str, Any]) -> tuple[Any, ...]:
         return (-r["tol"], r["region"], r["generalizer"], r["learner"], r["noise"] is not None)
@@ -141,6 +143,7 @@ def summarize_throwing(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def markdown_throwing(rows: list[dict[str, Any]]) -> str:
+    """The throwing table of the report."""
     lines = ["| experiment | learner | succeeded | trials to success median [range] | floor (median) | met |",
              "|---|---|---|---|---|---|"]
     for r in rows:
@@ -154,16 +157,15 @@ def markdown_throwing(rows: list[dict[str, Any]]) -> str:
 def figure_throwing(results: list[dict[str, Any]], out: str | Path) -> Path:
     """Landing points per trial on the floor plan (the paper's Fig. 2 way): the demos' landings,
     each basket (5 cm circle) and the trials' landings joined in order, one panel per generalizer
-    (exact robot, the secant learner, or the first learner present); ``out/throwing.png``."""
-    from dmprs.plots import pyplot, save_figure
-
+    (exact robot, the secant learner, or the first learner present); ``out/throwing.png``.
+    """
     plt = pyplot()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     runs = [r for r in results if r.get("kind") == "throwing" and r["noise"] is None and r["tol"] == 0.05]
     gens = sorted({r["generalizer"] for r in runs}) or ["linear"]
     fig, axes = plt.subplots(1, len(gens), figsize=(5.2 * len(gens), 4.6), squeeze=False)
-    for ax, gen in zip(axes[0], gens):
+    for ax, gen in zip(axes[0], gens, strict=True):
         mine = [r for r in runs if r["generalizer"] == gen]
         learner = "secant" if any(r["learner"] == "secant" for r in mine) else (mine[0]["learner"] if mine else "")
         mine = [r for r in mine if r["learner"] == learner]

@@ -31,7 +31,8 @@ STATUS_NAMES = {
 @dataclasses.dataclass
 class GoalHandle:
     """A goal sent by `ActionClient.send_goal`: its UUID, whether the server accepted it, and
-    the server's acceptance stamp."""
+    the server's acceptance stamp.
+    """
 
     goal_id: bytes
     accepted: bool
@@ -42,12 +43,14 @@ class GoalHandle:
 
 
 def uuid_message(goal_id: bytes) -> Any:
+    """A goal id as a ``unique_identifier_msgs/UUID``."""
     return messages.UUID(uuid=bytes(goal_id))
 
 
 class ActionClient:
     """A client of one action, e.g. `ActionClient(node, "control_msgs/action/FollowJointTrajectory",
-    "/joint_trajectory_controller/follow_joint_trajectory")`."""
+    "/joint_trajectory_controller/follow_joint_trajectory")`.
+    """
 
     def __init__(self, node: Node, action_type: str, action: str, feedback_depth: int = 100):
         self.action_name = node.resolve(action)
@@ -75,7 +78,8 @@ class ActionClient:
 
     def send_goal(self, goal: Any, timeout: float, goal_id: bytes | None = None) -> GoalHandle:
         """Send `goal` under a new UUID and wait for the server's answer (AdapterError after
-        `timeout`). A rejected goal comes back with `accepted` False: ROS 2 carries no reason."""
+        `timeout`). A rejected goal comes back with `accepted` False: ROS 2 carries no reason.
+        """
         if not isinstance(goal, self.goal_type):
             raise InvalidInputError(f"{self.action_name} takes {self.goal_type.__name__}, not {type(goal).__name__}")
         deadline = time.monotonic() + check_timeout(timeout) * 1e-9

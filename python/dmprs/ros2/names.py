@@ -38,6 +38,7 @@ def check_namespace(namespace: str) -> str:
 
 
 def check_node_name(name: str) -> str:
+    """``name`` if it is a valid ROS 2 node name, else an InvalidInputError."""
     if not _TOKEN.fullmatch(name) or "__" in name:
         raise InvalidInputError(f"node name {name!r}: letters, digits and single underscores only")
     return name

@@ -96,11 +96,13 @@ class Node:
         return topic
 
     def create_publisher(self, message_type: type[M], topic: str, qos: QosProfile = DEFAULT) -> Publisher[M]:
+        """A publisher of ``message_type`` on ``topic`` (resolved in this node's namespace)."""
         return Publisher(self, message_type, self.resolve(topic), qos)
 
     def create_subscription(
         self, message_type: type[M], topic: str, qos: QosProfile = DEFAULT
     ) -> Subscription[M]:
+        """A subscription to ``message_type`` on ``topic`` (resolved in this node's namespace)."""
         return Subscription(self, message_type, self.resolve(topic), qos)
 
     def _check_open(self) -> None:
@@ -136,12 +138,15 @@ class Publisher(Generic[M]):
         self._writer = DataWriter(node.participant, topic, qos=qos.to_cyclone())
 
     def publish(self, message: M) -> None:
+        """Write one message."""
         self._writer.write(message)
 
     def subscription_count(self) -> int:
+        """Number of subscriptions matched now."""
         return int(self._writer.get_publication_matched_status().current_count)
 
     def wait_for_subscribers(self, count: int = 1, timeout: float = 5.0) -> bool:
+        """Whether ``count`` subscriptions matched within ``timeout`` seconds."""
         return wait_for_matches(self._writer, self._participant, count, timeout, publication=True)
 
 
@@ -193,9 +198,11 @@ class Subscription(Generic[M]):
                 return None
 
     def publisher_count(self) -> int:
+        """Number of publishers matched now."""
         return int(self._reader.get_subscription_matched_status().current_count)
 
     def wait_for_publishers(self, count: int = 1, timeout: float = 5.0) -> bool:
+        """Whether ``count`` publishers matched within ``timeout`` seconds."""
         return wait_for_matches(self._reader, self._participant, count, timeout, publication=False)
 
 

@@ -26,9 +26,11 @@ class QosProfile:
             raise InvalidInputError(f"QoS depth {self.depth} must be >= 0 (0 keeps all)")
 
     def with_depth(self, depth: int) -> QosProfile:
+        """This profile with another history depth."""
         return dataclasses.replace(self, depth=depth)
 
     def to_cyclone(self, user_data: bytes | None = None) -> Qos:
+        """The profile as Cyclone DDS policies (with ROS 2's user data, if given)."""
         policies = [
             Policy.Reliability.Reliable(duration(infinite=True)) if self.reliable else Policy.Reliability.BestEffort,
             Policy.Durability.TransientLocal if self.transient_local else Policy.Durability.Volatile,

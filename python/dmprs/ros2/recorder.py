@@ -29,7 +29,8 @@ BATCH_PERIOD = 0.02
 @dataclasses.dataclass(frozen=True)
 class JointRecording:
     """Joint states in the recorder's joint order: `times` (n,) from the header stamps,
-    `positions` and `velocities` (n, joints; velocities NaN where a message had none)."""
+    `positions` and `velocities` (n, joints; velocities NaN where a message had none).
+    """
 
     joint_names: tuple[str, ...]
     times: np.ndarray
@@ -86,6 +87,7 @@ class JointStateRecorder:
             self._record(message)
 
     def start(self) -> JointStateRecorder:
+        """Start recording in a background thread; returns the recorder."""
         if self._thread is not None:
             raise AdapterError("the recorder is already running")
         self._thread = threading.Thread(target=self._run, name="joint-state-recorder", daemon=True)

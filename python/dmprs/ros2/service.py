@@ -40,7 +40,8 @@ MATCH_MARGIN = 0.1
 @functools.cache
 def _wrapped(ros_type: str) -> type[Any]:
     """The message class of `ros_type` with rmw_cyclonedds's request header in front, under the
-    same DDS name (one class per type, so that every client of a node shares its topics)."""
+    same DDS name (one class per type, so that every client of a node shares its topics).
+    """
     message_type = messages.message_class(ros_type)
     name = message_type.__name__ + "_Wrapped"
     namespace = cast(dict[str, Any], IdlMeta.__prepare__(name, (IdlStruct,), typename=message_type.__idl_typename__))
@@ -51,11 +52,13 @@ def _wrapped(ros_type: str) -> type[Any]:
 
 
 def wrap(wrapped_type: type[Any], guid: int, seq: int, message: Any) -> Any:
+    """``message`` in the request/reply wrapper of rmw_cyclonedds (writer guid, sequence number)."""
     fields = {f: getattr(message, f) for f in type(message).__annotations__}
     return wrapped_type(**{HEADER_FIELDS[0]: guid, HEADER_FIELDS[1]: seq}, **fields)
 
 
 def unwrap(message_type: type[Any], sample: Any) -> Any:
+    """The ``message_type`` message inside a request/reply wrapper."""
     return message_type(**{f: getattr(sample, f) for f in message_type.__annotations__})
 
 
@@ -155,7 +158,8 @@ class ServiceClient(_ServiceEndpoints):
 
 class ServiceServer(_ServiceEndpoints):
     """Answers one ROS 2 service in rmw_cyclonedds's wire format: each reply carries its request's
-    header back, so that the client that sent it keeps it."""
+    header back, so that the client that sent it keeps it.
+    """
 
     def __init__(self, node: Node, service_type: str, service: str, qos: QosProfile = SERVICES):
         super().__init__(node, service_type, service, qos, server=True)
@@ -164,7 +168,8 @@ class ServiceServer(_ServiceEndpoints):
 
     def serve(self, handler: Any, timeout: float) -> int:
         """Answer every waiting request with `handler(request)`, first waiting up to `timeout`
-        seconds for one; returns how many were answered."""
+        seconds for one; returns how many were answered.
+        """
         samples = self._reader.take(N=64, condition=self._unread)
         if not samples and self._waitset.wait(check_timeout(timeout)) > 0:
             samples = self._reader.take(N=64, condition=self._unread)

@@ -37,7 +37,8 @@ ORIENTATION_TOL = 1e-4
 @dataclass(frozen=True)
 class IKResult:
     """Joint positions ``q`` (T, 7) for the poses at ``t`` (T,), with the residual position error
-    (m) and orientation error (rad) of every sample."""
+    (m) and orientation error (rad) of every sample.
+    """
 
     t: NDArray[np.float64]
     q: NDArray[np.float64]
@@ -108,7 +109,8 @@ class ArmKinematics:
     def solve(self, target: NDArray[np.float64], q_init: NDArray[np.float64], *, max_steps: int = 200,
               ) -> tuple[NDArray[np.float64], float, float]:
         """Joint positions reaching ``target`` from ``q_init`` (iterated to convergence, with limit
-        avoidance): (q, position error m, orientation error rad) of the returned q."""
+        avoidance): (q, position error m, orientation error rad) of the returned q.
+        """
         q = np.array(q_init, dtype=float)
         for _ in range(max_steps):
             q_next, e = self.step(q, target, null_step=0.01)
@@ -121,7 +123,8 @@ class ArmKinematics:
     def track(self, t: NDArray[np.float64], poses: NDArray[np.float64], q0: NDArray[np.float64], *,
               max_steps: int = 4) -> IKResult:
         """Joint positions following ``poses`` (T, 7) sampled at ``t``, starting from ``q0`` (the
-        joint solution of ``poses[0]``)."""
+        joint solution of ``poses[0]``).
+        """
         n = len(t)
         q_out = np.empty((n, 7))
         pos_err = np.empty(n)

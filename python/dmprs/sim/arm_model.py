@@ -132,7 +132,8 @@ def wall(name: str, r0: float, z0: float, r1: float, z1: float, *, n: int = STAV
           rgba: str = "0.7 0.85 1 0.35", cls: str = "container") -> list[str]:
     """Box staves forming the surface of revolution of the segment (r0, z0)-(r1, z1) of a
     container's inner wall (a cylinder when r0 = r1, a cone frustum otherwise), in the frame of
-    the body they are added to (axis = z). Each stave's inner face lies on the segment."""
+    the body they are added to (axis = z). Each stave's inner face lies on the segment.
+    """
     dr, dz = r1 - r0, z1 - z0
     length = math.hypot(dr, dz)
     nr, nz = dz / length, -dr / length  # outward normal in the (radial, z) plane
@@ -180,7 +181,8 @@ def glass_geoms() -> list[str]:
 
 def arm_bodies(tool: list[str]) -> str:
     """Links 1..7 as nested bodies, each a capsule from its joint to the next, with the ``tool``'s
-    geoms (the bottle, or the throwing scene's cup) in a body held at link 7's flange."""
+    geoms (the bottle, or the throwing scene's cup) in a body held at link 7's flange.
+    """
     open_tags, z = [], 0.0
     for i in range(7):
         z_joint = sum(LINK_OFFSETS[: i + 1])
@@ -215,7 +217,8 @@ def arm_bodies(tool: list[str]) -> str:
 
 def particle_bodies(positions: NDArray[np.float64], radii: NDArray[np.float64] | None = None) -> str:
     """One free sphere per row of ``positions`` (m, world frame), of ``radii`` (m; default
-    PARTICLE_RADIUS)."""
+    PARTICLE_RADIUS).
+    """
     p = np.asarray(positions, dtype=float)
     r = np.full(len(p), PARTICLE_RADIUS) if radii is None else np.asarray(radii, dtype=float)
     return "\n".join(
@@ -227,7 +230,8 @@ def header(model: str, *, solver: str = SOLVER, iterations: int = ITERATIONS, to
            condim: int = CONDIM, classes: Sequence[str] = ()) -> str:
     """The MJCF of a scene with this arm up to its world body: the compiler, the physics options,
     the offscreen buffer and the default classes of the arm's links and of containers, then
-    ``classes`` (more default classes, one MJCF line each)."""
+    ``classes`` (more default classes, one MJCF line each).
+    """
     lines = [
         f'<mujoco model="{model}">',
         '<compiler angle="radian" autolimits="true"/>',
@@ -266,7 +270,8 @@ def scene_xml(particle_positions: NDArray[np.float64] | None = None, *,
               with_glass: bool = True) -> str:
     """The whole scene as an MJCF string: table, floor, arm with bottle, glass and one sphere per
     row of ``particle_positions`` with ``particle_radii`` (none: the kinematic model used by the IK
-    and the checks)."""
+    and the checks).
+    """
     parts = np.zeros((0, 3)) if particle_positions is None else np.asarray(particle_positions, dtype=float)
     tx, ty = TABLE_CENTER
     glass = "\n".join(glass_geoms()) if with_glass else ""

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import DmprsError
+from dmprs.plots import pyplot
 from dmprs.sim import arm_scene
 
 #: the camera: looking at the bottle and the glass from in front of the robot, slightly above
@@ -24,10 +25,10 @@ def frame_strip(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np.f
                 liquid: arm_scene.SettledLiquid, times: tuple[float, ...], path: str | Path, *,
                 hold: float = 0.5, width: int = 320, height: int = 240) -> Path:
     """Simulates the joint trajectory (as :func:`arm_scene.simulate_pour` does) and writes the
-    frames at ``times`` (s, multiples of 20 ms) side by side as one PNG at ``path``."""
+    frames at ``times`` (s, multiples of 20 ms) side by side as one PNG at ``path``.
+    """
     import mujoco
 
-    from dmprs.plots import pyplot
 
     try:
         renderer = mujoco.Renderer(liquid.model, height, width)

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from dmprs.errors import NumericalError
 from dmprs.sim import arm_model as am
 from dmprs.sim import granular
+from dmprs.sim.arm_ik import ArmKinematics
 
 #: the mouth's start pose (x, y, z, qw, qx, qy, qz): upright, beside the glass and above its rim
 HOME_POSE = (0.75, 0.0, 0.34, 1.0, 0.0, 0.0, 0.0)
@@ -49,8 +50,6 @@ _WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCT
 @functools.lru_cache(maxsize=1)
 def home_configuration() -> NDArray[np.float64]:
     """The joint positions of :data:`HOME_POSE` (the IK from :data:`HOME_SEED`), read-only."""
-    from dmprs.sim.arm_ik import ArmKinematics
-
     q, pe, re = ArmKinematics().solve(np.array(HOME_POSE), np.array(HOME_SEED))
     if pe > 1e-4 or re > 1e-3:
         raise NumericalError(f"the home pose is unreachable (errors {pe:.3g} m, {re:.3g} rad)")
@@ -78,7 +77,8 @@ class ArmPourResult:
     ``positions``: the final sphere centres (n, 3; m).
     ``n_bottle + n_glass + n_spilled = n_particles`` (spilled is counted from ``region``, not by
     subtraction, so this is a real check). ``cpu_servo``: seconds spent in the servo loop
-    outside ``mj_step``."""
+    outside ``mj_step``.
+    """
 
     times: NDArray[np.float64]
     q: NDArray[np.float64]
@@ -122,7 +122,8 @@ def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOL
                    ) -> SettledLiquid:
     """``n`` spheres spawned in the bottle at the home configuration and settled for
     :data:`SETTLE_TIME` s (cached per process); raises NumericalError if one is not in the bottle
-    afterwards."""
+    afterwards.
+    """
     liquid = settle_liquid(n, seed, solver)
     assert liquid is not None  # nothing can interrupt it
     return liquid
@@ -131,7 +132,8 @@ def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOL
 def settle_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER, am.ITERATIONS, am.CONDIM),
                   should_stop: Callable[[], bool] | None = None) -> SettledLiquid | None:
     """:func:`settled_liquid`, interruptible: None (and nothing cached) if ``should_stop()``
-    became true while settling (it is asked every :data:`STOP_CHECK_EVERY` steps)."""
+    became true while settling (it is asked every :data:`STOP_CHECK_EVERY` steps).
+    """
     import mujoco
 
     key = (n, seed, solver)
@@ -182,7 +184,8 @@ def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np
     ``should_stop()`` is asked every :data:`STOP_CHECK_EVERY` steps, while moving and while
     holding; when it says so the pour ends there (``interrupted``).
     ``on_sample(model, data, t)`` is called at every count (every ``sample_period`` s), e.g. to
-    render frames; it must not change ``data``."""
+    render frames; it must not change ``data``.
+    """
     import mujoco
 
     model, n = liquid.model, liquid.n

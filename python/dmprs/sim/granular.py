@@ -23,14 +23,16 @@ MAX_PARTICLES = 500
 
 def radii(n: int, seed: int) -> NDArray[np.float64]:
     """The radii (m) of the ``n`` spheres of the liquid of ``seed``: PARTICLE_RADIUS
-    (1 +- POLYDISPERSITY), uniform (a generator of its own, so the lattice's draws do not move)."""
+    (1 +- POLYDISPERSITY), uniform (a generator of its own, so the lattice's draws do not move).
+    """
     rng = np.random.default_rng([seed, 1])
     return am.PARTICLE_RADIUS * (1 + am.POLYDISPERSITY * rng.uniform(-1, 1, size=n))
 
 
 def cavity_radius(z: NDArray[np.float64]) -> NDArray[np.float64]:
     """The bottle's inner radius at height ``z`` of its own frame (mouth at 0, bottom at
-    ``-BOTTLE_LENGTH``): the body, the conical shoulder, the neck."""
+    ``-BOTTLE_LENGTH``): the body, the conical shoulder, the neck.
+    """
     z = np.asarray(z, dtype=float)
     z_neck = -am.NECK_LENGTH
     z_shoulder = z_neck - am.BOTTLE_SHOULDER
@@ -42,7 +44,8 @@ def spawn_sites(n: int, seed: int) -> NDArray[np.float64]:
     """Centres of ``n`` spheres in the upright bottle, in the bottle's frame (m): hexagonal
     layers in A/B stacking from the bottom up, each layer's points ordered by radius and angle;
     ``seed`` turns the lattice about the axis by a random angle and shifts it by a random
-    sub-millimetre offset, so different seeds give different (settled) liquids."""
+    sub-millimetre offset, so different seeds give different (settled) liquids.
+    """
     if not 1 <= n <= MAX_PARTICLES:
         raise ValueError(f"n = {n} spheres: the bottle holds 1..{MAX_PARTICLES}")
     rng = np.random.default_rng(seed)
@@ -76,7 +79,8 @@ def spawn_sites(n: int, seed: int) -> NDArray[np.float64]:
 
 def in_glass(positions: NDArray[np.float64]) -> NDArray[np.bool_]:
     """Whether each sphere centre (n, 3; world, m) is inside the glass: within its inner radius,
-    above its bottom and below its rim."""
+    above its bottom and below its rim.
+    """
     p = np.asarray(positions, dtype=float)
     gx, gy = am.GLASS_CENTER
     return ((np.hypot(p[:, 0] - gx, p[:, 1] - gy) < am.GLASS_RADIUS)
@@ -88,7 +92,8 @@ def classify(positions: NDArray[np.float64], bottle_pos: NDArray[np.float64],
     """The region of each sphere centre (n, 3; world, m): inside the bottle's cavity (below the
     mouth plane, within the cavity radius), inside the glass (within its inner radius, above
     its bottom and below its rim), or spilled (anywhere else: on the table, on the floor, in
-    flight, on a rim). The bottle is at ``bottle_pos`` with rotation ``bottle_mat`` (3, 3)."""
+    flight, on a rim). The bottle is at ``bottle_pos`` with rotation ``bottle_mat`` (3, 3).
+    """
     p = np.asarray(positions, dtype=float)
     local = (p - bottle_pos) @ np.asarray(bottle_mat).reshape(3, 3)
     z = local[:, 2]

@@ -84,7 +84,8 @@ STOP_CHECK_EVERY = 60  #: steps between checks of the stop/timeout callback (0.1
 @dataclass(frozen=True)
 class Liquid:
     """A settled liquid inside the upright bottle: per-disc radii, positions and velocities
-    (mm, mm/s; world frame), in insertion order. Arrays are read-only."""
+    (mm, mm/s; world frame), in insertion order. Arrays are read-only.
+    """
 
     seed: int
     radii: NDArray[np.float64]
@@ -93,6 +94,7 @@ class Liquid:
 
     @property
     def n(self) -> int:
+        """Number of particles."""
         return int(self.radii.shape[0])
 
 
@@ -126,7 +128,8 @@ class PourResult:
 
 def bottle_outline() -> list[tuple[float, float]]:
     """The bottle's wall polyline in its own frame (mm), from the mouth's right lip round the
-    bottom to the left lip."""
+    bottom to the left lip.
+    """
     n, s, b = NECK_HALF_WIDTH, NECK_LENGTH, NECK_LENGTH + SHOULDER_HEIGHT
     w = BODY_HALF_WIDTH
     return [(n, 0.0), (n, -s), (w, -b), (w, -BOTTLE_DEPTH), (-w, -BOTTLE_DEPTH), (-w, -b), (-n, -s), (-n, 0.0)]
@@ -151,7 +154,8 @@ def to_bottle_frame(positions: NDArray[np.float64], tilt: float) -> NDArray[np.f
 def classify(positions: NDArray[np.float64], tilt: float) -> NDArray[np.int8]:
     """The region of each disc centre: in the bottle's cavity (below the mouth plane), inside the
     glass (below its rim), on the tray floor outside the glass (below the rim height), or
-    elsewhere (in flight, on a rim, escaped)."""
+    elsewhere (in flight, on a rim, escaped).
+    """
     p = np.asarray(positions, dtype=float)
     local = to_bottle_frame(p, tilt)
     in_bottle = ((local[:, 1] <= 0.0) & (local[:, 1] > -BOTTLE_DEPTH)
@@ -271,7 +275,8 @@ def _radii(n: int, seed: int) -> NDArray[np.float64]:
 
 def spawn_sites() -> NDArray[np.float64]:
     """Hexagonal grid of disc centres inside the upright bottle's straight body (world frame,
-    mm), bottom row first, each row left to right. The spacing clears the largest disc."""
+    mm), bottom row first, each row left to right. The spacing clears the largest disc.
+    """
     d = 2.0 * RADIUS * (1.0 + POLYDISPERSITY) + COLLISION_SLOP
     x_max = BODY_HALF_WIDTH - WALL_RADIUS - RADIUS * (1.0 + POLYDISPERSITY) - COLLISION_SLOP
     y0 = -BOTTLE_DEPTH + WALL_RADIUS + RADIUS * (1.0 + POLYDISPERSITY) + COLLISION_SLOP

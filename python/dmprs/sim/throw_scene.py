@@ -66,7 +66,8 @@ _WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCT
 
 def cup_geoms() -> list[str]:
     """The cup in the frame of ``arm_model``'s tool body: bottom on the flange axis ``BRACKET``
-    beyond the flange (the tool body's z = -BOTTLE_LENGTH / 2), opening along the body's +z."""
+    beyond the flange (the tool body's z = -BOTTLE_LENGTH / 2), opening along the body's +z.
+    """
     z0 = -am.BOTTLE_LENGTH / 2
     geoms = am.wall("cup", CUP_RADIUS, z0, CUP_RADIUS, z0 + CUP_DEPTH, rgba="0.8 0.3 0.2 1")
     geoms.append(f'<geom name="cup_bottom" class="container" type="cylinder" '
@@ -76,7 +77,8 @@ def cup_geoms() -> list[str]:
 
 def throw_xml() -> str:
     """The throwing scene as an MJCF string: floor, pedestal, arm with cup, ball (placed at the
-    origin: :func:`settled_ball` puts it in the cup)."""
+    origin: :func:`settled_ball` puts it in the cup).
+    """
     h, p = PEDESTAL_HEIGHT, PEDESTAL_HALF
     return f"""{am.header("dmprs arm throwing", condim=1)}
 <worldbody>
@@ -121,7 +123,8 @@ def _cup_geoms(m: Any) -> frozenset[int]:
 @functools.lru_cache(maxsize=1)
 def settled_ball() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(qpos, qvel) of the scene at :data:`HOME` with the ball settled in the cup for
-    :data:`SETTLE_TIME` s (read-only); raises NumericalError if it is not in the cup then."""
+    :data:`SETTLE_TIME` s (read-only); raises NumericalError if it is not in the cup then.
+    """
     import mujoco
 
     m = model()
@@ -156,7 +159,8 @@ class Reach:
     distances between consecutive joint anchors are fixed by the links), it is released at most
     ``release_height`` m up (the first anchor's height plus the whole chain) and at most the
     chain's length from the axis, and flies without drag: the farthest a projectile gets from
-    height h at speed v is ``(v / g) sqrt(v^2 + 2 g h)``."""
+    height h at speed v is ``(v / g) sqrt(v^2 + 2 g h)``.
+    """
 
     low: float
     high: float
@@ -191,7 +195,8 @@ class ThrowResult:
     ``release_velocity`` (m, m/s) of the ball at the first step after its last contact with the
     cup (NaN if it never left); ``hit`` names what the ball touched, other than the cup, before
     the floor ("" if nothing); ``times``/``q``/``q_ref`` the executed and reference joint
-    positions at every physics step while the trajectory ran."""
+    positions at every physics step while the trajectory ran.
+    """
 
     landing: NDArray[np.float64]
     landing_time: float
@@ -206,6 +211,7 @@ class ThrowResult:
 
     @property
     def landed(self) -> bool:
+        """Whether the ball came down (its landing point is finite)."""
         return bool(np.isfinite(self.landing).all())
 
 
@@ -216,7 +222,8 @@ def simulate_throw(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[n
     last sample, and stops when the ball touches the floor (or :data:`MAX_FLIGHT` s after the
     end). The caller validates the trajectory; this function trusts it. ``should_stop()`` is
     asked every :data:`STOP_CHECK_EVERY` steps; when it says so the throw ends there, not landed
-    (``interrupted``)."""
+    (``interrupted``).
+    """
     import mujoco
 
     m = model()

@@ -44,7 +44,8 @@ class AnalyticAdapter(BaseAdapter):
     """Executes a trajectory by reading its peak; measures ``outcome_map(peak) + noise``.
 
     ``noise``: the measurement noise's standard deviation, or a whole
-    :class:`~dmprs.tasks.noise.Noise` (then ``execution_noise`` must be 0)."""
+    :class:`~dmprs.tasks.noise.Noise` (then ``execution_noise`` must be 0).
+    """
 
     def __init__(self, noise: float | Noise = 0.0, execution_noise: float = 0.0) -> None:
         super().__init__(AdapterSpec(
@@ -96,6 +97,7 @@ class AnalyticTask(Task):
         self.tol = float(tol)
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
+        """The measured outcome value (m)."""
         return np.array([outcome.signals["outcome"]])
 
     def demonstration(self, amplitude: float) -> tuple[NDArray[np.float64], Trajectory]:

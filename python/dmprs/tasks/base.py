@@ -1,5 +1,6 @@
 """A task is an adapter plus scoring: what the desired outcome is, how far an outcome is from it,
-and when a trial counts as a success."""
+and when a trial counts as a success.
+"""
 
 from __future__ import annotations
 
@@ -49,14 +50,17 @@ class Task(abc.ABC):
 
     @property
     def n_query(self) -> int:
+        """The dimension of the query."""
         return len(self.query_names)
 
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
+        """``query`` as one finite value per query dimension, or a clear error naming ``name``."""
         return as_query(query, name, self.query_names)
 
     def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
         """The trajectory to execute for a generalized DMP: by default its rollout at the
-        adapter's control period, up to tau (a pose trajectory for a Cartesian DMP)."""
+        adapter's control period, up to tau (a pose trajectory for a Cartesian DMP).
+        """
         return dmp.rollout(dt=self.adapter.spec.control_period)
 
     @abc.abstractmethod

@@ -1,6 +1,7 @@
 """What both MuJoCo arm tasks declare about the arm (the KUKA LBR iiwa 14 of
 :mod:`dmprs.sim.arm_model`): seven joints in rad with the data sheet's position and velocity
-limits, a home configuration every trajectory must start at, and the tracking signal."""
+limits, a home configuration every trajectory must start at, and the tracking signal.
+"""
 
 from __future__ import annotations
 
@@ -23,7 +24,8 @@ TRACKING_ERROR = SignalSpec("tracking_error", "rad", "largest joint tracking err
 def spec(name: str, *, home: Sequence[float] | NDArray[np.float64], control_period: float, max_duration: float,
          signals: Sequence[SignalSpec]) -> AdapterSpec:
     """The adapter spec of a task on the iiwa: its joints ``a1..a7`` (rad) with their limits,
-    starting at ``home`` (rad), and the task's ``signals``."""
+    starting at ``home`` (rad), and the task's ``signals``.
+    """
     return AdapterSpec(
         name=name,
         dof_names=arm_model.JOINT_NAMES,

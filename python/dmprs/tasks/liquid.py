@@ -37,7 +37,8 @@ def check_volume(value: Any, name: str, *, capacity: float) -> float:
 def signals(particle: str) -> tuple[SignalSpec, ...]:
     """The eight signals every pour measures: the volumes (l) in the glass (the measurement), in
     the bottle, spilled and at the start, and the same as whole ``particle`` counts (they add up
-    to ``particles``; the volumes are the counts times :data:`PARTICLE_VOLUME`)."""
+    to ``particles``; the volumes are the counts times :data:`PARTICLE_VOLUME`).
+    """
     return (
         SignalSpec("poured_volume", "l", "liquid in the glass, counted `hold` s after the trajectory ends"),
         SignalSpec("remaining_volume", "l", "liquid still in the bottle at the end"),
@@ -59,7 +60,8 @@ CURVE_SIGNALS = (
 
 def counts(n_glass: int, n_bottle: int, n_spilled: int, n: int, poured_volume: float) -> dict[str, Any]:
     """The eight signals of :func:`signals` from the particle counts; ``poured_volume`` is the
-    reading of the glass (the exact count times the particle volume, or a noisy reading of it)."""
+    reading of the glass (the exact count times the particle volume, or a noisy reading of it).
+    """
     return {
         "poured_volume": poured_volume,
         "remaining_volume": n_bottle * PARTICLE_VOLUME,
@@ -76,7 +78,8 @@ class Liquid:
     """The liquid's options of a pouring adapter: ``liquid_seed`` draws the particles (their
     sizes, hence the settled packing) and, with ``reseed_liquid``, ``reset(seed)`` draws a new
     liquid from ``seed`` for every trial (trial-to-trial variation); ``hold`` (s) is how long the
-    bottle rests after the trajectory before the liquid is counted."""
+    bottle rests after the trajectory before the liquid is counted.
+    """
 
     def __init__(self, liquid_seed: Any, reseed_liquid: Any, hold: Any) -> None:
         if not (isinstance(liquid_seed, (int, np.integer)) and not isinstance(liquid_seed, (bool, np.bool_))
@@ -117,6 +120,7 @@ class PouringTask(Task):
         self.tol = as_scalar(tol, "tol", positive=True)
 
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
+        """A bottle volume the simulation can hold, or a clear error naming ``name``."""
         q = super().validate_query(query, name)
         if not 0 < q[0] <= self.capacity:
             raise InvalidInputError(f"{name} = {q[0]:g} l: a bottle volume must be > 0 and at most the simulated "
@@ -124,8 +128,10 @@ class PouringTask(Task):
         return q
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
+        """The poured volume (l)."""
         return np.array([float(outcome.signals["poured_volume"])])
 
     def target(self, desired_query: NDArray[np.float64]) -> NDArray[np.float64]:
         # Whatever the bottle holds, the task is to pour the same amount (docs/method.md §9.1).
+        """The target volume, whatever the bottle holds."""
         return np.array([self.target_volume])

@@ -60,13 +60,15 @@ DEMO_SETS = {
 def config(**overrides: Any) -> _core.MatchboxConfig:
     """The simulation's parameters (see ``MatchboxConfig`` in crates/matchbox): defaults are a
     15 g, 53 x 36 x 16 mm box overhanging the table edge by 14 mm, friction 0.3, restitution
-    0.3, 1 ms steps with 8 solver iterations, 2 s of settling after the strike."""
+    0.3, 1 ms steps with 8 solver iterations, 2 s of settling after the strike.
+    """
     return _core.MatchboxConfig(**overrides)
 
 
 def strike(duration: float, cfg: _core.MatchboxConfig | None = None, dt: float = CONTROL_PERIOD) -> Trajectory:
     """A minimum-jerk vertical strike of ``duration`` s from 40 mm below the table top to 2 mm
-    above it, under the box, at the fingertip radius inside its outer edge."""
+    above it, under the box, at the fingertip radius inside its outer edge.
+    """
     if not (math.isfinite(duration) and duration > 0):
         raise InvalidInputError(f"duration = {duration} must be > 0")
     (x0, z0), (x1, z1) = (cfg or config()).default_strike()
@@ -81,7 +83,8 @@ class MatchboxAdapter(BaseAdapter):
     """The Rapier matchbox scene behind the adapter interface. Deterministic unless ``noise``
     (:class:`dmprs.tasks.noise.Noise`: fingertip tracking error in m, friction and restitution
     perturbed by ``contact``, ``outcome_angle`` and ``eps18`` measured with ``measurement`` rad),
-    drawn from ``reset``'s seed."""
+    drawn from ``reset``'s seed.
+    """
 
     def __init__(self, noise: Noise | None = None, **config_overrides: float) -> None:
         self.noise = noise or Noise()
@@ -172,9 +175,11 @@ class MatchboxFlip(Task):
         return dmp.rollout(dt=CONTROL_PERIOD)
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
+        """The achieved outcome angle q_a (rad)."""
         return np.array([outcome.signals["outcome_angle"]])
 
     def success(self, desired_query: ArrayLike, outcome: Outcome) -> bool:
+        """Whether the box stands upright (the regime, judged by the simulation)."""
         return outcome.ok and outcome.signals["regime"] == "upright"
 
     def demonstration(self, duration: float) -> tuple[NDArray[np.float64], Trajectory]:
@@ -194,7 +199,8 @@ class MatchboxFlip(Task):
 
 def simulate_batch(durations: list[float] | NDArray[np.float64], **config_overrides: float) -> list[dict]:
     """Scripted strikes of the given durations, simulated in parallel on all cores (for sweeps
-    and the baselines' many rollouts)."""
+    and the baselines' many rollouts).
+    """
     cfg = config(**config_overrides)
     paths = []
     for d in durations:

@@ -50,6 +50,7 @@ class Noise:
 
     @property
     def off(self) -> bool:
+        """Whether every noise level is zero (then nothing is drawn)."""
         return not self.measures and self.execution == 0 and self.contact == 0
 
     @property
@@ -59,6 +60,7 @@ class Noise:
 
     @staticmethod
     def rng(seed: int | None) -> np.random.Generator:
+        """The generator of one trial's noise, from the seed the trial runner passes to ``reset``."""
         return np.random.default_rng(seed)
 
     def track(self, trajectory: Trajectory, rng: np.random.Generator) -> Trajectory:
@@ -76,6 +78,7 @@ class Noise:
         return 1.0 if self.contact == 0 else max(0.05, 1.0 + self.contact * float(rng.standard_normal()))
 
     def measure(self, value: float, rng: np.random.Generator) -> float:
+        """``value`` read with the measurement noise (itself when there is none)."""
         if self.measurement > 0:
             value += self.measurement * float(rng.standard_normal())
         if self.outliers > 0 and rng.random() < self.outliers:  # drawn only when on: streams unchanged

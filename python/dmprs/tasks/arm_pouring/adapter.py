@@ -1,5 +1,6 @@
 """The MuJoCo arm-pouring scene behind the adapter interface: joint or pose trajectories, the dry
-IK pass, limits, collisions, and the outcome signals."""
+IK pass, limits, collisions, and the outcome signals.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +12,9 @@ from numpy.typing import NDArray
 
 from dmprs.adapters import BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.adapters.spec import pose_problems, start_problems
+from dmprs.sim import arm_scene as scene
+from dmprs.sim.arm_ik import ArmKinematics
+from dmprs.sim.arm_scene import HOME_POSE, home_configuration
 from dmprs.tasks import iiwa
 from dmprs.tasks.liquid import CURVE_SIGNALS, PARTICLE_VOLUME, Liquid, check_volume, counts
 from dmprs.tasks.liquid import signals as liquid_signals
@@ -39,7 +43,6 @@ def _tilt(quat: NDArray[np.float64]) -> NDArray[np.float64]:
 
 @functools.lru_cache(maxsize=1)
 def _kinematics() -> Any:
-    from dmprs.sim.arm_ik import ArmKinematics
 
     return ArmKinematics()
 
@@ -63,7 +66,6 @@ class ArmPouringAdapter(BaseAdapter):
 
     def __init__(self, bottle_volume: float = 0.5, *, liquid_seed: int = 0, reseed_liquid: bool = False,
                  hold: float = 0.5) -> None:
-        from dmprs.sim.arm_scene import home_configuration
 
         v = check_volume(bottle_volume, "bottle_volume", capacity=CAPACITY)
         self.n_particles = round(v / PARTICLE_VOLUME)
@@ -91,10 +93,10 @@ class ArmPouringAdapter(BaseAdapter):
     def plan(self, trajectory: Any) -> tuple[Trajectory | None, float, float, list[str]]:
         """The joint trajectory that executes ``trajectory`` (itself if it is a joint trajectory;
         the IK's solution for a pose trajectory), its largest IK residuals (m, rad), and every
-        problem found before the limit and collision checks."""
+        problem found before the limit and collision checks.
+        """
         if not isinstance(trajectory, CartesianTrajectory):
             return (trajectory if isinstance(trajectory, Trajectory) else None), 0.0, 0.0, []
-        from dmprs.sim.arm_scene import HOME_POSE
 
         problems = pose_problems(trajectory, min_samples=self.spec.min_samples) or start_problems(
             trajectory, HOME_POSE, START_TOLERANCE)
@@ -124,6 +126,7 @@ class ArmPouringAdapter(BaseAdapter):
         return joints, pe, re, []
 
     def check(self, trajectory: Any) -> list[str]:
+        """Every problem of the IK pass, then the limits of the joint solution, then the first collision."""
         joints, _, _, problems = self.plan(trajectory)
         if problems:
             return problems
@@ -144,7 +147,7 @@ class ArmPouringAdapter(BaseAdapter):
         table = m.geom("table").id
         glassware = {g for g in range(m.ngeom) if m.geom(g).name.startswith("glass")}
         step = max(1, round(COLLISION_CHECK_PERIOD / max(float(np.median(np.diff(joints.t))), 1e-9)))
-        rows = list(range(0, joints.n_samples, step)) + [joints.n_samples - 1]
+        rows = [*range(0, joints.n_samples, step), joints.n_samples - 1]
         for k in rows:
             d.qpos[:7] = joints.y[k]
             mujoco.mj_fwdPosition(m, d)
@@ -161,7 +164,6 @@ class ArmPouringAdapter(BaseAdapter):
     # --- execution -------------------------------------------------------------------------------
 
     def _execute(self, trajectory: Any) -> Outcome:
-        from dmprs.sim import arm_scene as scene
 
         joints, pe, re, problems = self.plan(trajectory)
         if problems or joints is None:  # execute() checked already; a changed trajectory is refused

@@ -1,5 +1,6 @@
 """Calibrating a demonstration: the peak tilt whose pour gives the target volume, found with the
-library's Illinois root finder and cached (per process, and on disk with ``cache_dir``)."""
+library's Illinois root finder and cached (per process, and on disk with ``cache_dir``).
+"""
 
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ from typing import Any
 import numpy as np
 
 from dmprs.errors import NumericalError
+from dmprs.learners import IllinoisRootFinder
+from dmprs.sim import arm_model, arm_scene, granular
 from dmprs.tasks.arm_pouring.adapter import CAPACITY, CONTROL_PERIOD, ArmPouringAdapter
 from dmprs.tasks.arm_pouring.demonstrator import DEMO_TIMING, POUR_POSITION, pour_poses
 from dmprs.tasks.liquid import TARGET_VOLUME, check_volume
@@ -32,10 +35,10 @@ def poured_volume(bottle_volume: float, trajectory: Any, liquid_seed: int = 0) -
 
 def _cache_path(cache_dir: str, params: dict[str, Any]) -> Path:
     """The disk-cache file of a calibration: keyed by its parameters, the whole scene (its MJCF,
-    the liquid's and the demonstrator's constants) and the MuJoCo version."""
+    the liquid's and the demonstrator's constants) and the MuJoCo version.
+    """
     import mujoco
 
-    from dmprs.sim import arm_model, arm_scene, granular
 
     blob = json.dumps({"params": params, "mjcf": arm_model.scene_xml(), "mujoco": mujoco.__version__,
                        "home": arm_scene.HOME_POSE, "settle": arm_scene.SETTLE_TIME,
@@ -53,7 +56,8 @@ def calibrate_peak_tilt(bottle_volume: float, target_volume: float = TARGET_VOLU
     (rad), stopping at ``|error| <= tol`` l or after ``max_evaluations`` pours (then the best).
 
     Cached per process; with ``cache_dir`` (default: ``$DMPRS_CACHE_DIR`` if set) also on disk
-    (see :func:`_cache_path`)."""
+    (see :func:`_cache_path`).
+    """
     if cache_dir is None and os.environ.get("DMPRS_CACHE_DIR"):
         cache_dir = os.environ["DMPRS_CACHE_DIR"]
     return _calibrate(float(bottle_volume), float(target_volume), int(liquid_seed), float(tol),
@@ -64,7 +68,6 @@ def calibrate_peak_tilt(bottle_volume: float, target_volume: float = TARGET_VOLU
 @functools.lru_cache(maxsize=16)
 def _calibrate(bottle_volume: float, target_volume: float, liquid_seed: int, tol: float, max_evaluations: int,
                bracket: tuple[float, float], cache_dir: str | None) -> Calibration:
-    from dmprs.learners import IllinoisRootFinder
 
     v = check_volume(bottle_volume, "bottle_volume", capacity=CAPACITY)
     target = check_volume(target_volume, "target_volume", capacity=v)

@@ -1,5 +1,6 @@
 """The scripted "kinesthetic" demonstrations: reach over the glass, tilt about the mouth, hold,
-tilt back, as poses of the mouth."""
+tilt back, as poses of the mouth.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import numpy as np
 
 from dmprs.errors import InvalidInputError
 from dmprs.profiles import min_jerk
+from dmprs.sim.arm_scene import HOME_POSE
 from dmprs.tasks.arm_pouring.adapter import CONTROL_PERIOD
 from dmprs.tasks.arm_pouring.poses import pose_to_tangent
 from dmprs.trajectory import CartesianTrajectory, Trajectory
@@ -25,9 +27,8 @@ def pour_poses(peak_tilt: float, timing: tuple[float, float, float, float] = DEM
     """The scripted demonstration as poses of the mouth: minimum-jerk reach from the home pose to
     :data:`POUR_POSITION` (upright), minimum-jerk tilt about the mouth by ``peak_tilt`` rad toward
     the glass (a rotation about the world's x axis, which turns the mouth toward -y), hold, and
-    minimum-jerk tilt back to upright; the mouth stays still while the bottle tilts."""
-    from dmprs.sim.arm_scene import HOME_POSE
-
+    minimum-jerk tilt back to upright; the mouth stays still while the bottle tilts.
+    """
     peak = float(peak_tilt)
     if not math.isfinite(peak):
         raise InvalidInputError(f"peak_tilt = {peak_tilt!r} must be a finite angle in rad")
@@ -46,9 +47,8 @@ def pour_poses(peak_tilt: float, timing: tuple[float, float, float, float] = DEM
 def demonstration_tangent(peak_tilt: float) -> Trajectory:
     """The scripted demonstration of :func:`pour_poses` as a 6-D trajectory of the position and the
     rotation vector from the upright home orientation (:func:`pose_to_tangent`), with its exact
-    sampling, for encoding as DMPs with the library's generalizer."""
-    from dmprs.sim.arm_scene import HOME_POSE
-
+    sampling, for encoding as DMPs with the library's generalizer.
+    """
     poses = pour_poses(peak_tilt)
     return Trajectory(poses.t, pose_to_tangent(poses.pose, np.asarray(HOME_POSE[3:])))
 

@@ -1,6 +1,7 @@
 """The map between the bottle mouth's poses and the tangent space of a reference orientation, for
 encoding a pour as one DMP per coordinate (the second method the Cartesian DMPs are checked
-against)."""
+against).
+"""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ def pose_to_tangent(pose: NDArray[np.float64], reference: NDArray[np.float64]) -
     orientation relative to the unit quaternion ``reference`` r (world frame). For rotations of
     less than pi from r this is one-to-one and smooth, so a per-coordinate DMP of it is a pose DMP
     in the tangent space at r: for a rotation about one fixed axis it is exactly the discrete DMP
-    of the angle, as the orientation DMP of Ude et al. 2014 is (docs/arm.md)."""
+    of the angle, as the orientation DMP of Ude et al. 2014 is (docs/arm.md).
+    """
     pose = np.asarray(pose, dtype=float)
     relative = quaternion.product(pose[:, 3:], np.broadcast_to(quaternion.conjugate(np.asarray(reference)),
                                                                (len(pose), 4)))

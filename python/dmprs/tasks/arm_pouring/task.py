@@ -1,5 +1,6 @@
 """The arm-pouring task: scoring like the 2-D pouring, and the pose trajectory of a generalized
-DMP."""
+DMP.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from dmprs.sim.arm_scene import HOME_POSE
 from dmprs.tasks.arm_pouring.adapter import CAPACITY, ArmPouringAdapter
 from dmprs.tasks.arm_pouring.poses import tangent_to_pose
 from dmprs.tasks.liquid import TARGET_VOLUME, PouringTask
@@ -39,10 +41,10 @@ class ArmPouring(PouringTask):
     def trajectory(self, dmp: DMP | CartesianDMP) -> CartesianTrajectory:
         """The pose trajectory of a generalized DMP, rolled out at the adapter's control period: a
         ``CartesianDMP``'s rollout, or a 6-D DMP of :func:`demonstration_tangent`'s coordinates
-        (position, rotation vector from upright) turned back into poses."""
+        (position, rotation vector from upright) turned back into poses.
+        """
         out = dmp.rollout(dt=self.adapter.spec.control_period)
         if isinstance(out, CartesianTrajectory):
             return out
-        from dmprs.sim.arm_scene import HOME_POSE
 
         return CartesianTrajectory.from_pose(out.t, tangent_to_pose(out.y, np.asarray(HOME_POSE[3:])))

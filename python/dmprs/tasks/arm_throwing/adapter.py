@@ -1,5 +1,6 @@
 """The MuJoCo throwing scene behind the adapter interface: joint trajectories of the 7-DOF arm,
-the iiwa's limits, and the landing point as the outcome."""
+the iiwa's limits, and the landing point as the outcome.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import numpy as np
 
 from dmprs.adapters import BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
+from dmprs.sim.throw_scene import HOME, simulate_throw
 from dmprs.tasks import iiwa
 from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
@@ -36,7 +38,6 @@ class ArmThrowingAdapter(BaseAdapter):
     """
 
     def __init__(self, noise: Noise | None = None) -> None:
-        from dmprs.sim.throw_scene import HOME
 
         if noise is not None and not isinstance(noise, Noise):
             raise InvalidInputError(f"noise is a {type(noise).__name__}; expected a dmprs.tasks.noise.Noise")
@@ -62,7 +63,6 @@ class ArmThrowingAdapter(BaseAdapter):
         self._rng = Noise.rng(seed)
 
     def _execute(self, trajectory: Trajectory) -> Outcome:
-        from dmprs.sim.throw_scene import simulate_throw
 
         executed = self.noise.track(trajectory, self._rng)
         qd = np.gradient(executed.y, executed.t, axis=0, edge_order=2) if (

@@ -1,6 +1,7 @@
 """The scripted demonstration throws: a minimum-jerk turn of the base to the throwing direction,
 then a minimum-jerk swing of the shoulder (A2), elbow (A4) and wrist (A6) together, the cup
-moving along its opening; the ball leaves the cup while the swing decelerates."""
+moving along its opening; the ball leaves the cup while the swing decelerates.
+"""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import numpy as np
 
 from dmprs.errors import InvalidInputError
 from dmprs.profiles import min_jerk
+from dmprs.sim.throw_scene import HOME
 from dmprs.trajectory import Trajectory
 
 #: rad: the swing of A2, A4, A6 at full strength (strength 1), in the throwing direction
@@ -31,9 +33,8 @@ def throw_trajectory(strength: float, yaw: float, dt: float = 0.002) -> Trajecto
     """A scripted throw from :data:`~dmprs.sim.throw_scene.HOME`: A1 turns by ``yaw`` rad in
     :data:`TURN_TIME`, then A2, A4, A6 swing by ``strength x`` :data:`SWING` in
     :data:`SWING_TIME` (minimum-jerk profiles, :func:`dmprs.profiles.min_jerk`), sampled every
-    ``dt`` s, with exact velocities and accelerations."""
-    from dmprs.sim.throw_scene import HOME
-
+    ``dt`` s, with exact velocities and accelerations.
+    """
     k, phi = float(strength), float(yaw)
     if not (math.isfinite(k) and k > 0):
         raise InvalidInputError(f"strength = {strength!r} must be > 0")

@@ -1,5 +1,6 @@
 """The throwing task: hit a basket at (x, y) on the floor (the paper's example of a query, section
-3: "the relationship between the basket positions and the DMP parameters")."""
+3: "the relationship between the basket positions and the DMP parameters").
+"""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs._arrays import as_scalar
 from dmprs.adapters import Outcome
 from dmprs.errors import InvalidInputError
+from dmprs.sim.throw_scene import reach
 from dmprs.tasks.arm_throwing.adapter import ArmThrowingAdapter
 from dmprs.tasks.base import Task
 from dmprs.tasks.noise import Noise
@@ -37,9 +39,8 @@ class ArmThrowing(Task):
 
     def validate_query(self, query: ArrayLike, name: str = "desired_query") -> NDArray[np.float64]:
         """A landing point the ball can reach (:func:`dmprs.sim.throw_scene.reach`); a basket
-        beyond it is refused, not simulated."""
-        from dmprs.sim.throw_scene import reach
-
+        beyond it is refused, not simulated.
+        """
         q = super().validate_query(query, name)
         r, span = float(np.hypot(*q)), reach()
         if not span.low <= r <= span.high:
@@ -51,7 +52,9 @@ class ArmThrowing(Task):
         return q
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
+        """The landing point (x, y) in m."""
         return np.array([float(outcome.signals["landing_x"]), float(outcome.signals["landing_y"])])
 
     def success(self, desired_query: ArrayLike, outcome: Outcome) -> bool:
+        """Whether the ball landed within ``tol`` of the target (a round basket)."""
         return bool(np.linalg.norm(self.error(desired_query, outcome)) < self.tol)

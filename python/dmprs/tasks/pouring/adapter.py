@@ -1,5 +1,6 @@
 """The pymunk pouring scene of :mod:`dmprs.sim.pouring_scene` behind the adapter interface, and
-the limits every pour must respect."""
+the limits every pour must respect.
+"""
 
 from __future__ import annotations
 
@@ -94,6 +95,7 @@ class PouringAdapter(BaseAdapter):
         return []
 
     def check(self, trajectory: Trajectory) -> list[str]:
+        """The spec's checks, then that the pour ends upright."""
         problems = self.spec.check(trajectory)
         # The end-upright check needs a valid, finite, 1-DOF trajectory.
         return problems or self._extra_checks(trajectory)

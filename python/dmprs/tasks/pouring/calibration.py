@@ -1,5 +1,6 @@
 """Calibrating a demonstration: the peak tilt whose pour gives the target volume, found in the
-simulation and cached (per process, and on disk with ``cache_dir``)."""
+simulation and cached (per process, and on disk with ``cache_dir``).
+"""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from typing import Any
 
 from dmprs._io import write_atomic
 from dmprs.errors import InvalidInputError, NumericalError
+from dmprs.sim import pouring_scene as scene
 from dmprs.tasks.liquid import TARGET_VOLUME, check_volume
 from dmprs.tasks.pouring.adapter import CAPACITY, CONTROL_PERIOD, MAX_TILT, PouringAdapter
 from dmprs.tasks.pouring.profile import DEMO_TIMING, tilt_profile
@@ -33,7 +35,8 @@ class Calibration:
     @classmethod
     def load(cls, path: Path) -> Calibration | None:
         """The calibration cached at ``path``; None if it is absent or damaged (then it is
-        computed and rewritten)."""
+        computed and rewritten).
+        """
         try:
             d = json.loads(path.read_text())
             return cls(**{**d, "evaluations": tuple(tuple(e) for e in d["evaluations"])})
@@ -42,7 +45,8 @@ class Calibration:
 
     def save(self, path: Path) -> None:
         """Caches this calibration at ``path`` (atomically); a disk that refuses is ignored,
-        the cache being an optimization only."""
+        the cache being an optimization only.
+        """
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             write_atomic(path, json.dumps(asdict(self)).encode())
@@ -63,7 +67,6 @@ def _poured(bottle_volume: float, peak: float, liquid_seed: int) -> float:
 def _cache_key(**params: Any) -> str:
     import pymunk
 
-    from dmprs.sim import pouring_scene as scene
 
     consts = {k: getattr(scene, k) for k in dir(scene) if k.isupper() and isinstance(getattr(scene, k), (int, float, tuple))}
     blob = json.dumps({"params": params, "scene": consts, "pymunk": pymunk.version,

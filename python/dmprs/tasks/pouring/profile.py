@@ -1,5 +1,6 @@
 """The demonstrator's movement: a minimum-jerk tilt up, a hold, a minimum-jerk tilt back to
-upright (docs/method.md §9.3)."""
+upright (docs/method.md §9.3).
+"""
 
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ DEMO_TIMING = (1.0, 1.0, 1.0)
 def tilt_profile(peak: float, timing: tuple[float, float, float] = DEMO_TIMING,
                  dt: float = CONTROL_PERIOD) -> Trajectory:
     """Minimum-jerk up to ``peak`` rad, hold, minimum-jerk back to 0 (docs/method.md §9.3), with exact
-    velocities and accelerations."""
+    velocities and accelerations.
+    """
     peak = float(peak)
     if not math.isfinite(peak):
         raise InvalidInputError(f"peak = {peak!r} must be a finite tilt in rad")

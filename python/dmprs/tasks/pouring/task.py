@@ -43,6 +43,7 @@ class Pouring(PouringTask):
         self.rollout_substeps = as_count(rollout_substeps, "rollout_substeps", 1)
 
     def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
+        """The tilt to execute: the DMP's rollout at the control period, finer when ``rollout_substeps`` asks."""
         k = self.rollout_substeps
         if k == 1 or not isinstance(dmp, DMP):
             return super().trajectory(dmp)
@@ -53,7 +54,8 @@ class Pouring(PouringTask):
     def demonstration(self, bottle_volume: float, *, cache_dir: str | os.PathLike[str] | None = None,
                       ) -> tuple[NDArray[np.float64], Trajectory]:
         """A scripted demonstration for a bottle of ``bottle_volume`` l, with this task's target
-        and liquid: (query, tilt trajectory)."""
+        and liquid: (query, tilt trajectory).
+        """
         q, traj, _ = demonstration(bottle_volume, self.target_volume,
                                    liquid_seed=self.adapter.liquid.liquid_seed, cache_dir=cache_dir)
         return q, traj
