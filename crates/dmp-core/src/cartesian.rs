@@ -17,12 +17,12 @@
 //! of the position fit, `tau^2 ydd_j - alpha_z (beta_z (g - y_j) - tau yd_j)`, written for the
 //! coordinates `y_j = -2 log(g_o * conj(q_j))`, `yd_j = omega_j`, `ydd_j = omegadot_j`, whose goal
 //! `y_T` is exactly 0. So a pose demonstration becomes a 6-coordinate demonstration (x, y, z and
-//! these three) and is fitted by the discrete DMP's least squares ([`crate::design`]); a
+//! these three) and is fitted by the discrete DMP's least squares ([`crate::design_matrix`]); a
 //! [`CartesianDmp`] is that 6-DOF [`Dmp`] (orientation goal and start 0) plus the goal and start
 //! quaternions.
 //!
 //! Angular velocities, when not given, are computed from the quaternion samples with the
-//! second-order scheme of [`crate::diff`] applied in the tangent space at each sample:
+//! second-order scheme of [`crate::finite_difference`] applied in the tangent space at each sample:
 //! `omega_j = sum_i c_ji 2 log(q_i * conj(q_j))` with the weights `c_ji` of
 //! `numpy.gradient(., t, edge_order=2)`; for a rotation about a fixed axis by `theta(t)` this is
 //! exactly that scheme applied to `theta`. Angular accelerations are the scheme applied to

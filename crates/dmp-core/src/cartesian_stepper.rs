@@ -2,7 +2,7 @@
 //! [`crate::stepper::Stepper`] for a pose (docs/method.md §2.5, docs/cartesian.md).
 //!
 //! Without measurements, couplings, limits or goal changes, the k-th call returns sample k of
-//! [`CartesianDmp::rollout`] to rounding (the forcing term as [`crate::forcing`] computes it):
+//! [`CartesianDmp::rollout`] to rounding (the forcing term as the private `forcing` module computes it):
 //! the same updates in the same order (position as the
 //! discrete DMP, `q <- exp(dt/(2 tau) eta) * q`, then the phase). When `dt` is beyond explicit
 //! Euler's stability limit the period is split into the joint rollout's sub-steps (the Cartesian

@@ -5,7 +5,7 @@
 //! rollout's sample k (`t = k dt`) to rounding: the same explicit Euler in the same order of
 //! updates (`y += z/tau h`, `z += dz h`, `x -= alpha_x x/tau h`), with the rollout's sub-steps
 //! when `dt` is beyond the stability limit ([`crate::rollout::stable_step`]); only the forcing
-//! term's exponentials are computed differently ([`crate::forcing`]).
+//! term's exponentials are computed differently (in the private `forcing` module).
 //!
 //! Online, the stepper adds
 //! * **phase stopping** (Ijspeert et al. 2002, 2013): a measured state `y~` slows the clock by

@@ -15,7 +15,7 @@
 //!   (at most `max_expansions` times per side, then `HitBound`), (c) stops when the bracket is
 //!   narrower than `q_tol` (`Bracketed`).
 //!
-//!   Expansion step [D]: docs/method.md §6.3 writes q_h <- q_h + 1.618 (q_h - q_l), but by the time a
+//!   Expansion step \[D\]: docs/method.md §6.3 writes q_h <- q_h + 1.618 (q_h - q_l), but by the time a
 //!   trial is within 5 % of q_h the bracket [q_l, q_h] has shrunk to about 7 % of W0, so that
 //!   step barely moves the limit (three expansions reach only 0.25 W0 past it). The k-th
 //!   expansion on a side instead adds 1.618^k W0, the geometric growth of classical bracket

@@ -12,7 +12,7 @@
 //! [dtheta]_j   = sum_i (T - i) Psi_j(x_i) [dtheta_i]_j / sum_i (T - i) Psi_j(x_i)   time averaging
 //! theta       += dtheta
 //! ```
-//! Decisions [D]: the exploration noise is constant during a rollout (Kober's and Stulp's
+//! Decisions \[D\]: the exploration noise is constant during a rollout (Kober's and Stulp's
 //! episodic setting; the costs can still vary per step); a reused rollout's eps is recomputed
 //! against the current theta (it executed theta_k, so eps_k = theta_k - theta); the weights are
 //! laid out DOF-major, theta[d * N + j] = w_{d, j} (a (D, N) array flattened in C order), and
