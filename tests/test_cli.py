@@ -208,20 +208,17 @@ def test_plot_refuses_damaged_labels_and_desired_query(tmp_path):
         _single_line_error(run("plot", run_dir), str(run_dir / "run.json"), repr(field))
 
 
-def test_plot_into_a_folder_replaces_a_link_instead_of_following_it(tmp_path):
+def test_plot_into_a_folder_replaces_a_link_instead_of_following_it(tmp_path, outside):
     run_dir = _unfinished_run(tmp_path)
-    folder, outside = tmp_path / "figs", tmp_path / "outside"
+    folder = tmp_path / "figs"
     folder.mkdir()
-    outside.mkdir()
     (folder / "learning.png").symlink_to(outside / "written-through-a-link.png")
     assert run("plot", run_dir, "--out", folder).exit_code == 0
     assert list(outside.iterdir()) == [] and not (folder / "learning.png").is_symlink()
     assert (folder / "learning.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def test_a_run_log_never_writes_through_a_link(tmp_path):
-    outside = tmp_path / "outside"
-    outside.mkdir()
+def test_a_run_log_never_writes_through_a_link(tmp_path, outside):
     run_dir = tmp_path / "run"
     run_dir.mkdir()
     (run_dir / "trials.jsonl").symlink_to(outside / "trials.jsonl")
