@@ -26,6 +26,7 @@ import time
 import mujoco
 import numpy as np
 
+from _timing import cpu, servo_cpu
 from dmprs.sim import arm_model as am
 from dmprs.sim import arm_scene, granular
 from dmprs.tasks.arm_pouring import ArmPouringAdapter, pour_poses
@@ -34,28 +35,12 @@ VOLUMES = (0.3, 0.5, 1.0)
 PEAK = 2.0  # rad
 
 
-def cpu(fn):
-    t0 = time.process_time()
-    out = fn()
-    return time.process_time() - t0, out
-
-
 def physics_only(adapter: ArmPouringAdapter, trajectory) -> float:
     """CPU of the bare mj_step loop that execute() runs, with its controls precomputed."""
     joints = adapter.plan(trajectory)[0]
     liquid = arm_scene.settled_liquid(adapter.n_particles, 0)
-    m, d = liquid.model, mujoco.MjData(liquid.model)
-    d.qpos[:] = liquid.qpos
-    d.qvel[:] = liquid.qvel
-    mujoco.mj_forward(m, d)
     n_steps = round(joints.duration / am.TIMESTEP) + round(adapter.liquid.hold / am.TIMESTEP)
-    times = np.arange(n_steps + 1) * am.TIMESTEP
-    ref = np.stack([np.interp(times, joints.t, joints.y[:, j]) for j in range(7)], axis=1)
-    t0 = time.process_time()
-    for k in range(1, n_steps + 1):
-        d.ctrl[:] = ref[k]
-        mujoco.mj_step(m, d)
-    return time.process_time() - t0
+    return servo_cpu(liquid.model, liquid.qpos, liquid.qvel, joints, n_steps, am.TIMESTEP)
 
 
 def trial_table(repeats: int) -> None:

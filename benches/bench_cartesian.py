@@ -17,27 +17,16 @@ from __future__ import annotations
 
 import os
 import platform
-import statistics
 import sys
-import time
 
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 import dmprs
+from _timing import timed
 
 N_SAMPLES, N_BASIS, DT = 1000, 50, 0.001
 REPEATS = 50
-
-
-def median_time(fn, repeats: int = REPEATS) -> float:
-    fn()  # warm up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def pose_demo(n: int = N_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
@@ -62,9 +51,9 @@ def errors(t, pose, t_roll, pose_roll) -> tuple[float, float]:
 
 
 def bench_dmprs(t, pose):
-    fit = median_time(lambda: dmprs.CartesianDMP.fit(t, pose, N_BASIS))
+    fit, _ = timed(lambda: dmprs.CartesianDMP.fit(t, pose, N_BASIS), REPEATS)
     dmp = dmprs.CartesianDMP.fit(t, pose, N_BASIS)
-    roll = median_time(lambda: dmp.rollout(dt=DT))
+    roll, _ = timed(lambda: dmp.rollout(dt=DT), REPEATS)
     tr = dmp.rollout(dt=DT)
     return (fit, roll / tr.n_samples, *errors(t, pose, tr.t, tr.pose), "Euler, exp map (Rust)")
 
@@ -77,7 +66,7 @@ def bench_movement_primitives(t, pose):
         d.imitate(t, pose)
         return d
 
-    fit = median_time(make, repeats=10)
+    fit, _ = timed(make, 10)
     d = make()
     best = None
     # The compiled step functions this build has (and plain Euler), for position and orientation.
@@ -88,9 +77,8 @@ def bench_movement_primitives(t, pose):
     quat_steps = [s for s in ("cython", "python") if s in CARTESIAN_DMP_STEP_FUNCTIONS]
     for step in steps:
         for quat_step in quat_steps:
-            roll = median_time(
-                lambda s=step, qs=quat_step: d.open_loop(step_function=s, quaternion_step_function=qs),
-                repeats=5,
+            roll, _ = timed(
+                lambda s=step, qs=quat_step: d.open_loop(step_function=s, quaternion_step_function=qs), 5
             )
             if best is None or roll < best[0]:
                 best = (roll, step, quat_step)

@@ -15,28 +15,17 @@ from __future__ import annotations
 
 import os
 import platform
-import statistics
 import sys
-import time
 import warnings
 
 import numpy as np
 
 import dmprs
+from _timing import timed
 from dmprs.demo import reaching_demo
 
 N_DOF, N_SAMPLES, N_BASIS, DT = 7, 1000, 50, 0.001
 REPEATS = 30
-
-
-def median_time(fn, repeats: int = REPEATS) -> float:
-    fn()  # warm up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def rms(t_demo, y_demo, t_roll, y_roll) -> float:
@@ -45,9 +34,9 @@ def rms(t_demo, y_demo, t_roll, y_roll) -> float:
 
 
 def bench_dmprs(t, y):
-    fit = median_time(lambda: dmprs.DMP.fit(t, y, N_BASIS))
+    fit, _ = timed(lambda: dmprs.DMP.fit(t, y, N_BASIS), REPEATS)
     dmp = dmprs.DMP.fit(t, y, N_BASIS)
-    roll = median_time(lambda: dmp.rollout(dt=DT))
+    roll, _ = timed(lambda: dmp.rollout(dt=DT), REPEATS)
     tr = dmp.rollout(dt=DT)
     return fit, roll / (tr.n_samples * N_DOF), rms(t, y, tr.t, tr.y)
 
@@ -60,7 +49,7 @@ def bench_movement_primitives(t, y):
         d.imitate(t, y)
         return d
 
-    fit = median_time(make)
+    fit, _ = timed(make, REPEATS)
     d = make()
     best = None
     for step in ("euler-cython", "rk4-cython", "euler"):
@@ -68,7 +57,7 @@ def bench_movement_primitives(t, y):
             d.open_loop(step_function=step)
         except Exception:  # noqa: BLE001, S112 - a step function this build lacks
             continue
-        roll = median_time(lambda: d.open_loop(step_function=step), repeats=10)
+        roll, _ = timed(lambda: d.open_loop(step_function=step), 10)
         if best is None or roll < best[0]:
             best = (roll, step)
     T, Y = d.open_loop(step_function=best[1])
@@ -85,9 +74,9 @@ def bench_pydmps(t, y):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fit = median_time(make, repeats=10)
+        fit, _ = timed(make, 10)
         d = make()
-        roll = median_time(lambda: (d.reset_state(), d.rollout()), repeats=5)
+        roll, _ = timed(lambda: (d.reset_state(), d.rollout()), 5)
         d.reset_state()
         Y, _, _ = d.rollout()
     T = np.arange(len(Y)) * DT
@@ -97,8 +86,8 @@ def bench_pydmps(t, y):
 def bench_batch(t, y, n=1000):
     base = dmprs.DMP.fit(t, y, N_BASIS)
     dmps = [base.with_goal(base.goal + 1e-4 * i) for i in range(n)]
-    loop = median_time(lambda: [d.rollout(dt=DT) for d in dmps], repeats=5)
-    batch = median_time(lambda: dmprs.rollout_batch(dmps, dt=DT), repeats=5)
+    loop, _ = timed(lambda: [d.rollout(dt=DT) for d in dmps], 5)
+    batch, _ = timed(lambda: dmprs.rollout_batch(dmps, dt=DT), 5)
     return loop, batch
 
 

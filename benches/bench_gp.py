@@ -20,7 +20,6 @@ import argparse
 import os
 import platform
 import statistics
-import time
 import timeit
 
 import numpy as np
@@ -29,6 +28,7 @@ from sklearn.gaussian_process.kernels import RBF, WhiteKernel
 from sklearn.gaussian_process.kernels import ConstantKernel as C
 
 import dmprs
+from _timing import timed
 
 N_RESTARTS = 4
 
@@ -50,15 +50,6 @@ def sklearn_model(X, y):
     return GaussianProcessRegressor(
         kernel, alpha=0.0, normalize_y=False, n_restarts_optimizer=N_RESTARTS, random_state=0
     )
-
-
-def timed(fn, repeats: int) -> tuple[float, object]:
-    times, out = [], None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
 
 
 def per_call(fn, repeats: int = 5) -> float:
@@ -92,8 +83,8 @@ def main() -> None:
             # Interleave so that load from other processes hits both alike.
             ours_t, theirs_t = [], []
             for _ in range(reps):
-                t_o, gp = timed(lambda: dmprs.GaussianProcess(n_restarts=N_RESTARTS).fit(X, y), 1)
-                t_s, sk = timed(lambda: sklearn_model(X, y).fit(X, yc), 1)
+                t_o, gp = timed(lambda: dmprs.GaussianProcess(n_restarts=N_RESTARTS).fit(X, y), 1, warm_up=False)
+                t_s, sk = timed(lambda: sklearn_model(X, y).fit(X, yc), 1, warm_up=False)
                 ours_t.append(t_o)
                 theirs_t.append(t_s)
             fit_o, fit_s = statistics.median(ours_t), statistics.median(theirs_t)

@@ -13,28 +13,16 @@ from __future__ import annotations
 
 import os
 import platform
-import statistics
-import time
 import warnings
-from typing import Any
 
 import numpy as np
 
 import dmprs
+from _timing import timed
 from dmprs.io.lasa import lasa_demos
 
 N_BASIS = 50
 REPEATS = 5
-
-
-def timed(fn, repeats: int = REPEATS) -> tuple[float, Any]:
-    out = fn()  # warm up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
 
 
 def rms_mm(traj, t_roll, y_roll) -> float:
@@ -47,8 +35,9 @@ def dt_of(traj) -> float:
 
 
 def bench_dmprs(demos):
-    fit, dmps = timed(lambda: [dmprs.DMP.fit(d.t, d.y, N_BASIS) for d in demos])
-    roll, outs = timed(lambda: [m.rollout(dt=dt_of(d), duration=d.duration) for m, d in zip(dmps, demos, strict=True)])
+    fit, dmps = timed(lambda: [dmprs.DMP.fit(d.t, d.y, N_BASIS) for d in demos], REPEATS)
+    roll, outs = timed(lambda: [m.rollout(dt=dt_of(d), duration=d.duration) for m, d in zip(dmps, demos, strict=True)],
+                       REPEATS)
     errors = [rms_mm(d, o.t, o.y) for d, o in zip(demos, outs, strict=True)]
     return fit, roll, errors, "Euler (Rust)"
 
@@ -65,8 +54,8 @@ def bench_movement_primitives(demos):
             out.append(m)
         return out
 
-    fit, dmps = timed(fit_all)
-    roll, outs = timed(lambda: [m.open_loop(step_function="euler-cython") for m in dmps])
+    fit, dmps = timed(fit_all, REPEATS)
+    roll, outs = timed(lambda: [m.open_loop(step_function="euler-cython") for m in dmps], REPEATS)
     errors = [rms_mm(d, np.asarray(T), np.asarray(Y)) for d, (T, Y) in zip(demos, outs, strict=True)]
     return fit, roll, errors, "euler-cython"
 

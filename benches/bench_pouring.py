@@ -18,22 +18,16 @@ import argparse
 import math
 import platform
 import statistics
-import time
 
 import numpy as np
 import pymunk
 
+from _timing import cpu
 from dmprs.sim import pouring_scene as scene
 from dmprs.tasks.pouring import PouringAdapter, calibrate_peak_tilt, demonstration_dmp, tilt_profile
 
 VOLUMES = (0.3, 0.5, 1.0)
 PEAK = math.radians(95.0)
-
-
-def cpu(fn):
-    t0 = time.process_time()
-    out = fn()
-    return time.process_time() - t0, out
 
 
 def trial_table(repeats: int) -> None:

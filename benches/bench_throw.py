@@ -20,37 +20,20 @@ from __future__ import annotations
 import argparse
 import platform
 import statistics
-import time
 
 import mujoco
-import numpy as np
 
+from _timing import cpu, servo_cpu
 from dmprs.experiments.arm_throwing import setup as arm_throwing_setup
 from dmprs.sim import throw_scene as ts
 
 TARGETS = ((1.05, 0.12), (0.85, -0.1), (1.27, -0.3))
 
 
-def cpu(fn):
-    t0 = time.process_time()
-    out = fn()
-    return time.process_time() - t0, out
-
-
 def physics_only(trajectory, n_steps: int) -> float:
     m = ts.model()
-    d = mujoco.MjData(m)
     qpos, qvel = ts.settled_ball()
-    d.qpos[:] = qpos
-    d.qvel[:] = qvel
-    mujoco.mj_forward(m, d)
-    times = np.arange(n_steps + 1) * 0.001
-    ref = np.stack([np.interp(times, trajectory.t, trajectory.y[:, j]) for j in range(7)], axis=1)
-    t0 = time.process_time()
-    for k in range(1, n_steps + 1):
-        d.ctrl[:] = ref[k]
-        mujoco.mj_step(m, d)
-    return time.process_time() - t0
+    return servo_cpu(m, qpos, qvel, trajectory, n_steps, 0.001)
 
 
 def main() -> None:

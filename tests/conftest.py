@@ -15,6 +15,16 @@ def demo() -> tuple[np.ndarray, np.ndarray]:
     return t, y
 
 
+@pytest.fixture
+def outside(tmp_path):
+    """An empty folder beside the ones a test writes to: links planted in those point here, and
+    it must stay empty (nothing written through a link).
+    """
+    folder = tmp_path / "outside"
+    folder.mkdir()
+    return folder
+
+
 def crash_after(run_dir, n_trials: int) -> None:
     """Leaves a run directory as a crash after ``n_trials`` finished trials would: their lines in
     trials.jsonl, and beyond them at most the next trial's arrays (written just before its line).

@@ -23,6 +23,7 @@ import dmprs
 from dmprs.learners import PI2, ErrorLearning, GoldenSection, IllinoisRootFinder, PolicyGradient, PoWER
 from tests.fuzz_io import IO_HANG_TIMEOUTS, IO_TARGETS
 from tests.fuzz_verdicts import AcceptedGarbage, UnclearMessage
+from tests.hostile import plant
 
 # Values a careless or hostile caller passes where a number is expected.
 _SPECIAL_FLOATS = [
@@ -297,31 +298,6 @@ def _snapshot(root: Path) -> dict[str, bytes | str]:
     return out
 
 
-def _plant(path: Path, kind: str, outside: Path, content: bytes = b"") -> None:
-    """Replaces ``path`` by a hostile entry of ``kind``."""
-    import os
-    import shutil
-
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path)
-    elif os.path.lexists(path):
-        path.unlink()
-    if kind == "fifo":
-        os.mkfifo(path)
-    elif kind == "zero":
-        path.symlink_to("/dev/zero")
-    elif kind == "dir":
-        path.mkdir()
-    elif kind == "link-outside":  # a link to a copy outside: reading it is fine, writing through it is not
-        target = outside / f"target-of-{path.name}"
-        target.write_bytes(content)
-        path.symlink_to(target)
-    elif kind == "dangling":
-        path.symlink_to(outside / f"created-through-{path.name}")
-    else:  # "bomb": these bytes
-        path.write_bytes(content)
-
-
 _JSON_BOMBS = {
     "deep": "[" * 100_000 + "]" * 100_000, "huge-int": "1" * 5000, "huge-float": "1e999", "bare-nan": "NaN",
     "list": "[1, 2, 3]", "string": '"manifest"', "empty": "", "binary": "\x00\xff\xfe",
@@ -403,7 +379,7 @@ def run_database_dir(a: dict[str, Any]) -> list[Any]:
                 orphans = _orphans(root, a["scale"])
                 continue
             if where == "foreign-manifest":
-                _plant(root / "manifest.json", "bomb", outside, b'{"project": "somebody else\'s"}')
+                plant(root / "manifest.json", "bomb", outside, b'{"project": "somebody else\'s"}')
                 continue
             if where == "demo":
                 demos = sorted(root.glob("demo_*.npz"))
@@ -414,7 +390,7 @@ def run_database_dir(a: dict[str, Any]) -> list[Any]:
                 target = root / where
             content = _regular_content(target) or b""
             bomb = _JSON_BOMBS.get(kind)
-            _plant(target, kind if bomb is None else "bomb", outside, content if bomb is None else bomb.encode())
+            plant(target, kind if bomb is None else "bomb", outside, content if bomb is None else bomb.encode())
         manifest = root / "manifest.json"
         if os.path.lexists(manifest) and not _is_dmprs_manifest(_regular_content(manifest)):
             foreign_manifest = _regular_content(manifest) or b"(not a regular file)"
@@ -555,7 +531,7 @@ def run_run_log(a: dict[str, Any]) -> list[Any]:
             else:
                 content = target.read_bytes()
                 bomb = {"garbage-bytes": "\x00garbage\xff", **_JSON_BOMBS}.get(how)
-                _plant(target, how if bomb is None else "bomb", outside, content if bomb is None else bomb.encode())
+                plant(target, how if bomb is None else "bomb", outside, content if bomb is None else bomb.encode())
         elif kind in ("trial", "meta"):
             name = "trials.jsonl" if kind == "trial" else "run.json"
             path = run_dir / name

@@ -170,13 +170,21 @@ def test_every_adapter_in_the_repo_conforms(tmp_path, make):
     assert "execute returns the declared signals" in check_adapter(adapter, valid)
 
 
-def test_replay_adapter_conforms(tmp_path):
-    rec = RecordingAdapter(AnalyticAdapter(), tmp_path)
+def _record_two_trials(folder, *then):
+    """Records two trials of ``bump(1.0)`` from seed 0 into ``folder``, then executes the
+    trajectories ``then`` without a reset.
+    """
+    rec = RecordingAdapter(AnalyticAdapter(), folder)
     with rec:
         for _ in range(2):
             rec.reset(seed=0)
             rec.execute(bump(1.0))
-        rec.execute(bump(99.0))
+        for trajectory in then:
+            rec.execute(trajectory)
+
+
+def test_replay_adapter_conforms(tmp_path):
+    _record_two_trials(tmp_path, bump(99.0))
     replay = ReplayAdapter(tmp_path, spec=AnalyticAdapter().spec)
     check_adapter(replay, bump(1.0))
 
@@ -288,11 +296,7 @@ def test_replay_of_a_damaged_recording_is_an_error_outcome_not_a_hang(tmp_path):
     import json
     import os
 
-    rec = RecordingAdapter(AnalyticAdapter(), tmp_path)
-    with rec:
-        for _ in range(2):
-            rec.reset(seed=0)
-            rec.execute(bump(1.0))
+    _record_two_trials(tmp_path)
     (tmp_path / "trial_0000.npz").unlink()
     os.mkfifo(tmp_path / "trial_0000.npz")
     lines = (tmp_path / "recording.jsonl").read_text().splitlines()

@@ -6,6 +6,7 @@ from click.testing import CliRunner
 import dmprs
 from dmprs.cli import main
 from dmprs.runlog import RunLog
+from tests.hostile import plant
 
 
 def run(*args):
@@ -173,29 +174,15 @@ def test_resume_and_plot_name_the_file_and_trial_of_a_damaged_record(tmp_path, f
 
 @pytest.mark.parametrize("damage", ["fifo", "zero", "deep", "huge", "list", "dir"])
 def test_resume_and_plot_refuse_a_damaged_file_at_once(tmp_path, damage):
-    import os
-
     run_dir = _unfinished_run(tmp_path)
+    text = {"deep": "[" * 10**5 + "]" * 10**5, "huge": '{"trial": 1' + "0" * 400 + "}", "list": "[1, 2]"}
     for name in ("trials.jsonl", "run.json"):
         target = run_dir / name
         saved = target.read_bytes()
-        target.unlink()
-        if damage == "fifo":
-            os.mkfifo(target)
-        elif damage == "zero":
-            target.symlink_to("/dev/zero")
-        elif damage == "dir":
-            target.mkdir()
-        else:
-            target.write_text({"deep": "[" * 10**5 + "]" * 10**5, "huge": '{"trial": 1' + "0" * 400 + "}",
-                               "list": "[1, 2]"}[damage] + "\n")
+        plant(target, damage, tmp_path, (text.get(damage, "") + "\n").encode())
         for command in ("resume", "plot"):
             _single_line_error(run(command, run_dir), str(target))
-        if target.is_dir():
-            target.rmdir()
-        else:
-            target.unlink()
-        target.write_bytes(saved)
+        plant(target, "saved", tmp_path, saved)
 
 
 def test_plot_refuses_damaged_labels_and_desired_query(tmp_path):
@@ -208,20 +195,17 @@ def test_plot_refuses_damaged_labels_and_desired_query(tmp_path):
         _single_line_error(run("plot", run_dir), str(run_dir / "run.json"), repr(field))
 
 
-def test_plot_into_a_folder_replaces_a_link_instead_of_following_it(tmp_path):
+def test_plot_into_a_folder_replaces_a_link_instead_of_following_it(tmp_path, outside):
     run_dir = _unfinished_run(tmp_path)
-    folder, outside = tmp_path / "figs", tmp_path / "outside"
+    folder = tmp_path / "figs"
     folder.mkdir()
-    outside.mkdir()
     (folder / "learning.png").symlink_to(outside / "written-through-a-link.png")
     assert run("plot", run_dir, "--out", folder).exit_code == 0
     assert list(outside.iterdir()) == [] and not (folder / "learning.png").is_symlink()
     assert (folder / "learning.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def test_a_run_log_never_writes_through_a_link(tmp_path):
-    outside = tmp_path / "outside"
-    outside.mkdir()
+def test_a_run_log_never_writes_through_a_link(tmp_path, outside):
     run_dir = tmp_path / "run"
     run_dir.mkdir()
     (run_dir / "trials.jsonl").symlink_to(outside / "trials.jsonl")

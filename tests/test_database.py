@@ -350,9 +350,7 @@ def test_a_crafted_manifest_or_header_is_a_database_error(tmp_path):
 
 # --- the directory: links, devices, FIFOs, foreign files, orphans ---------------------------------
 
-def test_a_save_never_follows_a_lock_file_link_and_leaves_nothing(tmp_path):
-    outside = tmp_path / "outside"
-    outside.mkdir()
+def test_a_save_never_follows_a_lock_file_link_and_leaves_nothing(tmp_path, outside):
     path = tmp_path / "db"
     _two_demo_db().save(path)
     (path / ".dmprs.lock").unlink()
@@ -364,9 +362,7 @@ def test_a_save_never_follows_a_lock_file_link_and_leaves_nothing(tmp_path):
     assert_same(_two_demo_db(), dmprs.Database.load(path))  # a reader ignores the link
 
 
-def test_demo_files_and_manifest_links_are_replaced_not_followed(tmp_path):
-    outside = tmp_path / "outside"
-    outside.mkdir()
+def test_demo_files_and_manifest_links_are_replaced_not_followed(tmp_path, outside):
     (outside / "theirs.json").write_text('{"format": "dmprs.Database"}')
     path = tmp_path / "db"
     db = _two_demo_db()

@@ -136,9 +136,7 @@ def test_garbage_is_a_clear_error():
         load_npz(b"PK\x03\x04garbage", "g.npz", limit=100)
 
 
-def test_no_write_follows_a_link(tmp_path):
-    outside = tmp_path / "outside"
-    outside.mkdir()
+def test_no_write_follows_a_link(tmp_path, outside):
     inside = tmp_path / "db"
     inside.mkdir()
     (inside / ".dmprs.lock").symlink_to(outside / "created-by-a-lock")

@@ -44,25 +44,36 @@ def test_every_query_learner_converges_on_the_analytic_task(name):
     assert result.converged, (name, [t.eps for t in result.trials])
 
 
+class _Passing:
+    """A learner that passes every call to ``inner``; a test overrides ``tell`` to watch what
+    the learn loop tells.
+    """
+
+    converged = False
+    done = property(lambda self: self.inner.done)
+    status_detail = property(lambda self: self.inner.status_detail)
+
+    def __init__(self, inner):
+        self.inner = inner
+
+    def ask(self):
+        return self.inner.ask()
+
+    def tell(self, q, eps):
+        self.inner.tell(q, eps)
+
+
 def test_each_trial_is_on_disk_before_the_learner_sees_it(tmp_path):
     s = setup()
-    inner = s.make_learner("error")
     log_path = tmp_path / "trials.jsonl"
 
-    class Watching:
-        converged = False
-        done = property(lambda self: inner.done)
-        status_detail = property(lambda self: inner.status_detail)
-
-        def ask(self):
-            return inner.ask()
-
+    class Watching(_Passing):
         def tell(self, q, eps):
             lines = log_path.read_text().splitlines()
             assert json.loads(lines[-1])["query"] == list(np.atleast_1d(q))
-            inner.tell(q, eps)
+            super().tell(q, eps)
 
-    result = learn(s.task, s.generalizer, s.desired_query, Watching(), log_dir=tmp_path)
+    result = learn(s.task, s.generalizer, s.desired_query, Watching(s.make_learner("error")), log_dir=tmp_path)
     assert len(log_path.read_text().splitlines()) == len(result.trials)
 
 
@@ -71,25 +82,17 @@ def test_a_crash_loses_no_finished_trial_and_resume_continues_identically(tmp_pa
     reference = learn(s.task, s.generalizer, s.desired_query, s.make_learner("error"), max_trials=20)
     assert reference.n_trials >= 3
 
-    inner = s.make_learner("error")
-
-    class Crashing:
-        converged = False
-        done = property(lambda self: inner.done)
-        status_detail = property(lambda self: inner.status_detail)
+    class Crashing(_Passing):
         told = 0
-
-        def ask(self):
-            return inner.ask()
 
         def tell(self, q, eps):
             self.told += 1
             if self.told == 2:
                 raise KeyboardInterrupt
-            inner.tell(q, eps)
+            super().tell(q, eps)
 
     with pytest.raises(KeyboardInterrupt):
-        learn(s.task, s.generalizer, s.desired_query, Crashing(), log_dir=tmp_path)
+        learn(s.task, s.generalizer, s.desired_query, Crashing(s.make_learner("error")), log_dir=tmp_path)
     trials, cut = RunLog(tmp_path).read()
     assert len(trials) == 2 and cut is None
 
@@ -168,20 +171,12 @@ def test_an_adapter_that_fails_mid_trial_stops_the_run_cleanly(tmp_path, fault, 
 def test_a_non_ok_outcome_never_reaches_the_learner():
     s = setup()
     s.task.adapter._execute = lambda trajectory: Outcome(Status.ABORTED, message="safety stop")
-    inner = s.make_learner("error")
 
-    class Strict:
-        converged = False
-        done = property(lambda self: inner.done)
-        status_detail = property(lambda self: inner.status_detail)
-
-        def ask(self):
-            return inner.ask()
-
+    class Strict(_Passing):
         def tell(self, q, eps):
             raise AssertionError("tell must not be called")
 
-    result = learn(s.task, s.generalizer, s.desired_query, Strict())
+    result = learn(s.task, s.generalizer, s.desired_query, Strict(s.make_learner("error")))
     assert result.trials[0].status == "aborted" and result.n_trials == 0
 
 

@@ -10,9 +10,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
-from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs._arrays import as_count, as_float_array
 from dmprs.errors import InvalidInputError
-from dmprs.primitive import Primitive, constants, rollout_options
+from dmprs.primitive import Parameters, Primitive, constants, rollout_options
 from dmprs.stepper import CartesianStepper
 from dmprs.trajectory import CartesianTrajectory
 
@@ -56,30 +56,19 @@ class CartesianDMP(Primitive):
     """
 
     __slots__ = ()
+    _CORE = _core.CartesianDmp
     _core: _core.CartesianDmp
     _DICT_TYPE = "dmprs.CartesianDMP"
 
-    def __init__(
-        self,
-        weights: ArrayLike,
-        goal: ArrayLike,
-        start: ArrayLike,
-        tau: float,
-        *,
-        alpha_z: float = 48.0,
-        beta_z: float | None = None,
-        alpha_x: float = 2.0,
-        width_factor: float = 2.0,
-    ) -> None:
+    @staticmethod
+    def _parameters(weights: ArrayLike, goal: ArrayLike, start: ArrayLike) -> Parameters:
         w = as_float_array(weights, "weights", 2)
         if w.shape[0] != 6:
             raise InvalidInputError(
                 f"weights has shape {w.shape}, expected (6, N): x, y, z, then 3 orientation rows"
             )
         as_count(w.shape[1], "n_basis (columns of weights)", 2)
-        core = _core.CartesianDmp(w, _pose(goal, "goal"), _pose(start, "start"), as_scalar(tau, "tau", positive=True),
-                                  constants(alpha_z, beta_z, alpha_x, width_factor))
-        object.__setattr__(self, "_core", core)
+        return w, _pose(goal, "goal"), _pose(start, "start")
 
     @classmethod
     def fit(

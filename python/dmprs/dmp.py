@@ -10,9 +10,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
-from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs._arrays import as_count, as_float_array
 from dmprs.errors import InvalidInputError
-from dmprs.primitive import Primitive, constants, rollout_options
+from dmprs.primitive import Parameters, Primitive, constants, rollout_options
 from dmprs.stepper import JointStepper
 from dmprs.trajectory import Trajectory
 
@@ -44,21 +44,12 @@ class DMP(Primitive):
     """
 
     __slots__ = ()
+    _CORE = _core.Dmp
     _core: _core.Dmp
     _DICT_TYPE = "dmprs.DMP"
 
-    def __init__(
-        self,
-        weights: ArrayLike,
-        goal: ArrayLike,
-        start: ArrayLike,
-        tau: float,
-        *,
-        alpha_z: float = 48.0,
-        beta_z: float | None = None,
-        alpha_x: float = 2.0,
-        width_factor: float = 2.0,
-    ) -> None:
+    @staticmethod
+    def _parameters(weights: ArrayLike, goal: ArrayLike, start: ArrayLike) -> Parameters:
         w = as_float_array(weights, "weights", (1, 2))
         w = w.reshape(1, -1) if w.ndim == 1 else w
         g = np.atleast_1d(as_float_array(goal, "goal", (0, 1)))
@@ -68,9 +59,7 @@ class DMP(Primitive):
                 f"weights has {w.shape[0]} rows (DOFs) but goal has {g.shape[0]} entries"
             )
         as_count(w.shape[1], "n_basis (columns of weights)", 2)
-        core = _core.Dmp(w, g, s, as_scalar(tau, "tau", positive=True),
-                         constants(alpha_z, beta_z, alpha_x, width_factor))
-        object.__setattr__(self, "_core", core)
+        return w, g, s
 
     @classmethod
     def fit(

@@ -11,13 +11,16 @@ from collections.abc import Mapping
 from typing import Any, ClassVar, Self
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs._arrays import as_flag, as_scalar, short
 from dmprs.errors import InvalidInputError
 
 __all__ = ["Primitive", "constants", "rollout_options"]
+
+#: A primitive's weights, goal and start, validated as its core takes them.
+Parameters = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
 
 #: The constants' names, in the order of the dict form and of the core's argument.
 CONSTANTS = ("alpha_z", "beta_z", "alpha_x", "width_factor")
@@ -61,9 +64,33 @@ class Primitive:
     """
 
     __slots__ = ("_core",)
+    #: the core's class the constructor builds
+    _CORE: ClassVar[type[_core.Dmp | _core.CartesianDmp]]
     _core: _core.Dmp | _core.CartesianDmp
     #: the ``type`` of the dict form
     _DICT_TYPE: ClassVar[str]
+
+    def __init__(
+        self,
+        weights: ArrayLike,
+        goal: ArrayLike,
+        start: ArrayLike,
+        tau: float,
+        *,
+        alpha_z: float = 48.0,
+        beta_z: float | None = None,
+        alpha_x: float = 2.0,
+        width_factor: float = 2.0,
+    ) -> None:
+        w, g, s = self._parameters(weights, goal, start)
+        core = self._CORE(w, g, s, as_scalar(tau, "tau", positive=True),
+                          constants(alpha_z, beta_z, alpha_x, width_factor))
+        object.__setattr__(self, "_core", core)
+
+    @staticmethod
+    def _parameters(weights: ArrayLike, goal: ArrayLike, start: ArrayLike) -> Parameters:
+        """The weights, goal and start validated as the subclass's core takes them."""
+        raise NotImplementedError
 
     @classmethod
     def _wrap(cls, core: Any) -> Self:
@@ -181,7 +208,7 @@ class Primitive:
             raise InvalidInputError(f"{kind} dict has unknown keys {', '.join(map(short, unknown))}")
         if fields["beta_z"] is None:
             raise InvalidInputError(f"{kind} dict has beta_z = None; to_dict() always writes a number")
-        return cls(fields["weights"], fields["goal"], fields["start"], fields["tau"],  # type: ignore[call-arg]
+        return cls(fields["weights"], fields["goal"], fields["start"], fields["tau"],
                    **{name: fields[name] for name in CONSTANTS})
 
     def __reduce__(self) -> tuple[Any, ...]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,8 +16,64 @@ from dmprs.errors import InvalidInputError
 _JOINT_FIELDS = ("t", "y", "yd", "ydd")
 
 
+class _Samples:
+    """What a joint-space and a pose trajectory share, read from the fields the subclass
+    declares (``_FIELDS``, ``t`` first): the sample count, the duration, the dict of arrays,
+    equality and freezing the validated arrays.
+    """
+
+    _FIELDS: ClassVar[tuple[str, ...]]
+    t: NDArray[np.float64]
+
+    def _freeze(self, fields: dict[str, NDArray[np.float64] | None]) -> None:
+        """Stores read-only copies of the validated ``fields``."""
+        for name, value in fields.items():
+            owned = None if value is None else value.copy()  # never alias the caller's array
+            if owned is not None:
+                owned.setflags(write=False)
+            object.__setattr__(self, name, owned)
+
+    @property
+    def n_samples(self) -> int:
+        """The number of samples T."""
+        return int(self.t.shape[0])
+
+    @property
+    def duration(self) -> float:
+        """``t[-1] - t[0]`` (s)."""
+        return float(self.t[-1] - self.t[0])
+
+    def __len__(self) -> int:
+        return self.n_samples
+
+    def _known(self) -> list[str]:
+        """The fields that hold an array, in declaration order."""
+        return [name for name in self._FIELDS if getattr(self, name) is not None]
+
+    def to_arrays(self, prefix: str = "") -> dict[str, NDArray[np.float64]]:
+        """Its arrays by field name (``t``, the positions and the known derivatives), each name
+        prefixed: what the database, the run logs and the recordings store (:func:`from_arrays`
+        reads it).
+        """
+        return {f"{prefix}{name}": getattr(self, name) for name in self._known()}
+
+    def __eq__(self, other: object) -> bool:
+        # a joint-space and a pose trajectory never compare equal (NotImplemented both ways)
+        if not isinstance(other, _Samples) or other._FIELDS != self._FIELDS:
+            return NotImplemented
+        for name in self._FIELDS:
+            a, b = getattr(self, name), getattr(other, name)
+            if (a is None) != (b is None):
+                return False
+            if a is not None and (a.shape != b.shape or not np.array_equal(a, b)):
+                return False
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+
 @dataclass(frozen=True, eq=False)
-class Trajectory:
+class Trajectory(_Samples):
     """Positions ``y`` (T, D) at times ``t`` (T,), with velocities ``yd`` and accelerations
     ``ydd`` (T, D) when known. SI units; arrays are read-only float64.
 
@@ -29,6 +85,7 @@ class Trajectory:
     y: NDArray[np.float64]
     yd: NDArray[np.float64] | None = None
     ydd: NDArray[np.float64] | None = None
+    _FIELDS = _JOINT_FIELDS
 
     def __post_init__(self) -> None:
         t = as_float_array(self.t, "t", 1)
@@ -53,11 +110,7 @@ class Trajectory:
                 raise InvalidInputError(f"{name} has shape {arr.shape}, expected {y.shape} like y")
             check_finite(arr, name)
             fields[name] = arr
-        for name, value in fields.items():
-            frozen = None if value is None else value.copy()  # never alias the caller's array
-            if frozen is not None:
-                frozen.setflags(write=False)
-            object.__setattr__(self, name, frozen)
+        self._freeze(fields)
 
     @classmethod
     def _trusted(cls, t: Any, y: Any, yd: Any, ydd: Any) -> Trajectory:
@@ -70,47 +123,14 @@ class Trajectory:
         return self
 
     @property
-    def n_samples(self) -> int:
-        """The number of samples T."""
-        return int(self.t.shape[0])
-
-    @property
     def n_dof(self) -> int:
         """The number of degrees of freedom D."""
         return int(self.y.shape[1])
 
-    @property
-    def duration(self) -> float:
-        """``t[-1] - t[0]`` (s)."""
-        return float(self.t[-1] - self.t[0])
-
-    def __len__(self) -> int:
-        return self.n_samples
-
-    def to_arrays(self, prefix: str = "") -> dict[str, NDArray[np.float64]]:
-        """Its arrays by field name (``t``, ``y`` and the known derivatives), each name prefixed:
-        what the database, the run logs and the recordings store (:func:`from_arrays` reads it).
-        """
-        return {f"{prefix}{name}": getattr(self, name) for name in _JOINT_FIELDS if getattr(self, name) is not None}
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, Trajectory):
-            return NotImplemented
-        return all(
-            (a is None and b is None)
-            or (a is not None and b is not None and a.shape == b.shape and bool(np.array_equal(a, b)))
-            for a, b in (
-                (self.t, other.t), (self.y, other.y), (self.yd, other.yd), (self.ydd, other.ydd)
-            )
-        )
-
-    __hash__ = None  # type: ignore[assignment]
-
     def __repr__(self) -> str:
-        parts = ["y"] + [n for n in ("yd", "ydd") if getattr(self, n) is not None]
         return (
             f"Trajectory(n_samples={self.n_samples}, n_dof={self.n_dof}, "
-            f"duration={self.duration:.6g} s, fields={'+'.join(['t', *parts])})"
+            f"duration={self.duration:.6g} s, fields={'+'.join(self._known())})"
         )
 
 
@@ -120,7 +140,7 @@ _CARTESIAN_FIELDS = (
 
 
 @dataclass(frozen=True, eq=False)
-class CartesianTrajectory:
+class CartesianTrajectory(_Samples):
     """A pose trajectory at times ``t`` (T,): ``position`` (T, 3) in m and ``quaternion`` (T, 4),
     scalar first ``(w, x, y, z)`` and unit norm, with the linear ``velocity``, ``acceleration``
     and the world-frame ``angular_velocity``, ``angular_acceleration`` (T, 3) when known. SI
@@ -139,6 +159,7 @@ class CartesianTrajectory:
     angular_velocity: NDArray[np.float64] | None = None
     acceleration: NDArray[np.float64] | None = None
     angular_acceleration: NDArray[np.float64] | None = None
+    _FIELDS = _CARTESIAN_FIELDS
 
     def __post_init__(self) -> None:
         t = as_float_array(self.t, "t", 1)
@@ -160,11 +181,7 @@ class CartesianTrajectory:
         quaternion = fields["quaternion"]
         assert quaternion is not None
         quaternion_.check_unit(quaternion, "quaternion")
-        for name, value in fields.items():
-            owned = None if value is None else value.copy()  # never alias the caller's array
-            if owned is not None:
-                owned.setflags(write=False)
-            object.__setattr__(self, name, owned)
+        self._freeze(fields)
 
     @classmethod
     def from_pose(
@@ -217,48 +234,14 @@ class CartesianTrajectory:
         return out
 
     @property
-    def n_samples(self) -> int:
-        """The number of samples T."""
-        return int(self.t.shape[0])
-
-    @property
     def n_dof(self) -> int:
         """6: three translations and three rotations."""
         return 6
 
-    @property
-    def duration(self) -> float:
-        """``t[-1] - t[0]`` (s)."""
-        return float(self.t[-1] - self.t[0])
-
-    def __len__(self) -> int:
-        return self.n_samples
-
-    def to_arrays(self, prefix: str = "") -> dict[str, NDArray[np.float64]]:
-        """Its arrays by field name (``t``, ``position``, ``quaternion`` and the known
-        derivatives), each name prefixed (see :meth:`Trajectory.to_arrays`).
-        """
-        return {f"{prefix}{name}": getattr(self, name) for name in _CARTESIAN_FIELDS
-                if getattr(self, name) is not None}
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, CartesianTrajectory):
-            return NotImplemented
-        for name in _CARTESIAN_FIELDS:
-            a, b = getattr(self, name), getattr(other, name)
-            if (a is None) != (b is None):
-                return False
-            if a is not None and (a.shape != b.shape or not np.array_equal(a, b)):
-                return False
-        return True
-
-    __hash__ = None  # type: ignore[assignment]
-
     def __repr__(self) -> str:
-        parts = [n for n in _CARTESIAN_FIELDS[1:] if getattr(self, n) is not None]
         return (
             f"CartesianTrajectory(n_samples={self.n_samples}, duration={self.duration:.6g} s, "
-            f"fields={'+'.join(['t', *parts])})"
+            f"fields={'+'.join(self._known())})"
         )
 
 

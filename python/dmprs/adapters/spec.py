@@ -129,15 +129,7 @@ class AdapterSpec:
                 problems.append(f"{name}[{j}, {d}] ({self.dof_names[d]}) is not finite")
         if problems:
             return problems
-        if self.max_duration is not None and trajectory.duration > self.max_duration + 1e-12:
-            problems.append(f"duration {trajectory.duration:.4g} s exceeds the limit {self.max_duration:.4g} s")
-        yd = trajectory.yd if trajectory.yd is not None else _derivative(t, y)
-        ydd = trajectory.ydd if trajectory.ydd is not None else _derivative(t, yd)
-        self._check_bounds(problems, t, "position", y, self.position_min, self.position_max)
-        if self.velocity_max is not None:
-            self._check_bounds(problems, t, "velocity", np.abs(yd), None, self.velocity_max)
-        if self.acceleration_max is not None:
-            self._check_bounds(problems, t, "acceleration", np.abs(ydd), None, self.acceleration_max)
+        self._check_motion(problems, trajectory.duration, t, y, trajectory.yd, trajectory.ydd)
         if self.start_pose is not None:
             off = np.abs(y[0] - np.asarray(self.start_pose))
             for d in np.flatnonzero(off > self.start_tolerance):
@@ -182,16 +174,7 @@ class AdapterSpec:
         if problems:
             return problems
         t = tr.t
-        if self.max_duration is not None and tr.duration > self.max_duration + 1e-12:
-            problems.append(f"duration {tr.duration:.4g} s exceeds the limit {self.max_duration:.4g} s")
-        p = tr.position
-        v = tr.velocity if tr.velocity is not None else _derivative(t, p)
-        a = tr.acceleration if tr.acceleration is not None else _derivative(t, v)
-        self._check_bounds(problems, t, "position", p, self.position_min, self.position_max)
-        if self.velocity_max is not None:
-            self._check_bounds(problems, t, "velocity", np.abs(v), None, self.velocity_max)
-        if self.acceleration_max is not None:
-            self._check_bounds(problems, t, "acceleration", np.abs(a), None, self.acceleration_max)
+        self._check_motion(problems, tr.duration, t, tr.position, tr.velocity, tr.acceleration)
         w = tr.angular_velocity if tr.angular_velocity is not None else _angular_velocity(t, tr.quaternion)
         for what, values, limit, unit in (
             ("angular velocity", w, self.angular_velocity_max, "rad/s"),
@@ -208,6 +191,20 @@ class AdapterSpec:
         if self.start_pose is not None:
             problems += start_problems(tr, self.start_pose, self.start_tolerance)
         return problems
+
+    def _check_motion(self, problems, duration, t, y, yd, ydd) -> None:
+        """The duration, position, velocity and acceleration limits, for joints and for the
+        position of a pose alike; a derivative not measured is taken by finite differences.
+        """
+        if self.max_duration is not None and duration > self.max_duration + 1e-12:
+            problems.append(f"duration {duration:.4g} s exceeds the limit {self.max_duration:.4g} s")
+        yd = yd if yd is not None else _derivative(t, y)
+        ydd = ydd if ydd is not None else _derivative(t, yd)
+        self._check_bounds(problems, t, "position", y, self.position_min, self.position_max)
+        if self.velocity_max is not None:
+            self._check_bounds(problems, t, "velocity", np.abs(yd), None, self.velocity_max)
+        if self.acceleration_max is not None:
+            self._check_bounds(problems, t, "acceleration", np.abs(ydd), None, self.acceleration_max)
 
     def _check_bounds(self, problems, t, what, values, low, high) -> None:
         for bound, sign in ((low, -1.0), (high, 1.0)):
