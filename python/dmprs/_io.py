@@ -15,8 +15,10 @@ it) or an append of one complete line followed by flush and fsync, opened with `
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import json
+import math
 import os
 import re
 import stat
@@ -204,6 +206,29 @@ def read_json(path: str | os.PathLike[str], *, what: str = "JSON file", error: E
 
 
 _NPY_HEADERS = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+#: numpy's own bound on an npy header (read_array_header's max_header_size)
+_NPY_HEADER_MAX = 10_000
+
+
+@functools.lru_cache(maxsize=256)
+def _npy_header(version: tuple[int, int], raw: bytes) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
+    """numpy's parse of one npy header (its length field and text). Cached: numpy evaluates the
+    header as a Python literal, which costs more than reading a small array, and the arrays of a
+    database share a handful of headers.
+    """
+    shape, fortran, dtype = _NPY_HEADERS[version](io.BytesIO(raw))
+    return shape, fortran, dtype
+
+
+def _read_npy_header(f: IO[bytes], version: tuple[int, int]) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
+    length_size = 2 if version == (1, 0) else 4
+    prefix = f.read(length_size)
+    if len(prefix) < length_size:
+        raise EOFError("the npy header is cut short")
+    length = int.from_bytes(prefix, "little")
+    if length > _NPY_HEADER_MAX:
+        raise ValueError(f"the npy header claims {length} bytes, more than numpy's {_NPY_HEADER_MAX}")
+    return _npy_header(version, prefix + f.read(length))
 
 
 def load_npz(source: str | os.PathLike[str] | bytes, where: str, *, limit: int,
@@ -227,16 +252,16 @@ def load_npz(source: str | os.PathLike[str] | bytes, where: str, *, limit: int,
                     version = np.lib.format.read_magic(f)
                     if version not in _NPY_HEADERS:  # 3.0 only adds UTF-8 field names: never numbers
                         raise error(f"{where}: array {name!r} has npy format version {version}")
-                    shape, fortran, dtype = _NPY_HEADERS[version](f)
+                    shape, fortran, dtype = _read_npy_header(f, version)
                     if dtype.hasobject or dtype.kind not in kinds:
                         raise error(f"{where}: array {name!r} has dtype {dtype}; expected numbers")
-                    nbytes = int(np.prod(shape, dtype=object)) * dtype.itemsize
+                    nbytes = math.prod(shape) * dtype.itemsize
                     total += nbytes
                     if nbytes > info.file_size or total > limit:
                         raise error(f"{where}: array {name!r} claims {nbytes} bytes of data, more than "
                                     f"{'its file holds' if nbytes > info.file_size else f'the {limit} allowed'}")
                     arr = np.frombuffer(f.read(nbytes), dtype=dtype)
-                    if arr.size != int(np.prod(shape, dtype=object)):
+                    if arr.size != math.prod(shape):
                         raise error(f"{where}: array {name!r} is truncated")
                     out[name] = arr.reshape(shape, order="F" if fortran else "C").copy()
     except DmprsError:
@@ -304,7 +329,7 @@ def inflate_bounded(source: IO[bytes] | bytes, codec: str, *, limit: int, where:
 # --- writing ------------------------------------------------------------------------------------
 
 
-def _fsync_dir(path: Path) -> None:
+def fsync_dir(path: Path) -> None:
     """Makes a rename durable; not possible (nor needed) on every platform."""
     try:
         fd = os.open(path, os.O_RDONLY)
@@ -377,8 +402,12 @@ def directory_lock(directory: Path, *, shared: bool) -> Iterator[None]:
         os.close(fd)  # releases the lock
 
 
-def write_atomic(path: Path, data: bytes) -> None:
-    """Writes ``data`` to ``path`` so that readers see the old file or the new one, never a mix."""
+def write_atomic(path: Path, data: bytes, *, sync_dir: bool = True) -> None:
+    """Writes ``data`` to ``path`` so that readers see the old file or the new one, never a mix.
+
+    With ``sync_dir=False`` the directory entry is not fsync'ed: a caller writing many files
+    calls :func:`fsync_dir` once after the last.
+    """
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
@@ -393,7 +422,8 @@ def write_atomic(path: Path, data: bytes) -> None:
         except FileNotFoundError:
             pass
         raise
-    _fsync_dir(path.parent)
+    if sync_dir:
+        fsync_dir(path.parent)
 
 
 def write_npz_atomic(path: Path, arrays: Mapping[str, Any]) -> bytes:
