@@ -15,6 +15,12 @@ demo files are named by their content, so they never overwrite the files of the 
 the manifest is replaced last, atomically, and only then are files no manifest refers to removed.
 A crash at any point leaves either the old or the new database, both loadable.
 
+A save is append-only: a database remembers the directory it last saved to or loaded from (the
+manifest's inode, size and modification time, and the files it listed). When the directory is
+still as it left it, a save writes only the demos added since and the manifest; otherwise every
+demo file is checked against its sha256 and rewritten if it is not whole. Demo files are made
+durable together (each fsync'ed, the directory once) before the manifest is replaced.
+
 A save refuses a directory that holds files dmprs did not write (a non-empty directory without a
 dmprs manifest, or with a ``manifest.json`` that is not one), before it writes anything there. It
 writes no file through a link. The next save removes what an interrupted one left behind, but only
@@ -38,6 +44,7 @@ import os
 import re
 import stat
 from collections.abc import Iterator, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -52,6 +59,7 @@ from dmprs._io import (
     MiB,
     atomic_temp_target,
     directory_lock,
+    fsync_dir,
     load_npz,
     read_bytes,
     read_json,
@@ -72,6 +80,7 @@ _POSE_SCHEMA = 2
 _FORMAT = "dmprs.Database"
 _MANIFEST = "manifest.json"
 _DEMO_FILE = re.compile(r"^demo_[0-9a-f]{16}\.npz$")
+_DIGEST_NAME = "demo_{}.npz"
 #: The largest manifest and demo file a database may hold (a link to a device, or a huge file,
 #: is refused before anything is read).
 MANIFEST_MAX_BYTES = JSON_MAX_BYTES
@@ -90,6 +99,101 @@ class Demo:
     trajectory: Trajectory | CartesianTrajectory
     label: str | None = None
     metadata: Mapping[str, Any] = field(default_factory=dict)
+    # its manifest entry, made at its first save or load (see _entry_of)
+    _entry: _Entry | None = field(default=None, init=False, repr=False, compare=False)
+
+
+@dataclass(frozen=True)
+class _Entry:
+    """A demo's manifest entry: its file (named by its content, which never changes: the query
+    is read-only and the trajectory frozen), the metadata the entry was written from, and the
+    entry as the manifest's JSON line.
+    """
+
+    file: str
+    sha256: str
+    metadata: Any
+    line: str
+
+
+def _entry(file: str, sha256: str, label: str | None, metadata: Mapping[str, Any]) -> _Entry:
+    line = json.dumps({"file": file, "sha256": sha256, "label": label, "metadata": dict(metadata)},
+                      allow_nan=False)
+    return _Entry(file, sha256, json.loads(line)["metadata"], line)  # a deep copy, as JSON holds it
+
+
+def _entry_of(demo: Demo) -> tuple[_Entry, bytes | None]:
+    """The demo's manifest entry and, when it had none, its file's bytes (computed for the
+    digest). Metadata changed since the entry was made gives a new entry for the same file.
+    """
+    known = demo._entry
+    if known is not None and known.metadata == demo.metadata:
+        return known, None
+    data = None
+    if known is None:
+        data = _npz_bytes(demo)
+        digest = hashlib.sha256(data).hexdigest()
+        file = _DIGEST_NAME.format(digest[:16])
+    else:
+        file, digest = known.file, known.sha256
+    made = _entry(file, digest, demo.label, demo.metadata)
+    object.__setattr__(demo, "_entry", made)
+    return made, data
+
+
+FileIdentity = tuple[int, int, int]
+
+
+@dataclass(frozen=True)
+class _Synced:
+    """A directory as a database last saved or loaded it: the identities of the manifest, of
+    the directory and of each demo file the manifest lists. While the manifest is unchanged, a
+    file that is still a regular file of that identity is whole (it was verified or written by
+    this database, and only a save replaces the manifest); while the directory is unchanged too,
+    no file in it was created, removed or renamed, and nothing needs looking at.
+    """
+
+    root: Path
+    manifest: tuple[int, int, int, int]
+    directory: tuple[int, int, int]
+    files: Mapping[str, FileIdentity]
+
+
+def _directory_identity(root: Path) -> tuple[int, int, int]:
+    st = os.stat(root)
+    return (st.st_ino, st.st_mtime_ns, st.st_ctime_ns)
+
+
+def _identity(path: Path) -> FileIdentity:
+    st = os.lstat(path)
+    return (st.st_ino, st.st_size, st.st_mtime_ns)
+
+
+def _file_identities(root: Path) -> dict[str, FileIdentity]:
+    """The identity (inode, size, modification time) of each regular file in ``root``: a file
+    rewritten, truncated or swapped for another changes it (a freed inode may be reused at
+    once, so the inode alone is not enough).
+    """
+    out = {}
+    with os.scandir(root) as entries:
+        for e in entries:
+            if e.is_file(follow_symlinks=False):
+                st = e.stat(follow_symlinks=False)
+                out[e.name] = (st.st_ino, st.st_size, st.st_mtime_ns)
+    return out
+
+
+def _manifest_identity(root: Path) -> tuple[int, int, int, int] | None:
+    try:
+        st = os.lstat(root / _MANIFEST)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+
+
+def _query_key(q: NDArray[np.float64]) -> tuple[float, ...]:
+    """A query as a dict key; equal exactly when ``np.array_equal`` says so (0.0 == -0.0)."""
+    return tuple(q.tolist())
 
 
 def _query_tuple(value: Any, name: str) -> tuple[str, ...]:
@@ -129,6 +233,11 @@ class Database:
         self._names = names
         self._units = units
         self._demos: list[Demo] = []
+        # how many demos hold each query: add's duplicate check without a scan of every demo
+        self._query_count: dict[tuple[float, ...], int] = {}
+        self._queries: NDArray[np.float64] | None = None  # cached for queries and nearest
+        self._tree: Any = None  # scipy's cKDTree over the queries, built on the first nearest
+        self._synced: _Synced | None = None
 
     @property
     def query_names(self) -> tuple[str, ...]:
@@ -201,7 +310,9 @@ class Database:
                 f"the trajectory has {trajectory.n_dof} DOFs, but the demonstrations in this "
                 f"database have {self.n_dof}"
             )
-        same = [k for k, d in enumerate(self._demos) if np.array_equal(d.query, q)]
+        key = _query_key(q)
+        same = ([k for k, d in enumerate(self._demos) if np.array_equal(d.query, q)]
+                if self._query_count.get(key) else [])
         if same and on_duplicate == "refuse":
             raise InvalidInputError(
                 f"demonstration {same[0]} already has the query {q.tolist()}; pass "
@@ -220,8 +331,11 @@ class Database:
             self._demos[same[0]] = demo
             for k in reversed(same[1:]):
                 del self._demos[k]
+            self._query_count[key] = 1
         else:
             self._demos.append(demo)
+            self._query_count[key] = self._query_count.get(key, 0) + 1
+        self._queries = self._tree = None
         return demo
 
     def __len__(self) -> int:
@@ -236,7 +350,13 @@ class Database:
     @property
     def queries(self) -> NDArray[np.float64]:
         """All queries, (M, n)."""
-        return np.array([d.query for d in self._demos], dtype=np.float64).reshape(len(self), self.n_query)
+        return self._query_array().copy()
+
+    def _query_array(self) -> NDArray[np.float64]:
+        if self._queries is None:
+            queries = np.array([d.query for d in self._demos], dtype=np.float64)
+            self._queries = queries.reshape(len(self), self.n_query)
+        return self._queries
 
     def nearest(self, query: ArrayLike, k: int = 2) -> Database:
         """A new database with the ``k`` demonstrations whose queries are nearest ``query``
@@ -248,9 +368,26 @@ class Database:
         k = as_count(k, "k", 1)
         if k > len(self):
             raise InvalidInputError(f"k = {k} but the database has {len(self)} demonstrations")
-        order = np.argsort(np.linalg.norm(self.queries - q, axis=1), kind="stable")[:k]
+        queries = self._query_array()
+        if self._tree is None:
+            # scipy.spatial loads on the first nearest, not with import dmprs (a tenth of a second)
+            from scipy.spatial import cKDTree
+
+            self._tree = cKDTree(queries)
+        # The tree finds the k-th distance; every demo within it (a hair more, for the tree's own
+        # rounding) is then ranked exactly as a full stable sort would: by the same norm, ties in
+        # database order.
+        reach, _ = self._tree.query(q, k=[k])
+        candidates = np.sort(np.asarray(self._tree.query_ball_point(q, float(reach[0]) * (1 + 1e-9) + 1e-300),
+                                        dtype=np.intp))
+        distance = np.linalg.norm(queries[candidates] - q, axis=1)
+        order = candidates[np.argsort(distance, kind="stable")[:k]]
         out = Database(self._names, self._units)
-        out._demos = [self._demos[i] for i in sorted(order)]
+        for i in sorted(order):
+            demo = self._demos[i]
+            out._demos.append(demo)
+            key = _query_key(demo.query)
+            out._query_count[key] = out._query_count.get(key, 0) + 1
         return out
 
     def __repr__(self) -> str:
@@ -268,41 +405,76 @@ class Database:
             root.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise DatabaseError(f"cannot create the database directory {root}: {exc}") from None
+        synced, self._synced = self._synced, None  # a failed save trusts nothing next time
         try:
-            _refuse_foreign(root)  # before the lock file: a refused save writes nothing
+            mine = synced if synced is not None and synced.root == root.resolve() else None
+            if mine is None or _manifest_identity(root) != mine.manifest:
+                mine = None
+                _refuse_foreign(root)  # before the lock file: a refused save writes nothing
             with directory_lock(root, shared=False):
-                _refuse_foreign(root)  # again: another process may have written meanwhile
-                self._save_locked(root)
+                if mine is not None and _manifest_identity(root) != mine.manifest:
+                    mine = None  # another process saved meanwhile
+                if mine is None:
+                    _refuse_foreign(root)
+                self._synced = self._save_locked(root, mine)
         except OSError as exc:
             raise DatabaseError(f"{root}: cannot save the database ({exc.strerror or exc})") from None
 
-    def _save_locked(self, root: Path) -> None:
-        entries = []
-        for demo in self._demos:
-            data = _npz_bytes(demo)
-            digest = hashlib.sha256(data).hexdigest()
-            name = f"demo_{digest[:16]}.npz"
-            if not _is_own_demo(root / name, digest):
-                _atomic_write(root / name, data)
-            entries.append({"file": name, "sha256": digest, "label": demo.label, "metadata": dict(demo.metadata)})
-        manifest = {
+    def _save_locked(self, root: Path, mine: _Synced | None) -> _Synced:
+        """Writes the demo files not known whole and the manifest; ``mine``: the directory as
+        this database last left it, if its manifest is still the one written then.
+        """
+        untouched = mine is not None and _directory_identity(root) == mine.directory
+        present = _file_identities(root) if mine is not None and not untouched else {}
+        files: dict[str, FileIdentity] = {}
+        lines: list[str] = []
+        pending: dict[str, bytes] = {}
+        written: list[str] = []
+        listed = mine.files if mine is not None else {}
+        with ThreadPoolExecutor(_WRITERS) as pool:
+            for demo in self._demos:  # per demo, the common case costs a few lookups: keep it so
+                entry, data = demo._entry, None
+                if entry is None or entry.metadata != demo.metadata:
+                    entry, data = _entry_of(demo)
+                name = entry.file
+                lines.append(entry.line)
+                if name in files or name in pending:
+                    continue
+                known = listed.get(name)
+                if known is not None and (untouched or present.get(name) == known):
+                    files[name] = known
+                elif _is_own_demo(root / name, entry.sha256):
+                    files[name] = _identity(root / name)
+                else:
+                    pending[name] = _npz_bytes(demo) if data is None else data
+                    if len(pending) >= _WRITE_BATCH:
+                        written += _write_all(pool, root, pending)
+            written += _write_all(pool, root, pending)
+        if written:
+            fsync_dir(root)  # the new demo files' names are durable before the manifest names them
+        files.update((name, _identity(root / name)) for name in written)
+        header = {
             "format": _FORMAT,
             "schema_version": _POSE_SCHEMA if self.is_cartesian else 1,
             "query_names": list(self._names),
             "query_units": list(self._units),
-            "demos": entries,
         }
-        text = json.dumps(manifest, indent=2, allow_nan=False) + "\n"
-        _atomic_write(root / _MANIFEST, text.encode("utf-8"))
+        _atomic_write(root / _MANIFEST, _manifest_text(header, lines).encode("utf-8"))
         # The new manifest is durable: the demo files it does not list can go, and so can the
         # temporary files of an interrupted earlier save (the lock says no save is running). Only
         # files that are provably ours: content-named demo files whose content matches their name
-        # (a file merely named like one may be the user's), and our own temporary files.
-        keep = {e["file"] for e in entries}
-        for name in regular_files(root):
-            if name not in keep and _DEMO_FILE.match(name):
-                remove_if(root / name, functools.partial(_named_by_content, name), limit=DEMO_MAX_BYTES)
-        remove_stale_temp_files(root, _is_own_file_name)
+        # (a file merely named like one may be the user's), and our own temporary files. In a
+        # directory untouched since this database's last save, those are the files it dropped.
+        dropped = sorted(set(mine.files) - set(files)) if untouched and mine is not None else [
+            name for name in regular_files(root) if name not in files and _DEMO_FILE.match(name)]
+        for name in dropped:
+            remove_if(root / name, functools.partial(_named_by_content, name), limit=DEMO_MAX_BYTES)
+        if not untouched:
+            remove_stale_temp_files(root, _is_own_file_name)
+        manifest = _manifest_identity(root)
+        if manifest is None:
+            raise DatabaseError(f"{root / _MANIFEST}: gone right after it was written")
+        return _Synced(root.resolve(), manifest, _directory_identity(root), files)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Database:
@@ -313,7 +485,15 @@ class Database:
         if not root.is_dir():
             raise DatabaseError(f"{root / _MANIFEST}: cannot read the manifest (no directory {root})")
         with directory_lock(root, shared=True):
-            return cls._load_locked(root)
+            manifest = _manifest_identity(root)
+            db = cls._load_locked(root)
+            directory = _directory_identity(root)
+            identities = _file_identities(root)
+        if manifest is not None:  # every listed file was just verified against its sha256
+            listed = {d._entry.file for d in db._demos if d._entry is not None}
+            db._synced = _Synced(root.resolve(), manifest, directory,
+                                 {name: identities[name] for name in listed if name in identities})
+        return db
 
     @classmethod
     def _load_locked(cls, root: Path) -> Database:
@@ -337,11 +517,40 @@ class Database:
         for k, entry in enumerate(entries):
             demo = _read_demo(root, mpath, k, entry, db.n_query)
             try:
-                db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata,
-                       on_duplicate="keep")  # as saved
+                added = db.add(demo.query, demo.trajectory, label=demo.label, metadata=demo.metadata,
+                               on_duplicate="keep")  # as saved
             except DmprsError as exc:
                 raise DatabaseError(f"{root / entry['file']}: {exc}") from None
+            # verified by _read_demo: a save of this database need not read the file again
+            object.__setattr__(added, "_entry", _entry(entry["file"], entry["sha256"], added.label, added.metadata))
         return db
+
+
+#: Demo files are written by this many threads: each fsync waits for the disk, and concurrent
+#: ones share a journal commit; at most _WRITE_BATCH files' bytes are held at a time.
+_WRITERS = 8
+_WRITE_BATCH = 256
+
+
+def _write_all(pool: ThreadPoolExecutor, root: Path, pending: dict[str, bytes]) -> list[str]:
+    """Writes the files ``pending`` (name to bytes) into ``root`` on the pool's threads, waits
+    for all (raising the first failure), empties ``pending``; the names written.
+    """
+    writes = [pool.submit(_atomic_write, root / name, data, sync_dir=False) for name, data in pending.items()]
+    for w in writes:
+        w.result()
+    names = list(pending)
+    pending.clear()
+    return names
+
+
+def _manifest_text(header: dict[str, Any], lines: list[str]) -> str:
+    """The manifest's JSON: the header indented, then one demo entry per line (readable, and
+    each line made once per demo, by json's C encoder).
+    """
+    head = json.dumps(header, indent=2, allow_nan=False).removesuffix("\n}")
+    demos = "\n    " + ",\n    ".join(lines) + "\n  " if lines else ""
+    return f'{head},\n  "demos": [{demos}]\n}}\n'
 
 
 def _npz_bytes(demo: Demo) -> bytes:
@@ -419,10 +628,10 @@ def _refuse_foreign(root: Path) -> None:
         )
 
 
-def _atomic_write(target: Path, data: bytes) -> None:
+def _atomic_write(target: Path, data: bytes, *, sync_dir: bool = True) -> None:
     """Readers see the old file or the new one, never a partial one (:func:`dmprs._io.write_atomic`)."""
     try:
-        write_atomic(target, data)
+        write_atomic(target, data, sync_dir=sync_dir)
     except OSError as exc:
         raise DatabaseError(f"{target}: cannot write ({exc.strerror or exc})") from None
 
