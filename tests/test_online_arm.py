@@ -99,3 +99,9 @@ def test_velocity_limit_is_kept_on_the_same_path(limited) -> None:
     # which the free run has as well
     assert limited.deviation(slow) < 1e-6
     assert limited.deviation(slow, measured=True) <= 1.5 * max(limited.deviation(free, measured=True), 1e-3)
+
+
+def test_throw_through_the_stepper_is_deterministic(basket) -> None:
+    again = oa.moving_basket_throw()
+    assert np.array_equal(again.updated.landing, basket.updated.landing)
+    assert np.array_equal(again.updated.run.q, basket.updated.run.q)
