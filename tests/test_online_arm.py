@@ -105,3 +105,17 @@ def test_throw_through_the_stepper_is_deterministic(basket) -> None:
     again = oa.moving_basket_throw()
     assert np.array_equal(again.updated.landing, basket.updated.landing)
     assert np.array_equal(again.updated.run.q, basket.updated.run.q)
+
+
+def test_reproduction_part_reports_every_scenario(tmp_path) -> None:
+    from dmprs.reproduce.online import PART
+    from dmprs.reproduce.run import dispatch
+
+    results = [dispatch(spec) for spec in PART.plan(True)]
+    rows = PART.summarize(results)
+    assert [r["scenario"] for r in rows] == ["held-pour", "held-pour", "moving-basket", "velocity-limit"]
+    # the truths: phase stopping's pour within the tolerance, the moved basket hit, the limit kept
+    assert [r["met"] for r in rows if r["scenario"] != "held-pour"] == [True, True]
+    assert rows[0]["met"]
+    assert "| held-pour |" in PART.markdown(results)
+    assert PART.figure(results, tmp_path).read_bytes()[:4] == b"\x89PNG"
