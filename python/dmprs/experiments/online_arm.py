@@ -39,8 +39,8 @@ from dmprs.trajectory import Trajectory
 _FEEDFORWARD = np.asarray(am.KV) / np.asarray(am.KP)
 #: kernels of the joint DMPs (the pour's 4.2 s, as the pouring experiment's N = 40)
 N_BASIS = 40
-#: the pour: a 0.3 l bottle (150 spheres) tilted to the calibrated peak of docs/arm.md (pours
-#: about 0.2 l), held still for HOLD s from HOLD_START s
+#: the pour: a 0.3 l bottle (150 spheres) tilted to its calibrated peak for 0.2 l (docs/arm.md,
+#: "The experiment"), held still for HOLD s from HOLD_START s (mid-tilt)
 POUR_VOLUME = 0.3
 POUR_PEAK_TILT = 2.388
 HOLD_START = 1.2
@@ -48,7 +48,7 @@ HOLD = 0.5
 #: the hold's constraint: a 2 ms time constant (twice the step, the stiffest MuJoCo recommends, as
 #: the contacts' arm_model.SOLREF_TIME) and an impedance near 1, so the servo's torque cannot drag it
 _HOLD_SOFTNESS = f'solref="{am.SOLREF_TIME:g} 1" solimp="0.99 0.999 0.001"'
-#: s the arm holds still after the stepper is done, before the spheres are counted (the adapter's)
+#: s the arm holds still after the movement's end, before the spheres are counted (the adapter's)
 POUR_SETTLE = 0.5
 #: the throw: from the basket BASKET to BASKET + BASKET_MOVE (m), moved MOVE_TIME s after the start
 BASKET = (1.0, 0.0)
@@ -58,10 +58,10 @@ MOVE_TIME = 0.3
 #: peak speed is LIMIT_EXCESS times the iiwa's limit of each
 FAST_MOVE = (0.8, 0.0, 0.0, 0.0, 0.0, 0.0, 1.5)
 LIMIT_EXCESS = 1.5
-#: the stepper's velocity_max as a fraction of the limit: the servo follows a command at the
-#: limit with a measured overshoot of a few 1e-4 (docs/arm.md), which this margin absorbs
+#: the stepper's velocity_max as a fraction of the limit: the servo overshoots a command at the
+#: limit slightly (docs/arm.md, "A stepper in the servo loop"), which this margin absorbs
 SPEED_MARGIN = 0.99
-#: s: the longest any run may last (a stepper that never comes to rest is an error)
+#: s: the longest any run may last (a movement that never ends is an error)
 MAX_TIME = 12.0
 
 
