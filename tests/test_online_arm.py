@@ -107,11 +107,14 @@ def test_throw_through_the_stepper_is_deterministic(basket) -> None:
     assert np.array_equal(again.updated.run.q, basket.updated.run.q)
 
 
-def test_reproduction_part_reports_every_scenario(tmp_path) -> None:
+def test_reproduction_part_reports_every_scenario(tmp_path, pours) -> None:
     from dmprs.reproduce.online import PART
     from dmprs.reproduce.run import dispatch
 
     results = [dispatch(spec) for spec in PART.plan(True)]
+    # the same pour a second time (the liquid's seed 0) gives the same numbers
+    assert results[0]["poured_ml"] == 1000 * pours[0].poured_volume
+    assert results[0]["tracking_error"] == pours[0].run.tracking_error
     rows = PART.summarize(results)
     assert [r["scenario"] for r in rows] == ["held-pour", "held-pour", "moving-basket", "velocity-limit"]
     # the truths: phase stopping's pour within the tolerance, the moved basket hit, the limit kept
