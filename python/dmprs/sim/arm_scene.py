@@ -118,6 +118,25 @@ _SETTLED: dict[tuple[int, int, tuple[str, int, int]], SettledLiquid] = {}
 _SETTLED_KEPT = 8
 
 
+def liquid_xml(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER, am.ITERATIONS, am.CONDIM),
+               ) -> str:
+    """The MJCF string of the scene with ``n`` spheres (of ``seed``) spawned in the upright bottle
+    at the home configuration: the model :func:`settled_liquid` settles, for a caller that adds
+    to it (its state then fits the settled one).
+    """
+    import mujoco
+
+    kinematic = am.load()
+    kd = mujoco.MjData(kinematic)
+    kd.qpos[:7] = home_configuration()
+    mujoco.mj_kinematics(kinematic, kd)
+    pos, mat = _bottle_frame(kinematic, kd)
+    world = pos + granular.spawn_sites(n, seed) @ mat.T
+    name, iterations, condim = solver
+    return am.scene_xml(world, particle_radii=granular.radii(n, seed), solver=name, iterations=iterations,
+                        condim=condim)
+
+
 def settled_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER, am.ITERATIONS, am.CONDIM),
                    ) -> SettledLiquid:
     """``n`` spheres spawned in the bottle at the home configuration and settled for
@@ -141,16 +160,7 @@ def settle_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLV
         _SETTLED[key] = _SETTLED.pop(key)  # most recently used
         return _SETTLED[key]
     q_home = home_configuration()
-    kinematic = am.load()
-    kd = mujoco.MjData(kinematic)
-    kd.qpos[:7] = q_home
-    mujoco.mj_kinematics(kinematic, kd)
-    pos, mat = _bottle_frame(kinematic, kd)
-    local = granular.spawn_sites(n, seed)
-    world = pos + local @ mat.T
-    name, iterations, condim = solver
-    model = am.load(world, particle_radii=granular.radii(n, seed), solver=name, iterations=iterations,
-                    condim=condim)
+    model = mujoco.MjModel.from_xml_string(liquid_xml(n, seed, solver))
     data = mujoco.MjData(model)
     data.qpos[:7] = q_home
     data.ctrl[:] = q_home
