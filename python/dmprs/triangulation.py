@@ -40,6 +40,9 @@ __all__ = ["PiecewiseLinear"]
 #: tau(q) must lie strictly inside (TAU_LOW x the shortest, TAU_HIGH x the longest demo's tau),
 #: as in the core (docs/method.md §3.3)
 TAU_LOW, TAU_HIGH = 0.2, 5.0
+#: From this many simplices on, a query inside the hull is located (scipy's find_simplex) and
+#: only the simplices around the one found are compared; below, comparing all costs no more.
+LOCAL_SEARCH_FROM = 256
 
 
 def _flatten(dmp: DMP) -> NDArray[np.float64]:
@@ -93,6 +96,12 @@ class PiecewiseLinear:
             raise InvalidInputError(f"the demonstration queries cannot be triangulated: {exc}") from None
         self._simplices = tri.simplices
         self._transform = tri.transform
+        self._tri = tri
+        # The simplices around each node (its star), grouped by node: star[ptr[v]:ptr[v + 1]].
+        incidence = tri.simplices.ravel()
+        order = np.argsort(incidence, kind="stable")
+        self._star = order // (n + 1)
+        self._star_ptr = np.searchsorted(incidence[order], np.arange(len(nodes) + 1))
 
     def _check_rank(self, delta: NDArray[np.float64], rank: int) -> None:
         s = np.linalg.svd(delta, compute_uv=False)
@@ -116,13 +125,29 @@ class PiecewiseLinear:
             return np.arange(len(nodes)), np.concatenate([[1.0 - b.sum()], b])
         assert self._transform is not None and self._simplices is not None
         n = nodes.shape[1]
-        t = self._transform
+        candidates = self._around(q)
+        t = self._transform if candidates is None else self._transform[candidates]
         b = np.einsum("sij,sj->si", t[:, :n, :], q - t[:, n, :])
         bary = np.concatenate([b, 1.0 - b.sum(axis=1, keepdims=True)], axis=1)
         # Inside the hull this picks a simplex containing q (smallest coordinate >= 0); outside,
-        # the one q is least outside of (the stated extrapolation rule).
+        # the one q is least outside of (the stated extrapolation rule). Ties go to the lowest
+        # simplex index either way.
         s = int(np.argmax(bary.min(axis=1)))
-        return self._simplices[s], bary[s]
+        return self._simplices[s if candidates is None else candidates[s]], bary[s]
+
+    def _around(self, q: NDArray[np.float64]) -> NDArray[np.intp] | None:
+        """The simplices that can win the comparison for a q inside the hull, in index order, or
+        None to compare all (few simplices, or q outside the hull). Any simplex whose smallest
+        coordinate at q is not clearly negative contains q up to rounding, so it shares a node
+        with the simplex scipy finds: the stars of that simplex's nodes hold them all.
+        """
+        if self._simplices is None or len(self._simplices) < LOCAL_SEARCH_FROM:
+            return None
+        found = int(self._tri.find_simplex(q))
+        if found < 0:
+            return None
+        star, ptr = self._star, self._star_ptr
+        return np.unique(np.concatenate([star[ptr[v]:ptr[v + 1]] for v in self._simplices[found]]))
 
     def _check_query(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         names = tuple(f"q[{d}]" for d in range(self.n_query))
