@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 import dmprs
 from dmprs import _core
 from dmprs.errors import ExtrapolationError, InvalidInputError
+from dmprs.generalize import MAX_GP_DEMOS
 
 
 def min_jerk(s):
@@ -324,3 +325,15 @@ def test_a_bad_demo_is_named():
             kernel="tricube", bandwidth=1.5, ridge=1e-8, interpolate=True, gp_noise=1e-3,
             gp_optimize=None, gp_restarts=0,
         )
+
+
+def test_lwr_gp_refuses_more_demos_than_its_gps_can_take():
+    t = np.linspace(0.0, 1.0, 10)
+    db = dmprs.Database(("a", "b"))
+    for k in range(MAX_GP_DEMOS + 1):
+        db.add([k % 40, k // 40], dmprs.Trajectory(t, np.outer(t, [1.0 + k % 7])))
+    with pytest.raises(InvalidInputError, match=rf"'lwr-gp' over {MAX_GP_DEMOS + 1} demonstrations is refused.*"
+                                                r"'linear'.*db\.nearest\(q, k\)"):
+        dmprs.Generalizer(db, "lwr-gp")
+    local = dmprs.Generalizer(db.nearest([3.0, 4.0], 12), "lwr-gp", n_basis=5)  # the local route
+    assert local.n_demos == 12

@@ -21,6 +21,9 @@ from dmprs.triangulation import PiecewiseLinear
 
 __all__ = ["Generalizer"]
 
+#: The most demonstrations "lwr-gp" takes: its GPs' build grows with the cube of their number
+#: (docs/growing.md measures it).
+MAX_GP_DEMOS = 1000
 _METHODS = ("linear", "lwr-gp")
 _KERNELS = ("tricube", "gaussian")
 _TRENDS = ("constant", "affine")
@@ -124,6 +127,14 @@ class Generalizer:
         if len(db) < 2:
             raise InvalidInputError(
                 f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
+            )
+        if method == "lwr-gp" and len(db) > MAX_GP_DEMOS:
+            raise InvalidInputError(
+                f"method 'lwr-gp' over {len(db)} demonstrations is refused: its Gaussian processes "
+                f"cost the cube of the number of demos per hyperparameter step, and beyond "
+                f"{MAX_GP_DEMOS} the build takes many minutes to days. Use method 'linear' (any number "
+                "of demos), or 'lwr-gp' over the demos near the query: Generalizer(db.nearest(q, k), "
+                "'lwr-gp') with k in the hundreds"
             )
         if method == "lwr-gp" and len(np.unique(db.queries, axis=0)) < len(db):
             raise InvalidInputError(
