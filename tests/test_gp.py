@@ -146,3 +146,10 @@ def test_fits_do_not_depend_on_the_thread_count():
         for threads in ("1", "2")
     }
     assert runs["1"] == runs["2"] != ""
+
+
+@pytest.mark.parametrize("option", ["length_scale", "length_scale_bounds"])
+def test_a_length_scale_whose_square_underflows_is_refused(option):
+    value = 5e-324 if option == "length_scale" else [[5e-324, 1.0]]
+    with pytest.raises(InvalidInputError, match=rf"{option} = 4.94066e-324 is too short"):
+        dmprs.GaussianProcess(**{option: value})

@@ -86,14 +86,15 @@ class GaussianProcess:
     ) -> None:
         self._length_scale = (
             None if length_scale is None
-            else np.atleast_1d(as_float_array(length_scale, "length_scale", (0, 1)))
+            else _length_scales(as_float_array(length_scale, "length_scale", (0, 1)), "length_scale")
         )
         self._signal_var = None if signal_var is None else as_scalar(signal_var, "signal_var", positive=True)
         self._noise_var = None if noise_var is None else as_scalar(noise_var, "noise_var", positive=True)
         self._n_restarts = as_count(n_restarts, "n_restarts", 0)
         self._length_scale_bounds = (
             None if length_scale_bounds is None
-            else np.atleast_2d(as_float_array(length_scale_bounds, "length_scale_bounds", (1, 2)))
+            else np.atleast_2d(_length_scales(as_float_array(length_scale_bounds, "length_scale_bounds", (1, 2)),
+                                              "length_scale_bounds"))
         )
         self._signal_var_bounds = _bounds_pair(signal_var_bounds, "signal_var_bounds")
         self._noise_var_bounds = _bounds_pair(noise_var_bounds, "noise_var_bounds")
@@ -192,3 +193,20 @@ class GaussianProcess:
             f"GaussianProcess(n_train={c.n_train}, length_scale={np.array2string(c.length_scale, precision=4)}, "
             f"signal_var={c.signal_var:.4g}, noise_var={c.noise_var:.4g})"
         )
+
+
+#: The shortest length scale: the kernel divides by its square, which must be a normal float
+#: (below, it underflows to zero or loses its digits, and the kernel turns into 0 / 0).
+MIN_LENGTH_SCALE = 1e-150
+
+
+def _length_scales(values: NDArray[np.float64], name: str) -> NDArray[np.float64]:
+    """``values`` as at least 1-D, refused where finite but shorter than MIN_LENGTH_SCALE (the
+    core refuses what is not positive and finite, naming it).
+    """
+    short = np.isfinite(values) & (values > 0) & (values < MIN_LENGTH_SCALE)
+    if short.any():
+        raise InvalidInputError(
+            f"{name} = {values[short].flat[0]:g} is too short: length scales must be at least "
+            f"{MIN_LENGTH_SCALE:g} (the kernel divides by their square)")
+    return np.atleast_1d(values)
