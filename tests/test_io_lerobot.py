@@ -163,3 +163,12 @@ def test_files_that_are_not_parquet_or_not_regular_are_refused(tmp_path, monkeyp
     with pytest.raises(InvalidInputError, match=r"file-000\.parquet: its footer declares 112 rows and \d+ bytes; "
                                                 r"a LeRobot data file may have at most 100 rows"):
         read_lerobot(root)
+
+
+def test_a_directory_named_like_a_data_file_is_refused_not_skipped(tmp_path):
+    root = write_v2(tmp_path / "ds")
+    data = root / "data" / "chunk-000" / "episode_000002.parquet"
+    data.unlink()
+    data.mkdir()
+    with pytest.raises(InvalidInputError, match=r"episode_000002\.parquet: is a directory"):
+        read_lerobot(root, "observation.state")

@@ -104,6 +104,11 @@ def _files(directory: Path) -> list[Path]:
     out = []
     for d, dirs, names in os.walk(directory, followlinks=False):
         dirs.sort()
+        # a directory (or a link to one) named like a data file would otherwise be skipped, and its
+        # episodes silently missing from the import
+        posing = [n for n in dirs if n.endswith(".parquet")]
+        if posing:
+            raise InvalidInputError(f"{Path(d) / posing[0]}: is a directory; a parquet file must be a regular file")
         out += [Path(d) / n for n in names if n.endswith(".parquet")]
     return sorted(out)
 
