@@ -123,12 +123,10 @@ def _entry(file: str, sha256: str, label: str | None, metadata: Mapping[str, Any
 
 
 def _entry_of(demo: Demo) -> tuple[_Entry, bytes | None]:
-    """The demo's manifest entry and, when it had none, its file's bytes (computed for the
-    digest). Metadata changed since the entry was made gives a new entry for the same file.
+    """A new manifest entry for a demo whose entry is missing or whose metadata changed since it
+    was made (the same file then), and the file's bytes when they were computed for the digest.
     """
     known = demo._entry
-    if known is not None and known.metadata == demo.metadata:
-        return known, None
     data = None
     if known is None:
         data = _npz_bytes(demo)
