@@ -1,5 +1,10 @@
+import itertools
+import os
+
 import numpy as np
 import pytest
+
+from dmprs.ros2 import LOOPBACK_CONFIG, MAX_DOMAIN_ID
 
 
 def min_jerk(s: np.ndarray) -> np.ndarray:
@@ -43,3 +48,15 @@ def calibration_cache(tmp_path_factory):
     arm's takes about 90 s of MuJoCo): the tests that pour share it instead of each calibrating.
     """
     return str(tmp_path_factory.mktemp("calibration-cache"))
+
+
+_domains = itertools.count()
+
+
+@pytest.fixture
+def domain_id(monkeypatch: pytest.MonkeyPatch, tmp_path) -> int:
+    """A ROS 2 domain of its own for each test (from the pid and a counter), Cyclone on loopback only."""
+    config = tmp_path / "cyclonedds.xml"
+    config.write_text(LOOPBACK_CONFIG)
+    monkeypatch.setenv("CYCLONEDDS_URI", config.as_uri())
+    return (os.getpid() * 7 + next(_domains)) % (MAX_DOMAIN_ID + 1)

@@ -4,8 +4,6 @@
 
 from __future__ import annotations
 
-import itertools
-import os
 import threading
 import time
 
@@ -16,8 +14,6 @@ from dmprs._core import RobotNode
 from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import (
     CLOCK,
-    LOOPBACK_CONFIG,
-    MAX_DOMAIN_ID,
     ActionClient,
     JointStateRecorder,
     Node,
@@ -31,18 +27,6 @@ CONTROLLER = "joint_trajectory_controller"
 ACTION = f"/{CONTROLLER}/follow_joint_trajectory"
 FJT = "control_msgs/action/FollowJointTrajectory"
 WAIT = 5.0  # seconds; discovery on loopback takes well under one
-
-_domains = itertools.count()
-
-
-@pytest.fixture
-def domain_id(monkeypatch: pytest.MonkeyPatch, tmp_path) -> int:
-    """A domain of its own for each test (from the pid and a counter), Cyclone on loopback only."""
-    config = tmp_path / "cyclonedds.xml"
-    config.write_text(LOOPBACK_CONFIG)
-    monkeypatch.setenv("CYCLONEDDS_URI", config.as_uri())
-    return (os.getpid() * 7 + next(_domains)) % (MAX_DOMAIN_ID + 1)
-
 
 @pytest.fixture
 def robot(domain_id: int):

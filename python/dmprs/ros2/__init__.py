@@ -2,11 +2,14 @@
 
 A `Node` joins a ROS 2 domain; it publishes and subscribes to topics with ROS 2's names and QoS
 profiles, calls services and drives actions (`ActionClient`) in rmw_cyclonedds's wire format;
-`JointStateRecorder` records `/joint_states` by joint name. Message classes are generated from
+`JointStateRecorder` records `/joint_states` by joint name; `Ros2TrajectoryAdapter` is a dmprs
+adapter for a robot's `joint_trajectory_controller`, its outcome signals read from topics
+(`SignalTopic`). Message classes are generated from
 ROS's own definitions in `dmprs.ros2.messages`. Needs the `ros2` extra (cyclonedds, rosbags).
 """
 
 from dmprs.ros2.action import STATUS_NAMES, ActionClient, GoalHandle
+from dmprs.ros2.adapter import Ros2TrajectoryAdapter, SignalTopic, signal_specs
 from dmprs.ros2.node import LOOPBACK_CONFIG, MAX_DOMAIN_ID, Node, Publisher, Subscription, stamp_seconds
 from dmprs.ros2.qos import ACTION_STATUS, CLOCK, DEFAULT, SENSOR_DATA, SERVICES, QosProfile
 from dmprs.ros2.recorder import JointRecording, JointStateRecorder
@@ -28,8 +31,11 @@ __all__ = [
     "Node",
     "Publisher",
     "QosProfile",
+    "Ros2TrajectoryAdapter",
     "ServiceClient",
     "ServiceServer",
+    "SignalTopic",
     "Subscription",
+    "signal_specs",
     "stamp_seconds",
 ]
