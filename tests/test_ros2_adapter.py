@@ -95,7 +95,8 @@ class Controller(threading.Thread):
                     self.clock += 0.05
                     self.robot.publish_signal(SCALE.topic, float(self.q.sum()), time.time())
                     self.robot.publish_signal(CAMERA.topic, [float(self.q[0]), 0.0, 0.0], self.clock)
-            self.robot.publish_joint_state(self.clock, self.q)
+            if not (self.ending == "silent" and self.goals):
+                self.robot.publish_joint_state(self.clock, self.q)
             time.sleep(1 / RATE)
 
     def wait_for_cancel(self, timeout: float = 5.0) -> None:
@@ -186,6 +187,15 @@ def test_a_robot_that_never_finishes_is_a_timeout_and_the_goal_is_canceled(robot
     assert took < 1.0 + 5.0 + 0.5  # the deadline, and one answer_timeout for the cancel at most
     assert controller.canceled == [controller.goals[0].id]
     assert out.executed is not None  # what the robot did until then
+
+
+def test_a_robot_that_falls_silent_mid_goal_is_an_error_within_the_answer_timeout(robot, domain_id):
+    with Controller(robot, "silent"), adapter(domain_id, signals=()) as a:
+        a.answer_timeout = 0.5
+        start = time.monotonic()
+        out = a.execute(move(), timeout_s=30.0)
+    assert out.status is Status.ERROR and "no /joint_states for" in out.message
+    assert time.monotonic() - start < 5.0
 
 
 def test_stop_cancels_the_running_goal(robot, domain_id):

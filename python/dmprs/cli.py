@@ -9,6 +9,7 @@ from typing import Any
 import click
 
 from dmprs import demo, experiments
+from dmprs._extras import require
 from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.experiments import learner_help
 from dmprs.io.importer import build_database, load_demos
@@ -64,16 +65,21 @@ def main() -> None:
 @click.option("--demos", default=None, help="demonstration set (matchbox: default | both_flipped_back)")
 @click.option("--target", type=float, nargs=2, default=None, help="basket position X Y in m (arm-throwing)")
 @click.option("--generalizer", default=None, help="linear | lwr-gp | lwr-gp-affine (arm-throwing)")
+@click.option("--robot", type=click.Choice(["sim", "ros2"]), default=None,
+              help="arm-throwing: the scene in this process (sim, default) or a ROS 2 robot (ros2)")
+@click.option("--domain-id", type=click.IntRange(min=0, max=232), default=None,
+              help="the ROS 2 robot's ROS_DOMAIN_ID (with --robot ros2; default 0)")
 def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
               tol: float | None, log_dir: Path | None, seed: int, noise: float | None,
               volume: float | None, demos: str | None, target: tuple[float, float] | None,
-              generalizer: str | None) -> None:
+              generalizer: str | None, robot: str | None, domain_id: int | None) -> None:
     """Learn TASK (analytic, matchbox, pouring, arm-pouring, arm-throwing) from its
     demonstrations, one trial at a time.
     """
     options: dict[str, Any] = {k: v for k, v in {
         "desired": desired, "noise": noise, "bottle_volume": volume, "demos": demos,
-        "target": target, "generalizer": generalizer}.items() if v is not None}
+        "target": target, "generalizer": generalizer, "robot": robot, "domain_id": domain_id}.items()
+        if v is not None}
     console = _console()
     try:
         result = experiments.run(task, learner=learner, max_trials=max_trials, tol=tol,
@@ -308,6 +314,38 @@ def plot_cmd(run: Path, out: Path | None) -> None:
     except DmprsError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"figure written to {path}")
+
+
+@main.group("robot")
+def robot_group() -> None:
+    """Simulated robots served over ROS 2."""
+
+
+@robot_group.command("serve")
+@click.argument("task", type=click.Choice(["arm-throwing"]))
+@click.option("--domain-id", type=click.IntRange(min=0, max=232), default=0, show_default=True,
+              help="the ROS_DOMAIN_ID to serve on")
+@click.option("--speed", type=click.FloatRange(min=0.01, max=1000.0), default=1.0, show_default=True,
+              help="playback speed of each motion against real time")
+@click.option("--loopback-only", is_flag=True, help="speak on 127.0.0.1 only")
+def serve_cmd(task: str, domain_id: int, speed: float, loopback_only: bool) -> None:
+    """Serve TASK's simulated arm as a ROS 2 robot (a joint_trajectory_controller, /joint_states,
+    /clock and the task's signal topics) until interrupted.
+    """
+    require("cyclonedds", "dmprs robot serve")
+    from dmprs.ros2.served import CONTROLLER, LANDING_TOPIC, serve_throwing
+
+    def ready() -> None:
+        click.echo(f"{task}: serving {CONTROLLER}/follow_joint_trajectory, /joint_states, /clock and "
+                   f"{LANDING_TOPIC} on ROS domain {domain_id}; Ctrl-C stops", err=True)
+
+    try:
+        served = serve_throwing(domain_id, speed=speed, on_ready=ready, loopback_only=loopback_only)
+    except KeyboardInterrupt:
+        return
+    except DmprsError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"served {served} goal(s)", err=True)
 
 
 @main.command("reproduce")

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_count, short
+from dmprs._extras import require
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.experiments.base import ExperimentSetup, LearnerSettings, build
@@ -64,7 +65,8 @@ def demonstrations(n_basis: int = N_BASIS) -> tuple[tuple[NDArray[np.float64], T
 
 
 def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: float = SUCCESS_TOLERANCE,
-          noise: Noise | None = None, n_basis: int = N_BASIS, max_trials: int = 50) -> ExperimentSetup:
+          noise: Noise | None = None, n_basis: int = N_BASIS, max_trials: int = 50, robot: str = "sim",
+          domain_id: int = 0) -> ExperimentSetup:
     """Throw the ball into a basket at ``target`` = (x, y) m on the floor (docs/throwing.md).
 
     Five scripted throws labelled with their measured landing points; ``generalizer``:
@@ -74,12 +76,25 @@ def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: floa
     learning with Broyden's update of the Jacobian), ``error`` (eq. 16, K = J = I),
     ``finite-difference``, ``broyden``, ``weighted`` (eq. 17), ``cma``. ``tol``: the basket's
     radius (m). ``noise``: a :class:`dmprs.tasks.noise.Noise` (execution in rad, measurement in
-    m) for the trials; the demonstrations are measured without it.
+    m) for the trials; the demonstrations are measured without it. ``robot``: ``"sim"`` (the
+    scene in this process) or ``"ros2"`` (a ROS 2 robot on ``domain_id``, e.g. ``dmprs robot
+    serve arm-throwing``, through :func:`dmprs.ros2.served.throwing_adapter`; needs the ``ros2``
+    extra); the demonstrations are measured in the scene either way.
     """
     if not isinstance(generalizer, str) or generalizer not in GENERALIZERS:
         raise InvalidInputError(f"generalizer = {short(generalizer)} is invalid: use one of {tuple(GENERALIZERS)}")
     n_basis = as_count(n_basis, "n_basis", 2)
     settings = dataclasses.replace(SETTINGS, max_trials=as_count(max_trials, "max_trials", 1))
     task = ArmThrowing(tol, noise=noise)
+    if robot == "ros2":
+        if noise is not None:
+            raise InvalidInputError("noise is the simulated robot's: a ROS 2 robot has its own")
+        require("cyclonedds", "robot='ros2'")
+        # the ros2 extra, imported only when asked for: the scene needs none of it
+        from dmprs.ros2.served import throwing_adapter
+
+        task.adapter = throwing_adapter(as_count(domain_id, "domain_id", 0))
+    elif robot != "sim":
+        raise InvalidInputError(f"robot = {short(robot)} is invalid: use 'sim' or 'ros2'")
     return build(task, lambda: demonstrations(n_basis), target, generalizer={"n_basis": n_basis, **GENERALIZERS[generalizer]},
                  default_learner="secant", learner_names=LEARNER_NAMES, settings=settings, desired_name="target")

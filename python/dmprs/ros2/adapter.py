@@ -33,7 +33,7 @@ from dmprs.adapters.spec import AdapterSpec, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
 from dmprs.ros2 import messages
 from dmprs.ros2.action import ActionClient, GoalHandle
-from dmprs.ros2.node import Node, Subscription
+from dmprs.ros2.node import Node, Subscription, stamp_seconds
 from dmprs.ros2.qos import DEFAULT
 from dmprs.ros2.recorder import JointRecording, JointStateRecorder
 from dmprs.trajectory import Trajectory
@@ -58,8 +58,9 @@ class SignalTopic:
     ``SignalTopic("landing_x", "/camera/landing", "geometry_msgs/msg/PointStamped", "point.x", unit="m")``.
 
     ``field`` is a dotted path into the message. A sample counts only when it is stamped after the
-    motion ended: by its header stamp (the robot's clock) when the type has a header, else by
-    when its publisher wrote it.
+    motion ended: by its header stamp when the type has a header, against the robot's clock when
+    the goal was sent (its latest ``/joint_states`` stamp) plus the trajectory's duration; else by
+    when its publisher wrote it, against when the controller's answer arrived.
     """
 
     name: str
@@ -180,27 +181,31 @@ class Ros2TrajectoryAdapter(BaseAdapter):
         self._node, self._client, self._publisher, self._probe, self._signals = None, None, None, None, []
         super().disconnect()
 
-    def _robot_joints(self) -> list[str] | None:
-        """The joints the robot publishes now, from a fresh ``/joint_states`` sample (None if none came)."""
+    def _robot_now(self) -> tuple[list[str], float] | None:
+        """The joints the robot publishes and its clock now, from a fresh ``/joint_states``
+        sample (None if none came).
+        """
         assert self._probe is not None
         self._probe.take()
         sample = self._probe.take_one(self.answer_timeout)
-        return None if sample is None else list(sample.name)
+        return None if sample is None else (list(sample.name), stamp_seconds(sample))
 
     def _execute(self, trajectory: Trajectory) -> Outcome:
         assert self._node is not None
         joints = self.spec.dof_names
-        robot_joints = self._robot_joints()
-        if robot_joints is None:
+        now = self._robot_now()
+        if now is None:
             return Outcome(Status.ERROR, message=f"no {self.joint_states} within {self.answer_timeout:g} s: "
                            "is the robot running, on this ROS_DOMAIN_ID and network?")
+        robot_joints, robot_start = now
         unknown = [j for j in joints if j not in robot_joints]
         if unknown:
             return Outcome(Status.REJECTED, message=f"the robot has no joint(s) {', '.join(unknown)}; "
                            f"its joints are {', '.join(robot_joints)}")
         recorder = JointStateRecorder(self._node, list(joints), self.joint_states).start()
         try:
-            status, message = (self._follow(trajectory) if self.mode == "action" else self._publish(trajectory))
+            status, message = (self._follow(trajectory, recorder) if self.mode == "action"
+                               else self._publish(trajectory))
             # the motion's end on this machine's clock, for signals without a header stamp
             ended = time.time()
         finally:
@@ -212,7 +217,8 @@ class Ros2TrajectoryAdapter(BaseAdapter):
             return Outcome(Status.ERROR, message=f"fewer than two {self.joint_states} samples while it moved "
                            f"({recorder.skipped} without the joints {', '.join(joints)})")
         signals: dict[str, Any] = {}
-        robot_end = float(recording.times[-1])
+        # on the robot's clock the motion cannot end before its start plus the trajectory's duration
+        robot_end = robot_start + float(trajectory.t[-1] - trajectory.t[0])
         for topic, subscription in self._signals:
             after = robot_end if SIGNAL_TYPES[topic.type] else ended
             sample = subscription.wait_for_sample(after, self.answer_timeout)
@@ -222,8 +228,10 @@ class Ros2TrajectoryAdapter(BaseAdapter):
             signals[topic.name] = topic.read(sample)
         return Outcome(Status.OK, signals=signals, executed=executed)
 
-    def _follow(self, trajectory: Trajectory) -> tuple[Status, str]:
-        """The trajectory through the action: (status, why) once the goal has ended."""
+    def _follow(self, trajectory: Trajectory, recorder: JointStateRecorder) -> tuple[Status, str]:
+        """The trajectory through the action: (status, why) once the goal has ended, or once the
+        robot has fallen silent (no ``/joint_states`` for ``answer_timeout``).
+        """
         assert self._client is not None
         joints = self.spec.dof_names
         goal = messages.FollowJointTrajectory_Goal(
@@ -242,6 +250,10 @@ class Ros2TrajectoryAdapter(BaseAdapter):
                 self._cancel(handle)
                 outcome = self._interrupted_outcome()
                 return outcome.status, f"{outcome.message}; the goal was canceled"
+            silent = time.monotonic() - recorder.last_arrival
+            if silent > self.answer_timeout:
+                return Status.ERROR, (f"the robot went silent: no {self.joint_states} for {silent:.1f} s "
+                                      "while its goal ran (is it still running?)")
 
     def _cancel(self, handle: GoalHandle) -> None:
         assert self._client is not None

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import threading
+import time
 from typing import Any
 
 import numpy as np
@@ -55,6 +56,8 @@ class JointStateRecorder:
         self._columns: dict[tuple[str, ...], list[int] | None] = {}
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        #: time.monotonic() when samples last arrived (or when recording started)
+        self.last_arrival = time.monotonic()
 
     def _columns_of(self, names: tuple[str, ...]) -> list[int] | None:
         if names not in self._columns:
@@ -80,6 +83,7 @@ class JointStateRecorder:
             for message in batch:
                 self._record(message)
             if batch:
+                self.last_arrival = time.monotonic()
                 self._stop.wait(BATCH_PERIOD)
             else:
                 self.subscription.wait(_WAKE_PERIOD)
@@ -90,6 +94,7 @@ class JointStateRecorder:
         """Start recording in a background thread; returns the recorder."""
         if self._thread is not None:
             raise AdapterError("the recorder is already running")
+        self.last_arrival = time.monotonic()
         self._thread = threading.Thread(target=self._run, name="joint-state-recorder", daemon=True)
         self._thread.start()
         return self

@@ -1,0 +1,131 @@
+"""The throwing arm served as a ROS 2 robot (on the Rust node) and learned through the wire with
+Ros2TrajectoryAdapter (Cyclone): the same trials as in process; a robot killed mid-trial loses no
+finished trial and the run resumes once it is back.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from typing import Self
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from dmprs.adapters import Status
+from dmprs.cli import main
+from dmprs.experiments import arm_throwing
+from dmprs.loop import learn
+from dmprs.ros2.served import serve_throwing
+from dmprs.runlog import RunLog
+
+TARGET = (1.05, 0.12)  # m: between the demonstrations' landings
+SPEED = 10.0  # the served robot plays each motion back at 10 x real time
+
+
+class Served:
+    """The throwing robot served in a thread for the duration of a ``with`` block."""
+
+    def __init__(self, domain_id: int):
+        self.stop, self.ready = threading.Event(), threading.Event()
+        self.thread = threading.Thread(target=serve_throwing, args=(domain_id,), daemon=True, kwargs={
+            "speed": SPEED, "stop": self.stop, "on_ready": self.ready.set, "loopback_only": True})
+
+    def __enter__(self) -> Self:
+        self.thread.start()
+        assert self.ready.wait(30)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop.set()
+        self.thread.join(30)
+
+
+def learned(robot: str, domain_id: int = 0, **options):
+    setup = arm_throwing.setup(TARGET, tol=0.003, robot=robot, domain_id=domain_id)
+    return learn(setup.task, setup.generalizer, setup.desired_query, setup.make_learner("secant"),
+                 max_trials=6, **options)
+
+
+def test_learning_through_ros2_takes_the_same_trials_as_in_process(domain_id):
+    here = learned("sim")
+    with Served(domain_id):
+        there = learned("ros2", domain_id)
+    assert here.n_trials >= 2, "a 3 mm basket takes the learner some trials"
+    assert (there.converged, there.trials_to_success, there.n_trials) == (
+        here.converged, here.trials_to_success, here.n_trials)
+    for a, b in zip(here.trials, there.trials, strict=True):
+        assert b.status == "ok"
+        # the goal's times cross the wire in whole nanoseconds: the same throws to rounding
+        np.testing.assert_allclose(b.query, a.query, rtol=0, atol=1e-6)
+        np.testing.assert_allclose([b.signals["landing_x"], b.signals["landing_y"]],
+                                   [a.signals["landing_x"], a.signals["landing_y"]], rtol=0, atol=1e-6)
+
+
+def serve_process(domain_id: int) -> subprocess.Popen:
+    process = subprocess.Popen(
+        [sys.executable, "-m", "dmprs", "robot", "serve", "arm-throwing", "--domain-id", str(domain_id),
+         "--speed", "1", "--loopback-only"], stderr=subprocess.PIPE, text=True, env=os.environ.copy())
+    assert "serving" in process.stderr.readline()
+    return process
+
+
+def test_a_robot_killed_mid_trial_loses_no_finished_trial_and_the_run_resumes(domain_id, tmp_path):
+    run_dir = tmp_path / "run"
+    robot = serve_process(domain_id)
+    try:
+        # the first trial finishes, the robot dies during the second
+        def kill_in_second_trial() -> None:
+            log = run_dir / "trials.jsonl"
+            while not (log.exists() and log.read_text().count("\n") >= 1):
+                time.sleep(0.05)
+            time.sleep(0.5)
+            robot.send_signal(signal.SIGKILL)
+
+        threading.Thread(target=kill_in_second_trial, daemon=True).start()
+        setup = arm_throwing.setup(TARGET, tol=0.003, robot="ros2", domain_id=domain_id)
+        setup.task.adapter.answer_timeout = 2.0
+        start = time.monotonic()
+        result = learn(setup.task, setup.generalizer, setup.desired_query, setup.make_learner("secant"),
+                       max_trials=8, log_dir=run_dir, timeout_s=20.0,
+                       meta={"experiment": "arm-throwing", "learner_name": "secant", "learner_options": {},
+                             "setup_options": {"target": TARGET, "tol": 0.003, "robot": "ros2",
+                                               "domain_id": domain_id}})
+        assert time.monotonic() - start < 30  # the death is noticed in answer_timeout, not timeout_s
+    finally:
+        robot.kill()
+        robot.wait()
+    statuses = [t.status for t in result.trials]
+    assert statuses == ["ok", Status.ERROR.value], statuses
+    assert "went silent" in result.trials[-1].message
+    finished = sum(s == "ok" for s in statuses)
+    assert len(RunLog(run_dir).read()[0]) == len(statuses)
+    robot = serve_process(domain_id)
+    try:
+        resumed = CliRunner().invoke(main, ["resume", str(run_dir), "--max-trials", str(len(statuses) + 1)])
+    finally:
+        robot.kill()
+        robot.wait()
+    trials = RunLog(run_dir).read()[0]
+    assert [t.status for t in trials][:finished] == ["ok"] * finished  # nothing finished was lost
+    assert len(trials) > len(statuses) and trials[-1].status == "ok", resumed.output
+
+
+@pytest.mark.parametrize(("options", "why"), [({"robot": "moon"}, "robot = 'moon' is invalid"),
+                                             ({"robot": "ros2", "domain_id": -1}, "domain_id")])
+def test_the_robot_option_is_checked(options, why):
+    with pytest.raises(ValueError, match=why):
+        arm_throwing.setup(TARGET, **options)
+
+
+def test_dmprs_learn_with_robot_ros2(domain_id):
+    with Served(domain_id):
+        result = CliRunner().invoke(main, ["learn", "arm-throwing", "--target", *map(str, TARGET), "--robot", "ros2",
+                                           "--domain-id", str(domain_id), "--max-trials", "3"])
+    assert result.exit_code == 0, result.output
+    assert "success in trial 1" in result.output
