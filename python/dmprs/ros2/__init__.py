@@ -4,7 +4,8 @@ A `Node` joins a ROS 2 domain; it publishes and subscribes to topics with ROS 2'
 profiles, calls services and drives actions (`ActionClient`) in rmw_cyclonedds's wire format;
 `JointStateRecorder` records `/joint_states` by joint name; `Ros2TrajectoryAdapter` is a dmprs
 adapter for a robot's `joint_trajectory_controller`, its outcome signals read from topics
-(`SignalTopic`). Message classes are generated from
+(`SignalTopic`); `stream` runs a DMP's stepper online against a forward position controller.
+Message classes are generated from
 ROS's own definitions in `dmprs.ros2.messages`. Needs the `ros2` extra (cyclonedds, rosbags).
 """
 
@@ -14,11 +15,13 @@ from dmprs.ros2.node import LOOPBACK_CONFIG, MAX_DOMAIN_ID, Node, Publisher, Sub
 from dmprs.ros2.qos import ACTION_STATUS, CLOCK, DEFAULT, SENSOR_DATA, SERVICES, QosProfile
 from dmprs.ros2.recorder import JointRecording, JointStateRecorder
 from dmprs.ros2.service import ServiceClient, ServiceServer
+from dmprs.ros2.streaming import FORWARD_COMMANDS, StreamResult, stream
 
 __all__ = [
     "ACTION_STATUS",
     "CLOCK",
     "DEFAULT",
+    "FORWARD_COMMANDS",
     "LOOPBACK_CONFIG",
     "MAX_DOMAIN_ID",
     "SENSOR_DATA",
@@ -35,7 +38,9 @@ __all__ = [
     "ServiceClient",
     "ServiceServer",
     "SignalTopic",
+    "StreamResult",
     "Subscription",
     "signal_specs",
     "stamp_seconds",
+    "stream",
 ]

@@ -1,0 +1,112 @@
+"""A joint stepper streamed over ROS 2 (dmprs.ros2.streaming, Cyclone) to a forward position
+controller played by the Rust robot node: the commands are the DMP's rollout, and phase stopping
+closes on /joint_states (a held robot holds the phase).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import dmprs
+from dmprs._core import RobotNode
+from dmprs.errors import AdapterError
+from dmprs.ros2 import Node
+from dmprs.ros2.streaming import stream
+
+ROBOT_JOINTS = ["j1", "j2", "j3"]
+JOINTS = ["j3", "j1", "j2"]  # the stepper's DOF order, named on the robot
+DT = 0.004  # s: 250 Hz
+
+
+class PositionController(threading.Thread):
+    """A forward position controller: publishes the last command received as its position,
+    except between ``hold`` (s from the first command) when it stays where it was.
+    """
+
+    def __init__(self, robot: RobotNode, hold: tuple[float, float] | None = None):
+        super().__init__(daemon=True)
+        self.robot, self.hold = robot, hold
+        self.q = np.zeros(3)
+        self.received: list[np.ndarray] = []
+        self.first: float | None = None
+        self.halt = threading.Event()
+
+    def run(self) -> None:
+        while not self.halt.is_set():
+            now = time.monotonic()
+            for row in self.robot.poll_commands():
+                self.received.append(row.copy())
+                self.first = self.first or now
+                held = self.hold is not None and self.hold[0] <= now - self.first < self.hold[1]
+                if not held:
+                    self.q = row.copy()
+            self.robot.publish_joint_state(now, self.q)
+            time.sleep(0.001)
+
+    def __enter__(self):
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.halt.set()
+        self.join()
+
+
+@pytest.fixture
+def robot(domain_id: int):
+    node = RobotNode(domain_id, "joint_trajectory_controller", ROBOT_JOINTS)
+    yield node
+    node.shutdown()
+
+
+@pytest.fixture
+def node(domain_id: int):
+    with Node("dmprs_stream", domain_id) as n:
+        yield n
+
+
+@pytest.fixture
+def dmp(demo):
+    t, y = demo
+    return dmprs.DMP.fit(t, y, 30)
+
+
+def test_open_loop_the_stream_is_the_rollout_and_reaches_the_robot_in_its_joint_order(robot, node, dmp):
+    with PositionController(robot) as controller:
+        result = stream(dmp.stepper(DT), node, JOINTS, controller_joints=ROBOT_JOINTS, phase_stopping=False)
+        time.sleep(0.2)
+    assert result.done
+    rollout = dmp.rollout(dt=DT).y  # to tau; the stepper goes on until the DMP is at rest
+    n = len(result.commands)
+    assert n > len(rollout)
+    np.testing.assert_allclose(result.commands[:len(rollout)], rollout, rtol=0, atol=1e-12)
+    order = [JOINTS.index(j) for j in ROBOT_JOINTS]
+    assert len(controller.received) == n  # reliable: every command arrived, in order
+    np.testing.assert_array_equal(np.array(controller.received), result.commands[:, order])
+
+
+def test_phase_stopping_closes_on_joint_states_a_held_robot_holds_the_phase(robot, node, dmp):
+    hold = (0.3, 0.8)
+    runs = {}
+    for stopping in (True, False):
+        with PositionController(robot, hold):
+            runs[stopping] = stream(dmp.stepper(DT, alpha_e=1e4), node, JOINTS, controller_joints=ROBOT_JOINTS,
+                                    phase_stopping=stopping)
+    inside = (runs[True].times > hold[0] + 0.1) & (runs[True].times < hold[1] - 0.05)
+    phase = runs[True].phases[inside]
+    free = runs[False].phases
+    free_advance = np.interp(hold[1] - 0.05, runs[False].times, free) - np.interp(hold[0] + 0.1, runs[False].times, free)
+    # held: the phase barely moves; free: it moves as the clock says
+    assert abs(phase[0] - phase[-1]) < 0.1 * abs(free_advance)  # the phase decays from 1 to 0
+    assert runs[True].done and runs[False].done
+    assert runs[True].times[-1] > runs[False].times[-1] + 0.3  # it waited for the robot
+    np.testing.assert_allclose(runs[True].commands[-1], dmp.goal, atol=1e-3)
+
+
+def test_no_controller_is_an_adapter_error(node, dmp):
+    with pytest.raises(AdapterError, match="nothing subscribes to /forward_position_controller/commands"):
+        stream(dmp.stepper(DT), node, JOINTS, answer_timeout=0.3)
