@@ -16,6 +16,7 @@ import pytest
 from dmprs._core import RobotNode
 from dmprs.adapters import AdapterSpec, Status, check_adapter
 from dmprs.errors import InvalidInputError
+from dmprs.ros2 import Node
 from dmprs.ros2 import messages as m
 from dmprs.ros2.adapter import Ros2TrajectoryAdapter, SignalTopic, signal_specs
 from dmprs.trajectory import Trajectory
@@ -249,3 +250,27 @@ def test_options_are_checked_at_the_boundary(options, why):
 def test_signal_topics_are_checked(args, why):
     with pytest.raises(InvalidInputError, match=why):
         SignalTopic(*args)
+
+
+def test_malformed_joint_states_are_skipped_and_only_they_are_an_error(domain_id):
+    # a robot whose /joint_states carry fewer positions than names: a clear error, never garbage
+    with Node("bad_robot", domain_id) as bad, Ros2TrajectoryAdapter(spec(()), domain_id=domain_id, mode="topic",
+                                                                    answer_timeout=1.0) as a:
+        states = bad.create_publisher(m.JointState, "/joint_states")
+        commands = bad.create_subscription(m.JointTrajectory, CONTROLLER + "/joint_trajectory")
+        stop = threading.Event()
+
+        def publish() -> None:
+            while not stop.is_set():
+                states.publish(m.JointState(header=m.Header(stamp=m.Time(sec=int(time.time()))),
+                                            name=list(ROBOT_JOINTS), position=[0.0, 0.0]))
+                time.sleep(0.004)
+
+        threading.Thread(target=publish, daemon=True).start()
+        try:
+            assert commands.wait_for_publishers(1, 5.0)
+            out = a.execute(move(0.2), timeout_s=10.0)
+        finally:
+            stop.set()
+    assert out.status is Status.ERROR and "fewer than two /joint_states samples" in out.message
+    assert "skipped" in out.message

@@ -215,7 +215,8 @@ class Ros2TrajectoryAdapter(BaseAdapter):
             return Outcome(status, executed=executed, message=message)
         if executed is None:
             return Outcome(Status.ERROR, message=f"fewer than two {self.joint_states} samples while it moved "
-                           f"({recorder.skipped} without the joints {', '.join(joints)})")
+                           f"({recorder.skipped} skipped: without the joints {', '.join(joints)}, or with "
+                           "fewer positions than names)")
         signals: dict[str, Any] = {}
         # on the robot's clock the motion cannot end before its start plus the trajectory's duration
         robot_end = robot_start + float(trajectory.t[-1] - trajectory.t[0])
