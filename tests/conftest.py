@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from dmprs.ros2 import LOOPBACK_CONFIG, MAX_DOMAIN_ID
+from dmprs.ros2 import LOOPBACK_CONFIG, MAX_DOMAIN_ID, Node
 
 
 def min_jerk(s: np.ndarray) -> np.ndarray:
@@ -60,3 +60,10 @@ def domain_id(monkeypatch: pytest.MonkeyPatch, tmp_path) -> int:
     config.write_text(LOOPBACK_CONFIG)
     monkeypatch.setenv("CYCLONEDDS_URI", config.as_uri())
     return (os.getpid() * 7 + next(_domains)) % (MAX_DOMAIN_ID + 1)
+
+
+@pytest.fixture
+def node(domain_id: int):
+    """A dmprs ROS 2 node (Cyclone) in the test's domain."""
+    with Node("dmprs_test", domain_id) as n:
+        yield n

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Self
 
 import numpy as np
 import pytest
@@ -20,6 +19,7 @@ from dmprs.ros2 import Node
 from dmprs.ros2 import messages as m
 from dmprs.ros2.adapter import Ros2TrajectoryAdapter, SignalTopic, signal_specs
 from dmprs.trajectory import Trajectory
+from tests.ros2_helpers import ControllerThread
 
 #: the robot's joints, in its own order; the adapter names them in another
 ROBOT_JOINTS = ["a1", "a2", "a3"]
@@ -45,7 +45,7 @@ def move(duration: float = 0.4) -> Trajectory:
     return Trajectory(t, y, np.gradient(y, t, axis=0))
 
 
-class Controller(threading.Thread):
+class Controller(ControllerThread):
     """A joint_trajectory_controller played on the Rust node: /joint_states at RATE on the robot's
     clock, each accepted goal followed by interpolating its points, then finished as ``ending``
     says; after a goal, the scale and the camera publish a reading (sum of the joints, and the first
@@ -53,13 +53,12 @@ class Controller(threading.Thread):
     """
 
     def __init__(self, robot: RobotNode, ending: str = "succeed"):
-        super().__init__(daemon=True)
+        super().__init__()
         self.robot, self.ending = robot, ending
         self.q = np.zeros(3)
         self.clock = CLOCK0
         self.goals: list = []
         self.canceled: list[bytes] = []
-        self.halt = threading.Event()
 
     def run(self) -> None:
         self.robot.publish_signal(SCALE.topic, -1.0, self.clock)  # stale: before any motion
@@ -106,13 +105,6 @@ class Controller(threading.Thread):
         while not self.canceled and time.monotonic() < deadline:
             time.sleep(0.01)
 
-    def __enter__(self) -> Self:
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.halt.set()
-        self.join()
 
 
 @pytest.fixture

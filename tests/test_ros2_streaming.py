@@ -5,7 +5,6 @@ closes on /joint_states (a held robot holds the phase).
 
 from __future__ import annotations
 
-import threading
 import time
 
 import numpy as np
@@ -14,26 +13,25 @@ import pytest
 import dmprs
 from dmprs._core import RobotNode
 from dmprs.errors import AdapterError
-from dmprs.ros2 import Node
 from dmprs.ros2.streaming import stream
+from tests.ros2_helpers import ControllerThread
 
 ROBOT_JOINTS = ["j1", "j2", "j3"]
 JOINTS = ["j3", "j1", "j2"]  # the stepper's DOF order, named on the robot
 DT = 0.004  # s: 250 Hz
 
 
-class PositionController(threading.Thread):
+class PositionController(ControllerThread):
     """A forward position controller: publishes the last command received as its position,
     except between ``hold`` (s from the first command) when it stays where it was.
     """
 
     def __init__(self, robot: RobotNode, hold: tuple[float, float] | None = None):
-        super().__init__(daemon=True)
+        super().__init__()
         self.robot, self.hold = robot, hold
         self.q = np.zeros(3)
         self.received: list[np.ndarray] = []
         self.first: float | None = None
-        self.halt = threading.Event()
 
     def run(self) -> None:
         while not self.halt.is_set():
@@ -47,26 +45,12 @@ class PositionController(threading.Thread):
             self.robot.publish_joint_state(now, self.q)
             time.sleep(0.001)
 
-    def __enter__(self):
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.halt.set()
-        self.join()
-
 
 @pytest.fixture
 def robot(domain_id: int):
     node = RobotNode(domain_id, "joint_trajectory_controller", ROBOT_JOINTS)
     yield node
     node.shutdown()
-
-
-@pytest.fixture
-def node(domain_id: int):
-    with Node("dmprs_stream", domain_id) as n:
-        yield n
 
 
 @pytest.fixture

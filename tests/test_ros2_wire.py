@@ -37,12 +37,6 @@ def robot(domain_id: int):
     node.shutdown()
 
 
-@pytest.fixture
-def node(domain_id: int):
-    with Node("dmprs_test", domain_id) as n:
-        yield n
-
-
 def trajectory(names: list[str], times: list[float], positions: np.ndarray, velocities: np.ndarray | None = None):
     points = [
         m.JointTrajectoryPoint(
