@@ -40,9 +40,6 @@ DEMO_BRACKET = (1.4, 2.7)
 N_BASIS = 40
 #: l: eq. 17's scale and the step scale of the policy gradient and Broyden, as in 2-D
 SCALE = 0.05
-#: the volumes the reproduction learns, and its trial cap per run
-VOLUMES = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
-MAX_TRIALS = 6
 
 
 @functools.lru_cache(maxsize=4)

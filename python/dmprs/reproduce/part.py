@@ -31,7 +31,3 @@ class Part:
     def available(self) -> bool:
         """Whether the packages this part needs are installed."""
         return self.needs is None or available(self.needs)
-
-    def markdown(self, results: list[dict[str, Any]]) -> str:
-        """This part's section of the report, from the runs' results."""
-        return self.markdown_of(self.summarize(results))

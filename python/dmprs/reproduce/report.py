@@ -7,7 +7,8 @@ from typing import Any
 
 from dmprs.baselines import METHODS
 from dmprs.reproduce.parts import PARTS
-from dmprs.reproduce.stats import trial_stats
+from dmprs.reproduce.plan import SEED_KEYS
+from dmprs.reproduce.stats import cell, trial_stats
 
 PAPER = {
     "matchbox": "Fig. 4: 4 trials in simulation (eq. 16, K = I); 5 on the real robot",
@@ -19,16 +20,41 @@ PAPER = {
 
 
 
-def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
-    """The table: per experiment and learner, trials to success (median and range)."""
-    rows = []
+def _first_signals(run: dict[str, Any]) -> dict[str, Any]:
+    """The numeric signals of a run's first, purely generalized trial."""
+    return {k: v for k, v in run["trials"][0]["signals"].items() if isinstance(v, (int, float))} \
+        if run["trials"] else {}
+
+
+def _learn_rows(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One row per setting and learner: the runs that differ only in a seed (:data:`SEED_KEYS`)
+    are one setting, with their trials to success as median, range and success count, and each
+    run's seed, count and first trial's signals kept in ``per_run``.
+    """
+    groups: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
     for r in results:
-        if r["kind"] != "learn":
-            continue
-        setup = ", ".join(f"{k} {v}" for k, v in r["setup"].items())
-        rows.append({"part": r["part"], "experiment": f"{r['experiment']} ({setup})", "learner": r["learner"],
-                     **trial_stats([r["trials_to_success"]]), "paper": PAPER[r["part"]],
-                     "stop_reason": None if r["converged"] else r["stop_reason"]})
+        if r["kind"] == "learn":
+            setting = tuple((k, v) for k, v in r["setup"].items() if k not in SEED_KEYS)
+            groups.setdefault((r["part"], r["experiment"], setting, r["learner"]), []).append(r)
+    rows = []
+    for (part, experiment, setting, learner), runs in groups.items():
+        failed = [r["stop_reason"] for r in runs if not r["converged"]]
+        rows.append({"part": part, "experiment": f"{experiment} ({', '.join(f'{k} {v}' for k, v in setting)})",
+                     "setting": dict(setting), "learner": learner,
+                     **trial_stats([r["trials_to_success"] for r in runs], max(r["n_trials"] for r in runs)
+                                   if failed else None),
+                     "paper": PAPER[part], "stop_reason": failed[0] if len(failed) == len(runs) else None,
+                     "per_run": [{"seeds": {k: r["setup"][k] for k in SEED_KEYS if k in r["setup"]},
+                                  "trials_to_success": r["trials_to_success"],
+                                  "first_signals": _first_signals(r)} for r in runs]})
+    return rows
+
+
+def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
+    """The table: per experiment and learner, trials to success (median and range), and each
+    part's section (its Markdown and the data it was written from).
+    """
+    rows = _learn_rows(results)
     groups: dict[tuple, list[dict[str, Any]]] = {}
     for r in results:
         if r["kind"] == "baseline":
@@ -36,24 +62,16 @@ def summarize(results: list[dict[str, Any]]) -> dict[str, Any]:
     for (demos, method, sf), runs in groups.items():
         name = METHODS[method].name
         rows.append({"part": "baselines", "experiment": f"matchbox (demos {demos})",
+                     "setting": {"demos": demos, "method": method, "sigma_frac": sf, "name": name},
                      "learner": f"{name}, sigma {sf} x max abs(w), {len(runs)} seeds",
                      **trial_stats([r["trials_to_success"] for r in runs], runs[0]["budget"]),
                      "paper": PAPER["baselines"]})
-    sections = [{"kind": part.kind, "title": part.title, "markdown": part.markdown(results)}
-                for part in PARTS if any(r.get("kind") == part.kind for r in results)]
+    sections = []
+    for part in PARTS:
+        if any(r.get("kind") == part.kind for r in results):
+            data = part.summarize(results)
+            sections.append({"kind": part.kind, "title": part.title, "data": data, "markdown": part.markdown_of(data)})
     return {"rows": rows, "sections": sections}
-
-
-def _cell(row: dict[str, Any]) -> str:
-    if row["successes"] == 0:
-        if row.get("stop_reason"):
-            return f"not solved: {row['stop_reason']}"
-        return f"none within {row['budget'] or 'the cap'}"
-    med = row["median"]
-    med_s = f">{row['budget']}" if med == float("inf") else f"{med:g}"
-    if row["runs"] == 1:
-        return med_s
-    return f"{med_s} [{row['min']}-{row['max']}], {row['successes']}/{row['runs']} succeeded"
 
 
 def markdown(report: dict[str, Any], figures: list[Path]) -> str:
@@ -61,11 +79,13 @@ def markdown(report: dict[str, Any], figures: list[Path]) -> str:
     lines = ["# dmprs reproduction of Nemec, Vuga, Ude (2013)", "",
              (f"Run {'--quick' if report.get('quick') else 'in full'} with backend "
               f"`{report.get('backend')}` in {report.get('seconds')} s. Trials count every executed "
-              "trial, the first (purely generalized) one included. Deterministic simulators: a "
-              "query-space learner gives one run per setting; baselines vary their seed."), "",
+              "trial, the first (purely generalized) one included. A query-space learner gives one run "
+              "per setting in the deterministic simulators, one per liquid on the arm (its granular "
+              "outcome is chaotic), and baselines vary their seed: several runs give the median "
+              "[range] and the successes."), "",
              "| experiment | learner | trials to success | paper |", "|---|---|---|---|"]
     for row in report["rows"]:
-        lines.append(f"| {row['experiment']} | {row['learner']} | {_cell(row)} | {row['paper']} |")
+        lines.append(f"| {row['experiment']} | {row['learner']} | {cell(row)} | {row['paper']} |")
     for section in report.get("sections", []):
         lines += ["", f"## {section['title']}", "", section["markdown"].rstrip()]
     lines += [f"\n{note}" for note in report.get("skipped", [])]

@@ -1,5 +1,5 @@
 """Trials to success over several runs of one setting: the median, the range and the success count
-the reproduction reports for every setting.
+the reproduction reports for every setting, and their one way of being written in a table.
 """
 
 from __future__ import annotations
@@ -18,3 +18,19 @@ def trial_stats(values: list[int | None], budget: int | None = None) -> dict[str
             "median": statistics.median(ok) if len(ok) == len(values) and ok else
             (statistics.median(ok + [float("inf")] * (len(values) - len(ok))) if ok else None),
             "min": min(ok) if ok else None, "max": max(ok) if ok else None, "budget": budget}
+
+
+def cell(row: dict[str, Any]) -> str:
+    """Trials to success of one row: the count of a single run, else ``median [min-max]`` and,
+    where some runs failed, how many succeeded.
+    """
+    if row["successes"] == 0:
+        if row.get("stop_reason"):
+            return f"not solved: {row['stop_reason']}"
+        return f"none within {row['budget'] or 'the cap'}"
+    med = row["median"]
+    med_s = f">{row['budget']}" if med == float("inf") else f"{med:g}"
+    if row["runs"] == 1:
+        return med_s
+    ok = "" if row["successes"] == row["runs"] else f", {row['successes']}/{row['runs']} succeeded"
+    return f"{med_s} [{row['min']}-{row['max']}]{ok}"

@@ -133,7 +133,8 @@ def summarize_throwing(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
         robot = f"noisy robot ({NOISE[0]:g} rad tracking, {NOISE[1]:g} m measurement), " \
                 f"{len({r['noise_seed'] for r in group})} seeds" if noisy else "exact robot"
         failed = [r["stop_reason"] for r in group if not r["converged"]]
-        rows.append({"part": "throwing", "experiment": f"arm throwing, {len(group)} baskets of {100 * tol:g} cm "
+        rows.append({"part": "throwing", "region": region, "generalizer": gen, "tol": tol, "noisy": noisy,
+                     "experiment": f"arm throwing, {len(group)} baskets of {100 * tol:g} cm "
                      f"{region} the demos' range, {gen}, {robot}", "learner": lrn, **stats, "paper": PAPER,
                      "floor": floor, "meets_floor": None if floor is None else
                      stats["median"] is not None and stats["median"] <= floor,
