@@ -69,6 +69,9 @@ class Controller(ControllerThread):
             goal = self.robot.poll_goal(0.0)
             if goal is not None:
                 self.goals.append(goal)
+                if active is not None:  # as joint_trajectory_controller does: the new goal preempts
+                    self.robot.finish_goal(active.id, m.GoalStatus.STATUS_CANCELED, m.FollowJointTrajectory_Result.SUCCESSFUL,
+                                           "Current goal cancelled due to new incoming action.")
                 active, start = goal, self.clock
             cancels = self.robot.poll_cancels()
             if active is not None and active.id in cancels:
@@ -189,6 +192,20 @@ def test_a_robot_that_falls_silent_mid_goal_is_an_error_within_the_answer_timeou
         out = a.execute(move(), timeout_s=30.0)
     assert out.status is Status.ERROR and "no /joint_states for" in out.message
     assert time.monotonic() - start < 5.0
+
+
+def test_a_second_client_preempting_the_goal_is_an_error_for_the_first(robot, domain_id):
+    with Controller(robot), adapter(domain_id, signals=()) as first, adapter(domain_id, signals=()) as second:
+        outcomes = {}
+        threading.Thread(target=lambda: outcomes.setdefault("first", first.execute(move(2.0), timeout_s=10.0))).start()
+        time.sleep(0.5)
+        outcomes["second"] = second.execute(move(0.2), timeout_s=10.0)
+        deadline = time.monotonic() + 5.0
+        while "first" not in outcomes and time.monotonic() < deadline:
+            time.sleep(0.01)
+    assert outcomes["second"].status is Status.OK, outcomes["second"].message
+    assert outcomes["first"].status is Status.ERROR
+    assert "canceled by another client: Current goal cancelled due to new incoming action." in outcomes["first"].message
 
 
 def test_stop_cancels_the_running_goal(robot, domain_id):
