@@ -16,6 +16,7 @@ from dmprs.io.importer import build_database, load_demos
 from dmprs.loop import LearningResult, learn
 from dmprs.plots import plot_run
 from dmprs.reproduce import reproduce, skipped
+from dmprs.reproduce.tables import update_docs
 from dmprs.runlog import RunLog
 
 
@@ -355,8 +356,15 @@ def serve_cmd(task: str, domain_id: int, speed: float, loopback_only: bool) -> N
 @click.option("--backend", type=click.Choice(["local", "ray", "serial"]), default="local", show_default=True,
               help="local processes, a Ray cluster (RAY_ADDRESS or a local one), or in-process")
 @click.option("--workers", type=int, default=None, help="parallel workers (default: all cores)")
-def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None) -> None:
+@click.option("--update-docs", "docs_root", type=click.Path(path_type=Path, file_okay=False, exists=True),
+              default=None, help="after a full run, rewrite the generated result tables of this checkout "
+              "(README.md, docs/*.md) and store the summary they cite as docs/reproduction.json")
+def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None, docs_root: Path | None) -> None:
     """Run the paper's experiments in simulation and the baselines; write the report."""
+    if docs_root is not None and quick:
+        raise click.UsageError("--update-docs takes a full run: the docs cite the full reproduction, not --quick")
+    if docs_root is not None and not (docs_root / "README.md").is_file():
+        raise click.UsageError(f"--update-docs {docs_root}: no README.md there (give the checkout's root)")
     import os
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -384,6 +392,9 @@ def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None) -> 
             raise click.ClickException(str(exc)) from None
     click.echo((out / "report.md").read_text())
     click.echo(f"finished in {report['seconds']} s; report and figures in {out}")
+    if docs_root is not None:
+        changed = update_docs(docs_root, report)
+        click.echo(f"tables rewritten in {', '.join(str(p) for p in changed) or 'no file (all current)'}")
 
 
 @main.command("demo")
