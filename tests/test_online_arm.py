@@ -120,5 +120,5 @@ def test_reproduction_part_reports_every_scenario(tmp_path, pours) -> None:
     # the truths: phase stopping's pour within the tolerance, the moved basket hit, the limit kept
     assert [r["met"] for r in rows if r["scenario"] != "held-pour"] == [True, True]
     assert rows[0]["met"]
-    assert "| held-pour |" in PART.markdown(results)
+    assert "| held-pour |" in PART.markdown_of(rows)
     assert PART.figure(results, tmp_path).read_bytes()[:4] == b"\x89PNG"
