@@ -27,6 +27,18 @@ _WAKE_PERIOD = 0.5
 BATCH_PERIOD = 0.02
 
 
+def joint_columns(cache: dict[tuple[str, ...], list[int] | None], message: Any,
+                  joint_names: tuple[str, ...]) -> list[int] | None:
+    """Where each of ``joint_names`` sits in a JointState ``message`` (cached per name list in
+    ``cache``); None when one is missing or the message has fewer positions than names.
+    """
+    names = tuple(message.name)
+    if names not in cache:
+        index = {name: i for i, name in enumerate(names)}
+        cache[names] = [index[j] for j in joint_names] if all(j in index for j in joint_names) else None
+    return cache[names] if len(message.position) == len(names) else None
+
+
 @dataclasses.dataclass(frozen=True)
 class JointRecording:
     """Joint states in the recorder's joint order: `times` (n,) from the header stamps,
@@ -59,17 +71,9 @@ class JointStateRecorder:
         #: time.monotonic() when samples last arrived (or when recording started)
         self.last_arrival = time.monotonic()
 
-    def _columns_of(self, names: tuple[str, ...]) -> list[int] | None:
-        if names not in self._columns:
-            index = {name: i for i, name in enumerate(names)}
-            self._columns[names] = (
-                [index[j] for j in self.joint_names] if all(j in index for j in self.joint_names) else None
-            )
-        return self._columns[names]
-
     def _record(self, message: Any) -> None:
-        columns = self._columns_of(tuple(message.name))
-        if columns is None or len(message.position) != len(message.name):
+        columns = joint_columns(self._columns, message, self.joint_names)
+        if columns is None:
             self.skipped += 1
             return
         t = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9

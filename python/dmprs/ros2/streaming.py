@@ -21,6 +21,7 @@ from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import messages
 from dmprs.ros2.node import Node, check_timeout
 from dmprs.ros2.qos import DEFAULT
+from dmprs.ros2.recorder import joint_columns
 
 #: the command topic of ros2_controllers' forward_position_controller
 FORWARD_COMMANDS = "/forward_position_controller/commands"
@@ -52,12 +53,8 @@ class _Latest:
 
     def update(self) -> np.ndarray | None:
         for message in self.subscription.take():
-            names = tuple(message.name)
-            if names not in self._columns:
-                index = {n: i for i, n in enumerate(names)}
-                self._columns[names] = [index[j] for j in self.names] if all(j in index for j in self.names) else None
-            columns = self._columns[names]
-            if columns is not None and len(message.position) == len(names):
+            columns = joint_columns(self._columns, message, self.names)
+            if columns is not None:
                 self.position = np.array([message.position[c] for c in columns])
         return self.position
 
