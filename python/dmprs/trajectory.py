@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from dmprs import quaternion as quaternion_
 from dmprs._arrays import as_float_array, check_finite, check_increasing
@@ -269,3 +269,19 @@ def from_arrays(arrays: Mapping[str, NDArray[np.float64]], prefix: str = "") -> 
     if pose:
         return CartesianTrajectory(**fields)
     return Trajectory(**fields)
+
+
+def nanoseconds(t: ArrayLike) -> NDArray[np.int64]:
+    """Times (s) in whole nanoseconds, as ROS 2's ``builtin_interfaces`` carry them."""
+    return np.round(np.asarray(t, dtype=float) * 1e9).astype(np.int64)
+
+
+def controller_times(t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``t`` from its first sample, rounded to whole nanoseconds: the times a robot's trajectory
+    controller receives over ROS 2 (a ``Duration`` per point). The arm scenes execute these, so
+    that a trajectory sent to a served scene through ROS 2 is the same command, bit for bit, as
+    one executed in this process.
+    """
+    t = np.asarray(t, dtype=float)
+    out: NDArray[np.float64] = nanoseconds(t - t[0]) / 1e9
+    return out

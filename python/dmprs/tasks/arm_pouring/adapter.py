@@ -18,7 +18,7 @@ from dmprs.sim.arm_scene import HOME_POSE, home_configuration
 from dmprs.tasks import iiwa
 from dmprs.tasks.liquid import CURVE_SIGNALS, PARTICLE_VOLUME, Liquid, check_volume, counts
 from dmprs.tasks.liquid import signals as liquid_signals
-from dmprs.trajectory import CartesianTrajectory, Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory, controller_times
 
 #: the most the simulated bottle holds (l): 500 spheres of 2 ml
 CAPACITY = 1.0
@@ -171,9 +171,9 @@ class ArmPouringAdapter(BaseAdapter):
         liquid = scene.settle_liquid(self.n_particles, self.liquid.seed, should_stop=self._interrupted)
         if liquid is None:  # stopped or timed out while the liquid settled
             return self._interrupted_outcome()
-        qd = joints.yd if joints.yd is not None else np.gradient(joints.y, joints.t, axis=0)
-        result = scene.simulate_pour(joints.t, joints.y, qd, liquid, hold=self.liquid.hold,
-                                     should_stop=self._interrupted)
+        t = controller_times(joints.t)
+        qd = joints.yd if joints.yd is not None else np.gradient(joints.y, t, axis=0)
+        result = scene.simulate_pour(t, joints.y, qd, liquid, hold=self.liquid.hold, should_stop=self._interrupted)
         t_rel = joints.t - joints.t[0]
         reached = t_rel <= result.times[-1] + 1e-12
         executed = None

@@ -43,7 +43,7 @@ def _cache_path(cache_dir: str, params: dict[str, Any]) -> Path:
     blob = json.dumps({"params": params, "mjcf": arm_model.scene_xml(), "mujoco": mujoco.__version__,
                        "home": arm_scene.HOME_POSE, "settle": arm_scene.SETTLE_TIME,
                        "spawn": (granular.SPAWN_GAP, granular.MAX_PARTICLES), "timing": DEMO_TIMING,
-                       "pour": POUR_POSITION, "period": CONTROL_PERIOD, "schema": 1}, sort_keys=True, default=str)
+                       "pour": POUR_POSITION, "period": CONTROL_PERIOD, "schema": 2}, sort_keys=True, default=str)
     return Path(cache_dir) / f"arm-pouring-demo-{hashlib.sha256(blob.encode()).hexdigest()[:24]}.json"
 
 

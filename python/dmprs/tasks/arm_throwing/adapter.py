@@ -11,7 +11,7 @@ from dmprs.errors import InvalidInputError
 from dmprs.sim.throw_scene import HOME, simulate_throw
 from dmprs.tasks import iiwa
 from dmprs.tasks.noise import Noise
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import Trajectory, controller_times
 
 #: s: command sample period of a trajectory (the servo interpolates it to 1 kHz)
 CONTROL_PERIOD = 0.002
@@ -65,9 +65,10 @@ class ArmThrowingAdapter(BaseAdapter):
     def _execute(self, trajectory: Trajectory) -> Outcome:
 
         executed = self.noise.track(trajectory, self._rng)
-        qd = np.gradient(executed.y, executed.t, axis=0, edge_order=2) if (
+        t = controller_times(executed.t)
+        qd = np.gradient(executed.y, t, axis=0, edge_order=2) if (
             executed is not trajectory or trajectory.yd is None) else trajectory.yd
-        r = simulate_throw(executed.t, executed.y, qd, should_stop=self._interrupted)
+        r = simulate_throw(t, executed.y, qd, should_stop=self._interrupted)
         done = Trajectory(executed.t[0] + r.times, r.q) if len(r.times) >= 2 else None
         if r.interrupted:
             return self._interrupted_outcome(done)
