@@ -67,7 +67,8 @@ def main() -> None:
 @click.option("--target", type=float, nargs=2, default=None, help="basket position X Y in m (arm-throwing)")
 @click.option("--generalizer", default=None, help="linear | lwr-gp | lwr-gp-affine (arm-throwing)")
 @click.option("--robot", type=click.Choice(["sim", "ros2"]), default=None,
-              help="arm-throwing: the scene in this process (sim, default) or a ROS 2 robot (ros2)")
+              help="arm-pouring, arm-throwing: the scene in this process (sim, default) or a ROS 2 robot "
+              "(ros2, e.g. `dmprs robot serve TASK`)")
 @click.option("--domain-id", type=click.IntRange(min=0, max=232), default=None,
               help="the ROS 2 robot's ROS_DOMAIN_ID (with --robot ros2; default 0)")
 def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
@@ -323,25 +324,31 @@ def robot_group() -> None:
 
 
 @robot_group.command("serve")
-@click.argument("task", type=click.Choice(["arm-throwing"]))
+@click.argument("task", type=click.Choice(["arm-throwing", "arm-pouring"]))
 @click.option("--domain-id", type=click.IntRange(min=0, max=232), default=0, show_default=True,
               help="the ROS_DOMAIN_ID to serve on")
 @click.option("--speed", type=click.FloatRange(min=0.01, max=1000.0), default=1.0, show_default=True,
               help="playback speed of each motion against real time")
+@click.option("--volume", type=float, default=0.5, show_default=True,
+              help="arm-pouring: the liquid in the robot's bottle, in litres")
+@click.option("--liquid-seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="arm-pouring: the seed that draws the liquid's particles")
 @click.option("--loopback-only", is_flag=True, help="speak on 127.0.0.1 only")
-def serve_cmd(task: str, domain_id: int, speed: float, loopback_only: bool) -> None:
+def serve_cmd(task: str, domain_id: int, speed: float, volume: float, liquid_seed: int, loopback_only: bool) -> None:
     """Serve TASK's simulated arm as a ROS 2 robot (a joint_trajectory_controller, /joint_states,
-    /clock and the task's signal topics) until interrupted.
+    /clock and the task's sensor: the landing camera or the glass's scale) until interrupted.
     """
     require("cyclonedds", "dmprs robot serve")
-    from dmprs.ros2.served import CONTROLLER, LANDING_TOPIC, serve_throwing
+    from dmprs.ros2.served import CONTROLLER, LANDING_TOPIC, SCALE_TOPIC, serve
 
     def ready() -> None:
+        sensor = LANDING_TOPIC if task == "arm-throwing" else SCALE_TOPIC
         click.echo(f"{task}: serving {CONTROLLER}/follow_joint_trajectory, /joint_states, /clock and "
-                   f"{LANDING_TOPIC} on ROS domain {domain_id}; Ctrl-C stops", err=True)
+                   f"{sensor} on ROS domain {domain_id}; Ctrl-C stops", err=True)
 
     try:
-        served = serve_throwing(domain_id, speed=speed, on_ready=ready, loopback_only=loopback_only)
+        served = serve(task, domain_id, speed=speed, on_ready=ready, loopback_only=loopback_only,
+                       bottle_volume=volume, liquid_seed=liquid_seed)
     except KeyboardInterrupt:
         return
     except DmprsError as exc:

@@ -20,13 +20,14 @@ from numpy.typing import NDArray
 
 from dmprs._arrays import as_count, short
 from dmprs.errors import DmprsError, InvalidInputError, NumericalError
-from dmprs.experiments.base import SCALAR_LEARNERS, ExperimentSetup, LearnerSettings, build
+from dmprs.experiments.base import SCALAR_LEARNERS, ExperimentSetup, LearnerSettings, build, ros2_domain
 from dmprs.sim import arm_render, arm_scene
 from dmprs.tasks.arm_pouring import (
     DEMO_VOLUMES,
     SUCCESS_TOLERANCE,
     TARGET_VOLUME,
     ArmPouring,
+    ArmPouringAdapter,
     Calibration,
     calibrate_peak_tilt,
     pour_poses,
@@ -59,15 +60,28 @@ def demonstrations(target_volume: float = TARGET_VOLUME, liquid_seed: int = 0, c
 
 def setup(bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME, tol: float = SUCCESS_TOLERANCE,
           liquid_seed: int = 0, demo_seed: int = 0, reseed_liquid: bool = False,
-          cache_dir: str | os.PathLike[str] | None = None) -> ExperimentSetup:
+          cache_dir: str | os.PathLike[str] | None = None, robot: str = "sim", domain_id: int = 0,
+          ) -> ExperimentSetup:
     """Pour ``target_volume`` with the arm from a bottle holding ``bottle_volume`` l: the two
     calibrated pose demonstrations generalized linearly as :class:`~dmprs.CartesianDMP` s with
     N = 40 kernels (weights, tau and positions linear in the volume, the orientations by slerp),
     the desired query = the true volume; learners ``golden`` (default, paper mode, bracket
-    [0.3, 1.0] l), ``root`` (Illinois) and the other scalar query learners.
+    [0.3, 1.0] l), ``root`` (Illinois) and the other scalar query learners. ``robot``: ``"sim"``
+    (the scene in this process) or ``"ros2"`` (a ROS 2 robot on ``domain_id`` holding that bottle,
+    e.g. ``dmprs robot serve arm-pouring --volume 0.5``, through
+    :func:`dmprs.ros2.served.pouring_adapter`; needs the ``ros2`` extra); the demonstrations are
+    calibrated in the scene either way.
     """
     task = ArmPouring(bottle_volume, target_volume=target_volume, tol=tol, liquid_seed=liquid_seed,
                       reseed_liquid=reseed_liquid)
+    domain = ros2_domain(robot, domain_id)
+    if domain is not None:
+        if liquid_seed != 0 or reseed_liquid:
+            raise InvalidInputError("the liquid is the robot's: give liquid_seed to `dmprs robot serve`")
+        # the ros2 extra, imported only when asked for: the scene needs none of it
+        from dmprs.ros2.served import pouring_adapter
+
+        task.adapter = pouring_adapter(domain)
     seed = as_count(demo_seed, "demo_seed", 0)
     if cache_dir is not None and not isinstance(cache_dir, (str, os.PathLike)):
         raise InvalidInputError(f"cache_dir = {short(cache_dir)} must be a folder's path or None")
@@ -112,12 +126,12 @@ def frame_strip(out: str | Path, bottle_volume: float = 0.6, learner_query: floa
     """
     experiment = setup(bottle_volume)
     q = experiment.desired_query if learner_query is None else np.array([learner_query])
-    task = experiment.task
-    assert isinstance(task, ArmPouring)
-    joints, _, _, problems = task.adapter.plan(task.trajectory(experiment.generalizer.predict(q)))
+    task, scene = experiment.task, experiment.task.adapter
+    assert isinstance(task, ArmPouring) and isinstance(scene, ArmPouringAdapter)
+    joints, _, _, problems = scene.plan(task.trajectory(experiment.generalizer.predict(q)))
     if problems or joints is None or joints.yd is None:
         raise DmprsError(f"the pour to render was refused: {'; '.join(problems)}")
-    liquid = arm_scene.settled_liquid(task.adapter.n_particles, task.adapter.liquid.liquid_seed)
+    liquid = arm_scene.settled_liquid(scene.n_particles, scene.liquid.liquid_seed)
     try:
         return arm_render.frame_strip(joints.t, joints.y, joints.yd, liquid,
                                       (0.0, 0.5, 1.4, 2.2, 2.8, 3.6, 4.6), Path(out) / "arm_pouring_strip.png")

@@ -15,10 +15,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_count, short
-from dmprs._extras import require
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError
-from dmprs.experiments.base import ExperimentSetup, LearnerSettings, build
+from dmprs.experiments.base import ExperimentSetup, LearnerSettings, build, ros2_domain
 from dmprs.tasks.arm_throwing import DEMOS, SUCCESS_TOLERANCE, ArmThrowing, throw_trajectory
 from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
@@ -86,15 +85,13 @@ def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: floa
     n_basis = as_count(n_basis, "n_basis", 2)
     settings = dataclasses.replace(SETTINGS, max_trials=as_count(max_trials, "max_trials", 1))
     task = ArmThrowing(tol, noise=noise)
-    if robot == "ros2":
+    domain = ros2_domain(robot, domain_id)
+    if domain is not None:
         if noise is not None:
             raise InvalidInputError("noise is the simulated robot's: a ROS 2 robot has its own")
-        require("cyclonedds", "robot='ros2'")
         # the ros2 extra, imported only when asked for: the scene needs none of it
         from dmprs.ros2.served import throwing_adapter
 
-        task.adapter = throwing_adapter(as_count(domain_id, "domain_id", 0))
-    elif robot != "sim":
-        raise InvalidInputError(f"robot = {short(robot)} is invalid: use 'sim' or 'ros2'")
+        task.adapter = throwing_adapter(domain)
     return build(task, lambda: demonstrations(n_basis), target, generalizer={"n_basis": n_basis, **GENERALIZERS[generalizer]},
                  default_learner="secant", learner_names=LEARNER_NAMES, settings=settings, desired_name="target")

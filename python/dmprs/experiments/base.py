@@ -16,6 +16,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import learners as L
+from dmprs._arrays import as_count, short
+from dmprs._extras import require
 from dmprs.cmaes import CMAES
 from dmprs.database import Database
 from dmprs.errors import InvalidInputError
@@ -173,6 +175,18 @@ class ExperimentSetup:
                 f"unknown learner {name!r} for {self.task.name}; choose from {', '.join(sorted(self.learner_names))}")
         start = self.desired_query if q0 is None else self.task.validate_query(q0, "q0")
         return LEARNERS[name].make(self.settings, start, dict(options))
+
+
+def ros2_domain(robot: Any, domain_id: Any) -> int | None:
+    """The ROS 2 domain of a robot option: ``robot = "ros2"`` (a served or real robot, through the
+    ``ros2`` extra) on ``domain_id``; None for ``"sim"`` (the scene in this process).
+    """
+    if robot == "sim":
+        return None
+    if robot != "ros2":
+        raise InvalidInputError(f"robot = {short(robot)} is invalid: use 'sim' or 'ros2'")
+    require("cyclonedds", "robot='ros2'")
+    return as_count(domain_id, "domain_id", 0)
 
 
 def database_of(task: Task, demos: Iterable[tuple[ArrayLike, AnyTrajectory]]) -> Database:

@@ -36,7 +36,7 @@ from dmprs.ros2.action import ActionClient, GoalHandle
 from dmprs.ros2.node import Node, Subscription, stamp_seconds
 from dmprs.ros2.qos import DEFAULT
 from dmprs.ros2.recorder import JointRecording, JointStateRecorder
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import Trajectory, nanoseconds
 
 FOLLOW_JOINT_TRAJECTORY = "control_msgs/action/FollowJointTrajectory"
 _RESULT = messages.FollowJointTrajectory_Result
@@ -90,18 +90,21 @@ class SignalTopic:
         return float(value)
 
 
-def _duration(seconds: float) -> Any:
-    sec = int(np.floor(seconds))
-    return messages.Duration(sec=sec, nanosec=min(999_999_999, round((seconds - sec) * 1e9)))
+def _duration(ns: Any) -> Any:
+    """A ``builtin_interfaces/Duration`` of ``ns`` whole nanoseconds."""
+    sec, nanosec = divmod(int(ns), 1_000_000_000)
+    return messages.Duration(sec=sec, nanosec=nanosec)
 
 
 def joint_trajectory(joint_names: tuple[str, ...], trajectory: Trajectory) -> Any:
-    """``trajectory`` as a ``trajectory_msgs/JointTrajectory``, times from its first sample."""
-    t = trajectory.t - trajectory.t[0]
+    """``trajectory`` as a ``trajectory_msgs/JointTrajectory``, times from its first sample (in
+    whole nanoseconds, :func:`~dmprs.trajectory.controller_times`).
+    """
+    t = nanoseconds(trajectory.t - trajectory.t[0])
     fields = [("positions", trajectory.y), ("velocities", trajectory.yd), ("accelerations", trajectory.ydd)]
     points = [messages.JointTrajectoryPoint(
         **{name: ([] if values is None else [float(v) for v in values[k]]) for name, values in fields},
-        time_from_start=_duration(float(t[k]))) for k in range(len(t))]
+        time_from_start=_duration(t[k])) for k in range(len(t))]
     return messages.JointTrajectory(joint_names=list(joint_names), points=points)
 
 
@@ -119,7 +122,9 @@ class Ros2TrajectoryAdapter(BaseAdapter):
     signals, as for any adapter; every :class:`SignalTopic` must be one of its signals. ``mode``
     is ``"action"`` (``<controller>/follow_joint_trajectory``) or ``"topic"``
     (``<controller>/joint_trajectory``: no answer comes, the motion is taken as ended when the
-    trajectory's duration and ``settle`` have passed). ``path_tolerance`` and ``goal_tolerance``
+    trajectory's duration has passed). ``settle`` (s) is how long the outcome takes to settle
+    once the motion has ended (liquid still flowing, a ball still rolling): the signals are read
+    from samples stamped at least that long after the end. ``path_tolerance`` and ``goal_tolerance``
     (rad, per joint) go into the goal; ``goal_time_tolerance`` (s) too. ``answer_timeout`` bounds
     each wait for the robot (discovery, the goal's acceptance, ``/joint_states``, a signal).
     ``config`` is a Cyclone XML configuration (e.g. :data:`~dmprs.ros2.LOOPBACK_CONFIG`), else
@@ -221,11 +226,12 @@ class Ros2TrajectoryAdapter(BaseAdapter):
         # on the robot's clock the motion cannot end before its start plus the trajectory's duration
         robot_end = robot_start + float(trajectory.t[-1] - trajectory.t[0])
         for topic, subscription in self._signals:
-            after = robot_end if SIGNAL_TYPES[topic.type] else ended
-            sample = subscription.wait_for_sample(after, self.answer_timeout)
+            after = (robot_end if SIGNAL_TYPES[topic.type] else ended) + self.settle
+            sample = subscription.wait_for_sample(after, self.settle + self.answer_timeout)
             if sample is None:
                 return Outcome(Status.ERROR, executed=executed, message=(
-                    f"no {topic.topic} sample stamped after the motion ended within {self.answer_timeout:g} s"))
+                    f"no {topic.topic} sample stamped {self.settle:g} s or more after the motion ended "
+                    f"within {self.settle + self.answer_timeout:g} s"))
             signals[topic.name] = topic.read(sample)
         return Outcome(Status.OK, signals=signals, executed=executed)
 
@@ -239,7 +245,7 @@ class Ros2TrajectoryAdapter(BaseAdapter):
             trajectory=joint_trajectory(joints, trajectory),
             path_tolerance=_tolerances(joints, self.path_tolerance),
             goal_tolerance=_tolerances(joints, self.goal_tolerance),
-            goal_time_tolerance=_duration(self.goal_time_tolerance))
+            goal_time_tolerance=_duration(nanoseconds(self.goal_time_tolerance)))
         handle = self._client.send_goal(goal, self.answer_timeout)
         if not handle.accepted:
             return Status.REJECTED, f"{self._client.action_name} refused the goal (ROS 2 carries no reason)"
@@ -261,11 +267,11 @@ class Ros2TrajectoryAdapter(BaseAdapter):
         self._client.cancel(handle, self.answer_timeout)
 
     def _publish(self, trajectory: Trajectory) -> tuple[Status, str]:
-        """The trajectory on the controller's topic; the motion ends with its duration and ``settle``."""
+        """The trajectory on the controller's topic; the motion ends with its duration."""
         if not self._publisher.wait_for_subscribers(1, self.answer_timeout):
             return Status.ERROR, f"nothing subscribes to {self.controller}/joint_trajectory"
         self._publisher.publish(joint_trajectory(self.spec.dof_names, trajectory))
-        end = time.monotonic() + float(trajectory.t[-1] - trajectory.t[0]) + self.settle
+        end = time.monotonic() + float(trajectory.t[-1] - trajectory.t[0])
         while time.monotonic() < end:
             if self._interrupted():
                 outcome = self._interrupted_outcome()

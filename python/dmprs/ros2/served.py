@@ -1,16 +1,24 @@
-"""The MuJoCo throwing arm served as a ROS 2 robot, and the adapter that learns through it.
+"""The MuJoCo arm served as a ROS 2 robot, and the adapters that learn through it.
 
-:func:`serve_throwing` runs the throwing scene (:mod:`dmprs.sim.throw_scene`) behind what a
-``ros2_control`` robot exposes, on the Rust robot node (ros2-client / RustDDS, the other ROS 2
-stack than dmprs's own Cyclone side): the ``joint_trajectory_controller``'s
-``follow_joint_trajectory`` action and ``joint_trajectory`` topic, ``/joint_states`` and
-``/clock`` on the simulation's clock, and a camera's landing point
-(``geometry_msgs/PointStamped`` on :data:`LANDING_TOPIC`). Each goal is simulated at once and
-played back at ``speed`` times real time; the arm is back home for the next one, as the
-in-process adapter is.
+:func:`serve` runs a task's scene (the throwing scene of :mod:`dmprs.sim.throw_scene` or the
+pouring scene of :mod:`dmprs.sim.arm_scene`) behind what a ``ros2_control`` robot exposes, on the
+Rust robot node (ros2-client / RustDDS, the other ROS 2 stack than dmprs's own Cyclone side): the
+``joint_trajectory_controller``'s ``follow_joint_trajectory`` action and ``joint_trajectory``
+topic, ``/joint_states`` and ``/clock`` on the simulation's clock, and the task's sensors: a
+camera's landing point (``geometry_msgs/PointStamped`` on :data:`LANDING_TOPIC`) or a scale under
+the glass (``std_msgs/Float64`` in l on :data:`SCALE_TOPIC`, published continuously).
 
-:func:`throwing_adapter` is the client side: a :class:`~dmprs.ros2.Ros2TrajectoryAdapter` with the
-in-process adapter's joints and limits, reading ``landing_x`` and ``landing_y`` from the camera.
+Each goal is simulated first and then played back at ``speed`` times real time. While the
+physics computes, the robot's clock stands still, as a simulator's ``/clock`` does when it runs
+slower than real time, and ``/joint_states`` repeats the standing pose at that stamp. After each
+goal the arm is back home (and for pouring the glass emptied and the bottle refilled) for the
+next one, as the in-process adapters are.
+
+:func:`throwing_adapter` and :func:`pouring_adapter` are the client side: a
+:class:`~dmprs.ros2.Ros2TrajectoryAdapter` with the in-process adapter's joints and limits,
+reading the task's signals from the sensors; for pouring, behind a
+:class:`~dmprs.adapters.planned.PlannedAdapter` that solves the pose trajectory's IK on the
+client, as a Cartesian task on a joint-controlled robot does.
 """
 
 from __future__ import annotations
@@ -22,12 +30,16 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from dmprs._core import RobotNode
-from dmprs.adapters import Status
+from dmprs.adapters import BaseAdapter, Outcome, Status
+from dmprs.adapters.planned import PlannedAdapter
+from dmprs.errors import InvalidInputError
 from dmprs.ros2 import messages
 from dmprs.ros2.adapter import Ros2TrajectoryAdapter, SignalTopic, signal_specs
 from dmprs.sim.throw_scene import HOME
+from dmprs.tasks.arm_pouring import ArmPouringAdapter
 from dmprs.tasks.arm_throwing.adapter import ArmThrowingAdapter
 from dmprs.trajectory import Trajectory
 
@@ -38,10 +50,20 @@ LANDING = (SignalTopic("landing_x", LANDING_TOPIC, "geometry_msgs/msg/PointStamp
                        "x where the ball first touched the floor"),
            SignalTopic("landing_y", LANDING_TOPIC, "geometry_msgs/msg/PointStamped", "point.y", "m",
                        "y where the ball first touched the floor"))
+#: where the scale under the glass publishes the liquid in the glass (l)
+SCALE_TOPIC = "/glass_scale/volume"
+SCALE = (SignalTopic("poured_volume", SCALE_TOPIC, "std_msgs/msg/Float64", "data", "l",
+                     "liquid in the glass, read once the pour has settled"),)
 #: Hz: /joint_states while idle and during playback (every other servo step of the 1 kHz scene)
 STATE_RATE = 500.0
+#: the scale publishes with every this many joint states (50 Hz)
+SCALE_EVERY = 10
 #: s: the robot's clock when it starts
 CLOCK_START = 0.0
+#: s: what a pour's reading waits for beyond the scene's hold, so that it is the settled one
+SCALE_MARGIN = 0.25
+#: the tasks that can be served
+TASKS = ("arm-throwing", "arm-pouring")
 _RESULT = messages.FollowJointTrajectory_Result
 
 
@@ -52,6 +74,19 @@ def throwing_adapter(domain_id: int, **options: Any) -> Ros2TrajectoryAdapter:
     """
     spec = dataclasses.replace(ArmThrowingAdapter().spec, name="arm-throwing-ros2", signals=signal_specs(LANDING))
     return Ros2TrajectoryAdapter(spec, domain_id=domain_id, controller=CONTROLLER, signals=LANDING, **options)
+
+
+def pouring_adapter(domain_id: int, **options: Any) -> PlannedAdapter:
+    """An adapter for a pouring robot on ``domain_id``: pose trajectories solved into joint
+    trajectories by the arm's IK and checked (limits, collisions) on this machine, then sent to
+    the robot's controller; ``poured_volume`` read from the scale once the pour has settled.
+    ``options`` go to the :class:`~dmprs.ros2.Ros2TrajectoryAdapter` (``answer_timeout``, ...).
+    """
+    planner = ArmPouringAdapter()  # its dry pass only: the liquid is the robot's
+    spec = dataclasses.replace(planner.spec, name="arm-pouring-ros2", signals=signal_specs(SCALE))
+    options.setdefault("settle", planner.liquid.hold + SCALE_MARGIN)
+    robot = Ros2TrajectoryAdapter(spec, domain_id=domain_id, controller=CONTROLLER, signals=SCALE, **options)
+    return PlannedAdapter(planner, robot)
 
 
 class _Clock:
@@ -66,45 +101,167 @@ class _Clock:
         return self.now
 
 
-def serve_throwing(domain_id: int, *, speed: float = 1.0, stop: threading.Event | None = None,
-                   on_ready: Callable[[], None] | None = None, loopback_only: bool = False) -> int:
-    """Serves the throwing arm on ``domain_id`` until ``stop`` is set; returns the goals served.
+class _Robot:
+    """A served scene: the arm's home, its sensors, and what they read before, during and after a motion."""
+
+    float_topics: tuple[str, ...] = ()
+    point_topics: tuple[str, ...] = ()
+
+    def __init__(self, scene: BaseAdapter[Any], home: NDArray[np.float64]) -> None:
+        self.scene, self.home, self.states = scene, home, 0
+
+    def new_goal(self) -> None:
+        """The scene as at the start (the in-process learning loop's reset)."""
+        self.scene.reset(seed=None)
+
+    def sense(self, node: RobotNode, now: float, t: float | None) -> None:
+        """The sensors' samples with one joint state at ``now``; ``t`` is the time into the
+        motion being played back (None when idle).
+        """
+
+    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome, speed: float,
+                 stop: threading.Event) -> None:
+        """The sensors' samples once the motion has ended (and the goal succeeded)."""
+
+
+class _Throwing(_Robot):
+    point_topics = (LANDING_TOPIC,)
+
+    def __init__(self) -> None:
+        super().__init__(ArmThrowingAdapter(), np.asarray(HOME, dtype=float))
+
+    def new_goal(self) -> None:
+        self.scene.reset(seed=0)
+
+    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome, speed: float,
+                 stop: threading.Event) -> None:
+        node.publish_signal(LANDING_TOPIC, [outcome.signals["landing_x"], outcome.signals["landing_y"], 0.0],
+                            clock.tick(0.001))
+
+
+class _Pouring(_Robot):
+    """The scale reads the glass every :data:`SCALE_EVERY` states: the poured volume over the
+    motion and the scene's hold, then the final count until the next goal empties the glass.
+    """
+
+    float_topics = (SCALE_TOPIC,)
+
+    scene: ArmPouringAdapter
+
+    def __init__(self, bottle_volume: float, liquid_seed: int) -> None:
+        scene = ArmPouringAdapter(bottle_volume, liquid_seed=liquid_seed)
+        super().__init__(scene, np.asarray(scene.home, dtype=float))
+        self.reading, self.curve = 0.0, (np.zeros(1), np.zeros(1))
+
+    def new_goal(self) -> None:
+        super().new_goal()
+        self.reading, self.curve = 0.0, (np.zeros(1), np.zeros(1))
+
+    def sense(self, node: RobotNode, now: float, t: float | None) -> None:
+        self.states += 1
+        if t is not None:
+            times, volumes = self.curve
+            self.reading = float(volumes[max(0, int(np.searchsorted(times, t, side="right")) - 1)])
+        if self.states % SCALE_EVERY == 0:
+            node.publish_signal(SCALE_TOPIC, self.reading, now)
+
+    def start(self, outcome: Outcome) -> None:
+        """The poured volume over the motion, to read out as it is played back."""
+        self.curve = (np.asarray(outcome.signals["poured_volume_time"]),
+                      np.asarray(outcome.signals["poured_volume_curve"]))
+
+    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome, speed: float,
+                 stop: threading.Event) -> None:
+        """The scene's hold: the arm rests at its last sample while the liquid settles, then the
+        scale shows the count.
+        """
+        executed = outcome.executed
+        assert isinstance(executed, Trajectory)
+        last, t_end = executed.y[-1], float(executed.t[-1] - executed.t[0])
+        period, start = 1.0 / STATE_RATE, time.monotonic()
+        for k in range(1, round(self.scene.liquid.hold * STATE_RATE) + 1):
+            if stop.is_set():
+                break
+            now = clock.tick(period)
+            node.publish_joint_state(now, last)
+            self.sense(node, now, t_end + k * period)
+            time.sleep(max(0.0, start + k * period / speed - time.monotonic()))
+        self.reading = float(outcome.signals["poured_volume"])
+
+
+def serve(task: str, domain_id: int, *, speed: float = 1.0, stop: threading.Event | None = None,
+          on_ready: Callable[[], None] | None = None, loopback_only: bool = False,
+          bottle_volume: float = 0.5, liquid_seed: int = 0) -> int:
+    """Serves ``task``'s arm (one of :data:`TASKS`) on ``domain_id`` until ``stop`` is set;
+    returns the goals served. ``bottle_volume`` (l) and ``liquid_seed`` are the pouring robot's
+    bottle and liquid (the in-process adapter's options).
 
     A goal the scene refuses (its start away from home, a limit broken) ends as INVALID_GOAL with
-    the scene's reason; one whose ball never lands ends as succeeded without a landing point (the
-    arm did move; the camera saw nothing), which the client reports as an error.
+    the scene's reason; a thrown ball that never lands ends as succeeded without a landing point
+    (the arm did move; the camera saw nothing), which the client reports as an error.
     """
+    if task == "arm-throwing":
+        robot: _Robot = _Throwing()
+    elif task == "arm-pouring":
+        robot = _Pouring(bottle_volume, liquid_seed)
+    else:
+        raise InvalidInputError(f"task = {task!r} cannot be served: use one of {', '.join(TASKS)}")
     stop = stop or threading.Event()
-    node = RobotNode(domain_id, CONTROLLER.strip("/"), list(ArmThrowingAdapter().spec.dof_names),
-                     point_signals=[LANDING_TOPIC], loopback_only=loopback_only)
-    clock, home, period = _Clock(node), np.asarray(HOME, dtype=float), 1.0 / STATE_RATE
+    node = RobotNode(domain_id, CONTROLLER.strip("/"), list(robot.scene.spec.dof_names),
+                     float_signals=list(robot.float_topics), point_signals=list(robot.point_topics),
+                     loopback_only=loopback_only)
+    clock, period = _Clock(node), 1.0 / STATE_RATE
     served = 0
     try:
-        with ArmThrowingAdapter() as scene:
+        with robot.scene:
             if on_ready is not None:
                 on_ready()
             while not stop.is_set():
-                node.publish_joint_state(clock.tick(period), home)
+                now = clock.tick(period)
+                node.publish_joint_state(now, robot.home)
+                robot.sense(node, now, None)
                 goal = node.poll_goal(period / speed)
                 if goal is None:
                     continue
                 served += 1
-                _throw(node, clock, scene, goal, speed, stop)
+                _run_goal(node, clock, robot, goal, speed, stop)
     finally:
         node.shutdown()
     return served
 
 
-def _throw(node: RobotNode, clock: _Clock, scene: ArmThrowingAdapter, goal: Any, speed: float,
-           stop: threading.Event) -> None:
-    """Simulates one goal and plays it back: joint states, feedback, the landing point, the result."""
+def _simulate(node: RobotNode, clock: _Clock, robot: _Robot, command: Trajectory, goal_id: bytes,
+              stop: threading.Event) -> Outcome | None:
+    """The scene's outcome of ``command``, computed in a worker while ``/joint_states`` repeats
+    the standing pose at the stopped clock; None if the goal was canceled meanwhile.
+    """
+    result: list[Outcome] = []
+    worker = threading.Thread(target=lambda: result.append(robot.scene.execute(command)), daemon=True)
+    worker.start()
+    canceled = False
+    while worker.is_alive():
+        node.publish_joint_state(clock.now, robot.home)
+        if not canceled and (stop.is_set() or goal_id in node.poll_cancels()):
+            canceled = True
+            robot.scene.stop()
+        worker.join(1.0 / STATE_RATE)
+    return None if canceled else result[0]
+
+
+def _run_goal(node: RobotNode, clock: _Clock, robot: _Robot, goal: Any, speed: float,
+              stop: threading.Event) -> None:
+    """Simulates one goal and plays it back: joint states, the sensors, the result."""
     tr = goal.trajectory
-    command = Trajectory(tr.times, tr.positions, tr.velocities)
-    scene.reset(seed=0)
-    out = scene.execute(command)
+    robot.new_goal()
+    out = _simulate(node, clock, robot, Trajectory(tr.times, tr.positions, tr.velocities), goal.id, stop)
+    if out is None:
+        node.finish_goal(goal.id, messages.GoalStatus.STATUS_CANCELED)
+        return
     if out.status is Status.REJECTED:
         node.finish_goal(goal.id, messages.GoalStatus.STATUS_ABORTED, _RESULT.INVALID_GOAL, out.message)
         return
+    if isinstance(robot, _Pouring) and out.ok:
+        robot.start(out)
     executed = out.executed
     if isinstance(executed, Trajectory):
         step = max(1, round(1.0 / (STATE_RATE * float(np.median(np.diff(executed.t))))))
@@ -114,12 +271,13 @@ def _throw(node: RobotNode, clock: _Clock, scene: ArmThrowingAdapter, goal: Any,
             if stop.is_set() or goal.id in node.poll_cancels():
                 node.finish_goal(goal.id, messages.GoalStatus.STATUS_CANCELED)
                 return
-            clock.now = t0 + float(executed.t[k] - executed.t[0])
+            t = float(executed.t[k] - executed.t[0])
+            clock.now = t0 + t
             node.publish_clock(clock.now)
             node.publish_joint_state(clock.now, executed.y[k])
+            robot.sense(node, clock.now, t)
             # paced at speed x real time, so that the client sees a motion, not a burst
-            time.sleep(max(0.0, start + (clock.now - t0) / speed - time.monotonic()))
-    if out.ok:
-        node.publish_signal(LANDING_TOPIC, [out.signals["landing_x"], out.signals["landing_y"], 0.0],
-                            clock.tick(0.001))
+            time.sleep(max(0.0, start + t / speed - time.monotonic()))
     node.finish_goal(goal.id, messages.GoalStatus.STATUS_SUCCEEDED)
+    if out.ok:
+        robot.measured(node, clock, out, speed, stop)

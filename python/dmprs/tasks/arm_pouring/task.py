@@ -29,7 +29,6 @@ class ArmPouring(PouringTask):
     granular outcome's noise floor. Adapter options go to :class:`ArmPouringAdapter`.
     """
 
-    adapter: ArmPouringAdapter
     name = "arm-pouring"
     capacity = CAPACITY
 
