@@ -16,14 +16,16 @@ from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 def check_adapter(
     adapter: Adapter,
-    valid_trajectory: Trajectory,
+    valid_trajectory: Trajectory | CartesianTrajectory,
     *,
     execute: bool = True,
     deterministic: bool = True,
 ) -> list[str]:
     """Checks that ``adapter`` follows the protocol; raises listing every failure.
 
-    ``valid_trajectory`` must be one the adapter accepts. Every outcome is checked for its types:
+    ``valid_trajectory`` must be one the adapter accepts: a joint :class:`~dmprs.Trajectory`, or
+    a :class:`~dmprs.CartesianTrajectory` for a pose adapter (the bad ones it is shown are then
+    poses with bad positions). Every outcome is checked for its types:
     a :class:`~dmprs.adapters.Status` (not a string that equals one), a str message, a
     trajectory or None as executed, and a mapping of declared signals of their declared types. With ``execute=False`` nothing moves
     (for a first check on real hardware): only the spec, check, dry run, stop and connection
@@ -45,10 +47,21 @@ def check_adapter(
 
     spec = getattr(adapter, "spec", None)
 
+    # a pose trajectory's DOFs in a pose spec are its positions' (the orientation comes with them)
+    n_dof = valid_trajectory.position.shape[1] if isinstance(valid_trajectory, CartesianTrajectory) else (
+        valid_trajectory.n_dof)
+
     def spec_is_valid() -> None:
         assert isinstance(spec, AdapterSpec), "adapter.spec must be an AdapterSpec"
-        assert spec.n_dof == valid_trajectory.n_dof, (
-            f"valid_trajectory has {valid_trajectory.n_dof} DOFs, spec has {spec.n_dof}")
+        assert spec.n_dof == n_dof, f"valid_trajectory has {n_dof} DOFs, spec has {spec.n_dof}"
+
+    def altered(make: Callable[[np.ndarray], np.ndarray]) -> Trajectory | CartesianTrajectory:
+        """``valid_trajectory`` with its positions changed by ``make``, unvalidated."""
+        if isinstance(valid_trajectory, CartesianTrajectory):
+            v = valid_trajectory
+            return CartesianTrajectory._trusted(v.t.copy(), make(v.position.copy()), v.quaternion.copy(),
+                                                None, None, None, None)
+        return Trajectory._trusted(valid_trajectory.t.copy(), make(valid_trajectory.y.copy()), None, None)
 
     run("spec", spec_is_valid)
     if failures:
@@ -60,9 +73,7 @@ def check_adapter(
 
     def check_rejects(name: str, make: Callable[[np.ndarray], np.ndarray]) -> Callable[[], None]:
         def fn() -> None:
-            bad = Trajectory._trusted(valid_trajectory.t.copy(), make(valid_trajectory.y.copy()),
-                                      None, None)
-            problems = adapter.check(bad)
+            problems = adapter.check(altered(make))
             assert problems and all(isinstance(p, str) and p for p in problems), (
                 f"check() accepted a trajectory with {name}")
         return fn
@@ -109,16 +120,14 @@ def check_adapter(
             adapter.reset(seed=0)
             o = adapter.execute(valid_trajectory, dry_run=True)
             outcome_shape(o, {Status.DRY_RUN})
-            bad = Trajectory._trusted(valid_trajectory.t.copy(), nan(valid_trajectory.y.copy()), None, None)
-            o = adapter.execute(bad, dry_run=True)
+            o = adapter.execute(altered(nan), dry_run=True)
             outcome_shape(o, {Status.REJECTED})
             assert o.message, "a rejection must say why"
 
     def rejected_never_raises() -> None:
         with adapter:
             adapter.reset(seed=0)
-            bad = Trajectory._trusted(valid_trajectory.t.copy(), far(valid_trajectory.y.copy()), None, None)
-            o = adapter.execute(bad)
+            o = adapter.execute(altered(far))
             outcome_shape(o, {Status.REJECTED})
 
     def stop_is_idempotent() -> None:

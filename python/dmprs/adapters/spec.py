@@ -244,15 +244,20 @@ def _angular_velocity(t: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 def pose_problems(tr: CartesianTrajectory, *, min_samples: int) -> list[str]:
     """What makes a pose trajectory unusable, as every consumer checks it before anything else
-    (an adapter's spec, an adapter that turns poses into joints): too few samples, a value that
-    is not finite, times that do not increase, a quaternion that is not unit. A validated
+    (an adapter's spec, an adapter that turns poses into joints): too few samples, arrays of the
+    wrong width, a value that is not finite, times that do not increase, a quaternion that is not
+    unit. A validated
     :class:`~dmprs.CartesianTrajectory` can only have too few samples; one built
     :meth:`~dmprs.CartesianTrajectory.unchecked` may break any. Empty when none.
     """
     t = tr.t
     if len(t) < min_samples:
         return [f"trajectory has {len(t)} samples; at least {min_samples} are needed"]
-    problems = []
+    widths = {name: (3 if name != "quaternion" else 4) for name in _POSE_FIELDS}
+    problems = [f"{name} has {arr.shape[1]} columns per sample, a pose has {widths[name]}"
+                for name in _POSE_FIELDS if (arr := getattr(tr, name)) is not None and arr.shape[1:] != (widths[name],)]
+    if problems:
+        return problems
     for name in ("t", *_POSE_FIELDS):
         arr = getattr(tr, name)
         if arr is not None and not np.isfinite(arr).all():
