@@ -172,7 +172,8 @@ pub struct PyRobotNode {
 impl PyRobotNode {
     #[new]
     #[pyo3(signature = (domain_id, controller, joint_names, *, node_name="dmprs_robot", namespace="/",
-        command_topic="/forward_position_controller/commands", float_signals=vec![], point_signals=vec![],
+        command_topic="/forward_position_controller/commands",
+        cartesian_controller="/cartesian_motion_controller", float_signals=vec![], point_signals=vec![],
         loopback_only=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -183,6 +184,7 @@ impl PyRobotNode {
         node_name: &str,
         namespace: &str,
         command_topic: &str,
+        cartesian_controller: &str,
         float_signals: Vec<String>,
         point_signals: Vec<String>,
         loopback_only: bool,
@@ -191,6 +193,7 @@ impl PyRobotNode {
         config.node_name = node_name.into();
         config.namespace = namespace.into();
         config.command_topic = command_topic.into();
+        config.cartesian_controller = cartesian_controller.into();
         config.loopback_only = loopback_only;
         config.signals = float_signals
             .into_iter()
@@ -270,6 +273,37 @@ impl PyRobotNode {
             &self.inner.poll_commands(),
             self.inner.config().joint_names.len(),
         )
+    }
+
+    /// Target poses received by the Cartesian controller since the last call: `(stamps, poses)`,
+    /// `poses` one `[x, y, z, qw, qx, qy, qz]` row per target, and their frame ids.
+    fn poll_poses<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Vec<String>,
+    )> {
+        let targets = self.inner.poll_poses();
+        let stamps: Vec<f64> = targets.iter().map(|t| t.stamp).collect();
+        let poses: Vec<Vec<f64>> = targets.iter().map(|t| t.pose.to_vec()).collect();
+        let frames = targets.into_iter().map(|t| t.frame_id).collect();
+        Ok((stamps.into_pyarray(py), rows(py, &poses, 7)?, frames))
+    }
+
+    /// Publish the Cartesian controller's `current_pose` (`[x, y, z, qw, qx, qy, qz]`).
+    #[pyo3(signature = (stamp, pose, frame_id="base_link"))]
+    fn publish_pose(
+        &self,
+        py: Python<'_>,
+        stamp: f64,
+        pose: PyReadonlyArray1<'_, f64>,
+        frame_id: &str,
+    ) -> PyResult<()> {
+        let pose = vector("pose", Some(pose))?.unwrap_or_default();
+        py.detach(|| self.inner.publish_pose(stamp, frame_id, &pose))
+            .py_err()
     }
 
     #[pyo3(signature = (stamp, position, velocity=None))]

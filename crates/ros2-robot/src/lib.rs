@@ -15,7 +15,7 @@ mod robot;
 pub mod validate;
 
 pub use goals::{GoalId, GoalStatus, GoalTableError};
-pub use robot::{AcceptedGoal, Rejection, RobotConfig, RobotNode, SignalKind};
+pub use robot::{AcceptedGoal, Rejection, RobotConfig, RobotNode, SignalKind, TargetPose};
 
 /// What can go wrong on the robot's side.
 #[derive(Debug, thiserror::Error)]

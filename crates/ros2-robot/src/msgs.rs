@@ -157,6 +157,14 @@ ros_message!(
     PointStamped { header: Header, point: Point }
 );
 ros_message!(
+    /// geometry_msgs/msg/Pose
+    Pose { position: Point, orientation: Quaternion }
+);
+ros_message!(
+    /// geometry_msgs/msg/PoseStamped
+    PoseStamped { header: Header, pose: Pose }
+);
+ros_message!(
     /// rosgraph_msgs/msg/Clock
     Clock { clock: Time }
 );

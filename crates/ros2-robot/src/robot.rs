@@ -2,7 +2,7 @@
 //!
 //! One thread owns the incoming side (goal, cancel and result requests of the
 //! `<controller>/follow_joint_trajectory` action, the `<controller>/joint_trajectory` topic, the
-//! streamed position commands) and waits on them with mio, woken by the DDS readers or by
+//! streamed position commands, the Cartesian controller's target poses) and waits on them with mio, woken by the DDS readers or by
 //! [`RobotNode::shutdown`]. What arrives is queued for the simulation, which polls it with a
 //! timeout. The outgoing side (joint states, clock, signals, feedback, results) is published
 //! from the caller's thread.
@@ -36,7 +36,7 @@ use crate::goals::{CancelReturn, GoalId, GoalStatus, GoalTable, ResultReply};
 use crate::msgs::{
     Clock, Float64, Float64MultiArray, FollowJointTrajectoryFeedback, FollowJointTrajectoryGoal,
     FollowJointTrajectoryResult, Header, JointState, JointTrajectory, JointTrajectoryPoint, Point,
-    PointStamped, Time,
+    PointStamped, Pose, PoseStamped, Quaternion, Time,
 };
 use crate::validate::check_trajectory;
 use crate::{RobotError, wire};
@@ -55,6 +55,7 @@ const RESULT: Token = Token(2);
 const TRAJECTORY: Token = Token(3);
 const COMMANDS: Token = Token(4);
 const WAKE: Token = Token(5);
+const POSES: Token = Token(6);
 
 /// The kind of message a named signal topic carries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,6 +78,10 @@ pub struct RobotConfig {
     pub joint_names: Vec<String>,
     /// Topic of streamed position commands (std_msgs/msg/Float64MultiArray).
     pub command_topic: String,
+    /// A Cartesian controller (as FZI's cartesian_motion_controller): it follows the poses
+    /// streamed on `<cartesian_controller>/target_frame` and publishes the end effector's on
+    /// `<cartesian_controller>/current_pose` (both geometry_msgs/msg/PoseStamped).
+    pub cartesian_controller: String,
     /// Named signal topics the simulation publishes.
     pub signals: Vec<(String, SignalKind)>,
     /// Advertise and use the loopback interface only (127.0.0.1).
@@ -92,6 +97,7 @@ impl RobotConfig {
             controller: controller.into(),
             joint_names,
             command_topic: "/forward_position_controller/commands".into(),
+            cartesian_controller: "/cartesian_motion_controller".into(),
             signals: Vec::new(),
             loopback_only: true,
         }
@@ -103,6 +109,15 @@ impl RobotConfig {
 pub struct AcceptedGoal {
     pub id: GoalId,
     pub goal: FollowJointTrajectoryGoal,
+}
+
+/// A target pose received by the Cartesian controller: its header stamp (s), the frame it is
+/// given in, and the pose as `[x, y, z, qw, qx, qy, qz]` (m, unit quaternion, dmprs's order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TargetPose {
+    pub stamp: f64,
+    pub frame_id: String,
+    pub pose: [f64; 7],
 }
 
 /// A goal or trajectory the controller refused, and why (a ROS 2 rejection carries no reason on
@@ -129,6 +144,7 @@ struct Outgoing {
     clock: Publisher<Clock>,
     float_signals: HashMap<String, Publisher<Float64>>,
     point_signals: HashMap<String, Publisher<PointStamped>>,
+    current_pose: Publisher<PoseStamped>,
 }
 
 /// One lock per queue, so that a caller blocked in `poll_goal` holds up no other poll.
@@ -138,6 +154,7 @@ struct Queues {
     cancels: Mutex<Receiver<GoalId>>,
     trajectories: Mutex<Receiver<JointTrajectory>>,
     commands: Mutex<Receiver<Vec<f64>>>,
+    poses: Mutex<Receiver<TargetPose>>,
 }
 
 struct Senders {
@@ -146,6 +163,7 @@ struct Senders {
     cancels: Sender<GoalId>,
     trajectories: Sender<JointTrajectory>,
     commands: Sender<Vec<f64>>,
+    poses: Sender<TargetPose>,
 }
 
 /// A running robot node. Dropping it shuts it down.
@@ -252,6 +270,17 @@ impl RobotNode {
             "std_msgs",
             "Float64MultiArray",
         )?;
+        let cartesian = config.cartesian_controller.trim_end_matches('/');
+        let mut pose_sub: Subscription<PoseStamped> = subscription(
+            &mut node,
+            &name(
+                ns,
+                &format!("{cartesian}/target_frame"),
+                "cartesian controller",
+            )?,
+            "geometry_msgs",
+            "PoseStamped",
+        )?;
 
         let outgoing = Outgoing {
             joint_states: publisher(
@@ -285,6 +314,17 @@ impl RobotNode {
                 "geometry_msgs",
                 "PointStamped",
             )?,
+            current_pose: publisher(
+                &mut node,
+                &name(
+                    ns,
+                    &format!("{cartesian}/current_pose"),
+                    "cartesian controller",
+                )?,
+                "geometry_msgs",
+                "PoseStamped",
+                default_qos(),
+            )?,
         };
 
         let poll = create(Poll::new(), "mio poll")?;
@@ -295,6 +335,7 @@ impl RobotNode {
         register(registry.register(server.result_server(), RESULT, Interest::READABLE))?;
         register(registry.register(&mut trajectory_sub, TRAJECTORY, Interest::READABLE))?;
         register(registry.register(&mut command_sub, COMMANDS, Interest::READABLE))?;
+        register(registry.register(&mut pose_sub, POSES, Interest::READABLE))?;
         let waker = Arc::new(create(Waker::new(registry, WAKE), "mio waker")?);
 
         let (goals_tx, goals) = mpsc::channel();
@@ -302,12 +343,14 @@ impl RobotNode {
         let (cancels_tx, cancels) = mpsc::channel();
         let (trajectories_tx, trajectories) = mpsc::channel();
         let (commands_tx, commands) = mpsc::channel();
+        let (poses_tx, poses) = mpsc::channel();
         let senders = Senders {
             goals: goals_tx,
             rejections: rejections_tx,
             cancels: cancels_tx,
             trajectories: trajectories_tx,
             commands: commands_tx,
+            poses: poses_tx,
         };
         let action = Arc::new(Mutex::new(ActionSide {
             server,
@@ -320,6 +363,7 @@ impl RobotNode {
             action: Arc::clone(&action),
             trajectory_sub,
             command_sub,
+            pose_sub,
             senders,
             joint_names: config.joint_names.clone(),
         };
@@ -340,6 +384,7 @@ impl RobotNode {
                 cancels: Mutex::new(cancels),
                 trajectories: Mutex::new(trajectories),
                 commands: Mutex::new(commands),
+                poses: Mutex::new(poses),
             },
             stop,
             waker,
@@ -391,6 +436,38 @@ impl RobotNode {
     /// Position commands received since the last call, oldest first.
     pub fn poll_commands(&self) -> Vec<Vec<f64>> {
         queue(&self.queues.commands).try_iter().collect()
+    }
+
+    /// Target poses received by the Cartesian controller since the last call, oldest first.
+    pub fn poll_poses(&self) -> Vec<TargetPose> {
+        queue(&self.queues.poses).try_iter().collect()
+    }
+
+    /// Publish the Cartesian controller's `current_pose`: `pose` = `[x, y, z, qw, qx, qy, qz]`
+    /// in `frame_id` at `stamp` (s).
+    pub fn publish_pose(&self, stamp: f64, frame_id: &str, pose: &[f64]) -> Result<(), RobotError> {
+        self.check_running()?;
+        check_len("pose", pose, 7)?;
+        let message = PoseStamped {
+            header: Header {
+                stamp: Time::from_seconds(check_stamp(stamp)?),
+                frame_id: frame_id.into(),
+            },
+            pose: Pose {
+                position: Point {
+                    x: pose[0],
+                    y: pose[1],
+                    z: pose[2],
+                },
+                orientation: Quaternion {
+                    w: pose[3],
+                    x: pose[4],
+                    y: pose[5],
+                    z: pose[6],
+                },
+            },
+        };
+        wire(self.outgoing.current_pose.publish(message), "current_pose")
     }
 
     /// Publish `/joint_states` with the controller's joint names.
@@ -725,6 +802,7 @@ struct Incoming {
     action: Arc<Mutex<ActionSide>>,
     trajectory_sub: Subscription<JointTrajectory>,
     command_sub: Subscription<Float64MultiArray>,
+    pose_sub: Subscription<PoseStamped>,
     senders: Senders,
     joint_names: Vec<String>,
 }
@@ -913,6 +991,25 @@ impl Incoming {
                 }
                 Ok(None) => break,
                 Err(e) => self.reject(None, format!("unreadable position command: {e:?}")),
+            }
+        }
+        loop {
+            match self.pose_sub.take() {
+                Ok(Some((target, _))) => {
+                    let (p, q) = (&target.pose.position, &target.pose.orientation);
+                    let pose = [p.x, p.y, p.z, q.w, q.x, q.y, q.z];
+                    if pose.iter().all(|v| v.is_finite()) {
+                        let _ = self.senders.poses.send(TargetPose {
+                            stamp: target.header.stamp.seconds(),
+                            frame_id: target.header.frame_id,
+                            pose,
+                        });
+                    } else {
+                        self.reject(None, "target pose with a non-finite value".into());
+                    }
+                }
+                Ok(None) => break,
+                Err(e) => self.reject(None, format!("unreadable target pose: {e:?}")),
             }
         }
     }

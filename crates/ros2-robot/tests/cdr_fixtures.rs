@@ -46,6 +46,7 @@ fn every_struct_matches_rosbags_bytes() {
             "std_msgs/msg/Float64" => check::<Float64>(value, &bytes, ros_type),
             "std_msgs/msg/Float64MultiArray" => check::<Float64MultiArray>(value, &bytes, ros_type),
             "geometry_msgs/msg/PointStamped" => check::<PointStamped>(value, &bytes, ros_type),
+            "geometry_msgs/msg/PoseStamped" => check::<PoseStamped>(value, &bytes, ros_type),
             "rosgraph_msgs/msg/Clock" => check::<Clock>(value, &bytes, ros_type),
             "control_msgs/action/FollowJointTrajectory_Goal" => {
                 check::<FollowJointTrajectoryGoal>(value, &bytes, ros_type)
@@ -64,5 +65,5 @@ fn every_struct_matches_rosbags_bytes() {
         }
         seen.push(ros_type);
     }
-    assert_eq!(seen.len(), 11, "every struct is checked: {seen:?}");
+    assert_eq!(seen.len(), 12, "every struct is checked: {seen:?}");
 }

@@ -36,7 +36,7 @@ from dmprs.ros2.action import ActionClient, GoalHandle
 from dmprs.ros2.node import Node, Subscription, stamp_seconds
 from dmprs.ros2.qos import DEFAULT
 from dmprs.ros2.recorder import JointRecording, JointStateRecorder
-from dmprs.trajectory import Trajectory, nanoseconds
+from dmprs.trajectory import AnyTrajectory, Trajectory, nanoseconds
 
 FOLLOW_JOINT_TRAJECTORY = "control_msgs/action/FollowJointTrajectory"
 _RESULT = messages.FollowJointTrajectory_Result
@@ -115,20 +115,86 @@ def _tolerances(joint_names: tuple[str, ...], position: float | None) -> list[An
             for j in joint_names]
 
 
-class Ros2TrajectoryAdapter(BaseAdapter):
+class Ros2Adapter(BaseAdapter):
+    """What the ROS 2 adapters share: joining the domain as a node, and reading the outcome
+    signals from topics once the motion has ended (:meth:`_signals`).
+
+    Every :class:`SignalTopic` must be one of the spec's signals and every signal needs one.
+    ``settle`` (s) is how long the outcome takes to settle once the motion has ended (liquid
+    still flowing, a ball still rolling): the signals are read from samples stamped at least that
+    long after the end. ``answer_timeout`` bounds each wait for the robot. ``config`` is a Cyclone
+    XML configuration (e.g. :data:`~dmprs.ros2.LOOPBACK_CONFIG`), else ``CYCLONEDDS_URI`` is read
+    as a ROS 2 node reads it.
+    """
+
+    def __init__(self, spec: AdapterSpec, *, domain_id: int, signals: tuple[SignalTopic, ...], settle: float,
+                 answer_timeout: float, node_name: str, namespace: str, config: str | None,
+                 **more_times: float | None) -> None:
+        declared = {s.name for s in spec.signals}
+        for s in signals:
+            if s.name not in declared:
+                raise InvalidInputError(f"signal topic {s.name!r} is not a signal of {spec.name} ({', '.join(sorted(declared))})")
+        missing = declared - {s.name for s in signals}
+        if missing:
+            raise InvalidInputError(f"{spec.name}: no SignalTopic for signal(s) {', '.join(sorted(missing))}")
+        for name, value in (("settle", settle), ("answer_timeout", answer_timeout), *more_times.items()):
+            if value is not None and not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
+                raise InvalidInputError(f"{name} = {value!r} must be a finite number >= 0")
+        super().__init__(spec)
+        self.domain_id, self.signal_topics = domain_id, tuple(signals)
+        self.settle, self.answer_timeout = float(settle), float(answer_timeout)
+        self._node_args = (node_name, domain_id, namespace, config)
+        self._node: Node | None = None
+        self._signals: list[tuple[SignalTopic, Subscription[Any]]] = []
+
+    def connect(self) -> None:
+        """Joins the ROS 2 domain: the node, the adapter's endpoints (:meth:`_open`), the signals."""
+        if self._node is None:
+            name, domain_id, namespace, config = self._node_args
+            self._node = Node(name, domain_id, namespace, config)
+            self._open(self._node)
+            self._signals = [(s, self._node.create_subscription(messages.message_class(s.type), s.topic, DEFAULT))
+                             for s in self.signal_topics]
+        super().connect()
+
+    def _open(self, node: Node) -> None:
+        """Hook: create the adapter's publishers, subscriptions and clients on ``node``."""
+
+    def disconnect(self) -> None:
+        """Leaves the domain."""
+        if self._node is not None:
+            self._node.close()
+        self._node, self._signals = None, []
+        super().disconnect()
+
+    def _signals_after(self, robot_end: float, ended: float, executed: AnyTrajectory) -> Outcome:
+        """The outcome with each signal's first sample stamped ``settle`` s after the motion ended:
+        ``robot_end`` on the robot's clock for stamped types, ``ended`` (this machine's clock,
+        when the end was seen) for the others.
+        """
+        signals: dict[str, Any] = {}
+        for topic, subscription in self._signals:
+            after = (robot_end if SIGNAL_TYPES[topic.type] else ended) + self.settle
+            sample = subscription.wait_for_sample(after, self.settle + self.answer_timeout)
+            if sample is None:
+                return Outcome(Status.ERROR, executed=executed, message=(
+                    f"no {topic.topic} sample stamped {self.settle:g} s or more after the motion ended "
+                    f"within {self.settle + self.answer_timeout:g} s"))
+            signals[topic.name] = topic.read(sample)
+        return Outcome(Status.OK, signals=signals, executed=executed)
+
+
+class Ros2TrajectoryAdapter(Ros2Adapter):
     """Joint trajectories executed by a ROS 2 robot's ``joint_trajectory_controller``.
 
     ``spec`` declares the joints (``dof_names``, matched by name with the robot's), limits and
-    signals, as for any adapter; every :class:`SignalTopic` must be one of its signals. ``mode``
-    is ``"action"`` (``<controller>/follow_joint_trajectory``) or ``"topic"``
-    (``<controller>/joint_trajectory``: no answer comes, the motion is taken as ended when the
-    trajectory's duration has passed). ``settle`` (s) is how long the outcome takes to settle
-    once the motion has ended (liquid still flowing, a ball still rolling): the signals are read
-    from samples stamped at least that long after the end. ``path_tolerance`` and ``goal_tolerance``
-    (rad, per joint) go into the goal; ``goal_time_tolerance`` (s) too. ``answer_timeout`` bounds
-    each wait for the robot (discovery, the goal's acceptance, ``/joint_states``, a signal).
-    ``config`` is a Cyclone XML configuration (e.g. :data:`~dmprs.ros2.LOOPBACK_CONFIG`), else
-    ``CYCLONEDDS_URI`` is read as a ROS 2 node reads it.
+    signals, as for any adapter. ``mode`` is ``"action"``
+    (``<controller>/follow_joint_trajectory``) or ``"topic"`` (``<controller>/joint_trajectory``:
+    no answer comes, the motion is taken as ended when the trajectory's duration has passed).
+    ``path_tolerance`` and ``goal_tolerance`` (rad, per joint) go into the goal;
+    ``goal_time_tolerance`` (s) too. ``answer_timeout`` bounds each wait for the robot
+    (discovery, the goal's acceptance, ``/joint_states``, a signal); ``signals``, ``settle`` and
+    ``config`` as for :class:`Ros2Adapter`.
     """
 
     def __init__(self, spec: AdapterSpec, *, domain_id: int = 0, controller: str = "/joint_trajectory_controller",
@@ -140,51 +206,27 @@ class Ros2TrajectoryAdapter(BaseAdapter):
             raise InvalidInputError(f"{spec.name}: Ros2TrajectoryAdapter takes joint trajectories (pose=False)")
         if mode not in ("action", "topic"):
             raise InvalidInputError(f"mode = {mode!r} is invalid: use 'action' or 'topic'")
-        declared = {s.name for s in spec.signals}
-        for s in signals:
-            if s.name not in declared:
-                raise InvalidInputError(f"signal topic {s.name!r} is not a signal of {spec.name} ({', '.join(sorted(declared))})")
-        missing = declared - {s.name for s in signals}
-        if missing:
-            raise InvalidInputError(f"{spec.name}: no SignalTopic for signal(s) {', '.join(sorted(missing))}")
-        for name, value in (("path_tolerance", path_tolerance), ("goal_tolerance", goal_tolerance),
-                            ("goal_time_tolerance", goal_time_tolerance), ("settle", settle),
-                            ("answer_timeout", answer_timeout)):
-            if value is not None and not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
-                raise InvalidInputError(f"{name} = {value!r} must be a finite number >= 0")
-        super().__init__(spec)
-        self.domain_id, self.controller, self.mode, self.signal_topics = domain_id, controller, mode, tuple(signals)
-        self.joint_states, self.path_tolerance, self.goal_tolerance = joint_states, path_tolerance, goal_tolerance
-        self.goal_time_tolerance, self.settle, self.answer_timeout = float(goal_time_tolerance), float(settle), float(answer_timeout)
-        self._node_args = (node_name, domain_id, namespace, config)
-        self._node: Node | None = None
+        super().__init__(spec, domain_id=domain_id, signals=signals, settle=settle, answer_timeout=answer_timeout,
+                         node_name=node_name, namespace=namespace, config=config, path_tolerance=path_tolerance,
+                         goal_tolerance=goal_tolerance, goal_time_tolerance=goal_time_tolerance)
+        self.controller, self.mode, self.joint_states = controller, mode, joint_states
+        self.path_tolerance, self.goal_tolerance = path_tolerance, goal_tolerance
+        self.goal_time_tolerance = float(goal_time_tolerance)
         self._client: ActionClient | None = None
         self._publisher: Any = None
         self._probe: Subscription[Any] | None = None
-        self._signals: list[tuple[SignalTopic, Subscription[Any]]] = []
 
-    def connect(self) -> None:
-        """Joins the ROS 2 domain: the node, the action client or trajectory publisher, the signals."""
-        if self._node is None:
-            name, domain_id, namespace, config = self._node_args
-            self._node = Node(name, domain_id, namespace, config)
-            if self.mode == "action":
-                self._client = ActionClient(self._node, FOLLOW_JOINT_TRAJECTORY,
-                                            f"{self.controller}/follow_joint_trajectory")
-            else:
-                self._publisher = self._node.create_publisher(messages.JointTrajectory,
-                                                              f"{self.controller}/joint_trajectory")
-            self._probe = self._node.create_subscription(messages.JointState, self.joint_states, DEFAULT)
-            self._signals = [(s, self._node.create_subscription(messages.message_class(s.type), s.topic, DEFAULT))
-                             for s in self.signal_topics]
-        super().connect()
+    def _open(self, node: Node) -> None:
+        if self.mode == "action":
+            self._client = ActionClient(node, FOLLOW_JOINT_TRAJECTORY, f"{self.controller}/follow_joint_trajectory")
+        else:
+            self._publisher = node.create_publisher(messages.JointTrajectory, f"{self.controller}/joint_trajectory")
+        self._probe = node.create_subscription(messages.JointState, self.joint_states, DEFAULT)
 
     def disconnect(self) -> None:
         """Leaves the domain."""
-        if self._node is not None:
-            self._node.close()
-        self._node, self._client, self._publisher, self._probe, self._signals = None, None, None, None, []
         super().disconnect()
+        self._client, self._publisher, self._probe = None, None, None
 
     def _robot_now(self) -> tuple[list[str], float] | None:
         """The joints the robot publishes and its clock now, from a fresh ``/joint_states``
@@ -222,18 +264,8 @@ class Ros2TrajectoryAdapter(BaseAdapter):
             return Outcome(Status.ERROR, message=f"fewer than two {self.joint_states} samples while it moved "
                            f"({recorder.skipped} skipped: without the joints {', '.join(joints)}, or with "
                            "fewer positions than names)")
-        signals: dict[str, Any] = {}
         # on the robot's clock the motion cannot end before its start plus the trajectory's duration
-        robot_end = robot_start + float(trajectory.t[-1] - trajectory.t[0])
-        for topic, subscription in self._signals:
-            after = (robot_end if SIGNAL_TYPES[topic.type] else ended) + self.settle
-            sample = subscription.wait_for_sample(after, self.settle + self.answer_timeout)
-            if sample is None:
-                return Outcome(Status.ERROR, executed=executed, message=(
-                    f"no {topic.topic} sample stamped {self.settle:g} s or more after the motion ended "
-                    f"within {self.settle + self.answer_timeout:g} s"))
-            signals[topic.name] = topic.read(sample)
-        return Outcome(Status.OK, signals=signals, executed=executed)
+        return self._signals_after(robot_start + float(trajectory.t[-1] - trajectory.t[0]), ended, executed)
 
     def _follow(self, trajectory: Trajectory, recorder: JointStateRecorder) -> tuple[Status, str]:
         """The trajectory through the action: (status, why) once the goal has ended, or once the
