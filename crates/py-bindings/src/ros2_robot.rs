@@ -162,6 +162,13 @@ fn vector(name: &str, a: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option<V
     .transpose()
 }
 
+/// Target poses as Python receives them: stamps (s), `[x, y, z, qw, qx, qy, qz]` rows, frame ids.
+type TargetPoses<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+);
+
 /// A simulated ros2_control robot on ROS 2 (ros2-client / RustDDS, its own threads).
 #[pyclass(name = "RobotNode", module = "dmprs._core", frozen)]
 pub struct PyRobotNode {
@@ -277,14 +284,7 @@ impl PyRobotNode {
 
     /// Target poses received by the Cartesian controller since the last call: `(stamps, poses)`,
     /// `poses` one `[x, y, z, qw, qx, qy, qz]` row per target, and their frame ids.
-    fn poll_poses<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<(
-        Bound<'py, PyArray1<f64>>,
-        Bound<'py, PyArray2<f64>>,
-        Vec<String>,
-    )> {
+    fn poll_poses<'py>(&self, py: Python<'py>) -> PyResult<TargetPoses<'py>> {
         let targets = self.inner.poll_poses();
         let stamps: Vec<f64> = targets.iter().map(|t| t.stamp).collect();
         let poses: Vec<Vec<f64>> = targets.iter().map(|t| t.pose.to_vec()).collect();
