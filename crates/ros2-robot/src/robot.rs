@@ -23,13 +23,15 @@ use ros2_client::action_msgs::{
     GoalStatus as RosGoalStatus, GoalStatusArray, GoalStatusEnum,
 };
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
+
 use ros2_client::dds::rustdds::mio1::{Events, Interest, Poll, Token, Waker};
 use ros2_client::dds::{Context, Node, Publisher, ServiceMapping, Subscription};
 use ros2_client::qos::{Durability, History, QosProfile, Reliability, WhenFull};
 use ros2_client::service::RmwRequestId;
 use ros2_client::unique_identifier_msgs::UUID;
 use ros2_client::{
-    ActionTypeName, MessageTypeName, Name, NodeName, NodeOptions, builtin_interfaces,
+    ActionTypeName, MessageTypeName, Name, NodeName, NodeOptions, WriteError, WriteResult,
+    builtin_interfaces,
 };
 
 use crate::goals::{CancelReturn, GoalId, GoalStatus, GoalTable, ResultReply};
@@ -467,7 +469,7 @@ impl RobotNode {
                 },
             },
         };
-        wire(self.outgoing.current_pose.publish(message), "current_pose")
+        stream_sample(self.outgoing.current_pose.publish(message), "current_pose")
     }
 
     /// Publish `/joint_states` with the controller's joint names.
@@ -490,7 +492,7 @@ impl RobotNode {
             velocity: velocity.to_vec(),
             effort: Vec::new(),
         };
-        wire(self.outgoing.joint_states.publish(message), "/joint_states")
+        stream_sample(self.outgoing.joint_states.publish(message), "/joint_states")
     }
 
     /// Publish `/clock` at simulated time `seconds`.
@@ -499,7 +501,7 @@ impl RobotNode {
         let clock = Clock {
             clock: Time::from_seconds(check_stamp(seconds)?),
         };
-        wire(self.outgoing.clock.publish(clock), "/clock")
+        stream_sample(self.outgoing.clock.publish(clock), "/clock")
     }
 
     /// Publish a named signal: one value on a Float64 topic, three (x, y, z) on a PointStamped one.
@@ -627,6 +629,19 @@ impl RobotNode {
 impl Drop for RobotNode {
     fn drop(&mut self) {
         self.shutdown();
+    }
+}
+
+/// One sample of a periodic stream (`/joint_states`, `/clock`, the current pose): a sample that
+/// would block behind a subscriber that has not acknowledged the last ones is dropped, since the
+/// stream's next sample supersedes it (what keep-last means), instead of failing the robot.
+fn stream_sample<M: std::fmt::Debug>(
+    result: WriteResult<(), M>,
+    what: &str,
+) -> Result<(), RobotError> {
+    match result {
+        Err(WriteError::WouldBlock { .. }) => Ok(()),
+        other => wire(other, what),
     }
 }
 
