@@ -35,7 +35,7 @@ from dmprs.ros2 import messages
 from dmprs.ros2.action import ActionClient, GoalHandle
 from dmprs.ros2.node import Node, Subscription, stamp_seconds
 from dmprs.ros2.qos import DEFAULT
-from dmprs.ros2.recorder import JointRecording, JointStateRecorder
+from dmprs.ros2.recorder import JointRecording, JointStateRecorder, increasing
 from dmprs.trajectory import AnyTrajectory, Trajectory, nanoseconds
 
 FOLLOW_JOINT_TRAJECTORY = "control_msgs/action/FollowJointTrajectory"
@@ -328,7 +328,7 @@ def _ended(goal_status: int, result: Any) -> tuple[Status, str]:
 
 def _executed(recording: JointRecording) -> Trajectory | None:
     """The recorded motion, timed by the robot's stamps from its first sample; None if too short."""
-    keep = np.concatenate([[True], np.diff(recording.times) > 0]) if len(recording.times) else np.zeros(0, bool)
+    keep = increasing(recording.times)
     t = recording.times[keep]
     if len(t) < 2:
         return None

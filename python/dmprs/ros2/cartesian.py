@@ -21,6 +21,7 @@ from dmprs.ros2 import messages
 from dmprs.ros2.adapter import Ros2Adapter, SignalTopic
 from dmprs.ros2.node import Node, Subscription, stamp_seconds
 from dmprs.ros2.qos import DEFAULT
+from dmprs.ros2.recorder import increasing
 from dmprs.trajectory import CartesianTrajectory, nanoseconds
 
 #: FZI cartesian_controllers' motion controller, the common Cartesian controller of ros2_control
@@ -135,8 +136,7 @@ class Ros2PoseAdapter(Ros2Adapter):
 def _executed(stamps: list[float], poses: list[np.ndarray]) -> CartesianTrajectory | None:
     """The recorded poses, timed by the robot's stamps from the first; None if too short."""
     t = np.asarray(stamps)
-    # a sample stamped at or before one already kept (a repeat, a reordering) adds nothing
-    keep = np.concatenate([[True], t[1:] > np.maximum.accumulate(t)[:-1]])
+    keep = increasing(t)
     if keep.sum() < 2:
         return None
     return CartesianTrajectory.from_pose(t[keep] - t[0], np.asarray(poses)[keep])

@@ -14,6 +14,7 @@ import time
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import messages
@@ -37,6 +38,16 @@ def joint_columns(cache: dict[tuple[str, ...], list[int] | None], message: Any,
         index = {name: i for i, name in enumerate(names)}
         cache[names] = [index[j] for j in joint_names] if all(j in index for j in joint_names) else None
     return cache[names] if len(message.position) == len(names) else None
+
+
+def increasing(stamps: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Which samples to keep so that the times strictly increase: a sample stamped at or before
+    one already kept (a repeat, a reordering) adds nothing.
+    """
+    t = np.asarray(stamps, dtype=float)
+    if not len(t):
+        return np.zeros(0, bool)
+    return np.concatenate([[True], t[1:] > np.maximum.accumulate(t)[:-1]])
 
 
 @dataclasses.dataclass(frozen=True)

@@ -108,11 +108,14 @@ class _Robot:
     point_topics: tuple[str, ...] = ()
 
     def __init__(self, scene: BaseAdapter[Any], home: NDArray[np.float64]) -> None:
-        self.scene, self.home, self.states = scene, home, 0
+        self.scene, self.home = scene, home
 
     def new_goal(self) -> None:
         """The scene as at the start (the in-process learning loop's reset)."""
         self.scene.reset(seed=None)
+
+    def started(self, outcome: Outcome) -> None:
+        """The simulated outcome of the goal whose motion is about to be played back."""
 
     def sense(self, node: RobotNode, now: float, t: float | None) -> None:
         """The sensors' samples with one joint state at ``now``; ``t`` is the time into the
@@ -151,7 +154,7 @@ class _Pouring(_Robot):
     def __init__(self, bottle_volume: float, liquid_seed: int) -> None:
         scene = ArmPouringAdapter(bottle_volume, liquid_seed=liquid_seed)
         super().__init__(scene, np.asarray(scene.home, dtype=float))
-        self.reading, self.curve = 0.0, (np.zeros(1), np.zeros(1))
+        self.reading, self.curve, self.states = 0.0, (np.zeros(1), np.zeros(1)), 0
 
     def new_goal(self) -> None:
         super().new_goal()
@@ -165,7 +168,7 @@ class _Pouring(_Robot):
         if self.states % SCALE_EVERY == 0:
             node.publish_signal(SCALE_TOPIC, self.reading, now)
 
-    def start(self, outcome: Outcome) -> None:
+    def started(self, outcome: Outcome) -> None:
         """The poured volume over the motion, to read out as it is played back."""
         self.curve = (np.asarray(outcome.signals["poured_volume_time"]),
                       np.asarray(outcome.signals["poured_volume_curve"]))
@@ -260,8 +263,8 @@ def _run_goal(node: RobotNode, clock: _Clock, robot: _Robot, goal: Any, speed: f
     if out.status is Status.REJECTED:
         node.finish_goal(goal.id, messages.GoalStatus.STATUS_ABORTED, _RESULT.INVALID_GOAL, out.message)
         return
-    if isinstance(robot, _Pouring) and out.ok:
-        robot.start(out)
+    if out.ok:
+        robot.started(out)
     executed = out.executed
     if isinstance(executed, Trajectory):
         step = max(1, round(1.0 / (STATE_RATE * float(np.median(np.diff(executed.t))))))
