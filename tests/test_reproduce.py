@@ -7,13 +7,18 @@ from click.testing import CliRunner
 from dmprs.cli import main
 
 
+def _refuse(token: str) -> float:
+    raise ValueError(f"{token} is not JSON")
+
+
 def test_quick_reproduction(tmp_path, calibration_cache, monkeypatch):
     monkeypatch.setenv("DMPRS_CACHE_DIR", calibration_cache)  # the arm's calibration, computed once
     out = tmp_path / "out"
     result = CliRunner().invoke(main, ["reproduce", "--quick", "--out", str(out), "--backend", "serial"],
                                 catch_exceptions=False)
     assert result.exit_code == 0, result.output
-    report = json.loads((out / "report.json").read_text())
+    # strict JSON: NaN and infinities are written as strings, not as Python's bare tokens
+    report = json.loads((out / "report.json").read_text(), parse_constant=_refuse)
     parts = {r["part"] for r in report["runs"]}
     assert parts == {"matchbox", "matchbox_both_flipped_back", "pouring", "arm_pouring", "baselines", "growing",
                      "noisy", "throwing", "online"}

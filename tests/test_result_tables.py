@@ -13,7 +13,7 @@ from click.testing import CliRunner
 
 from dmprs.cli import main
 from dmprs.reproduce.report import summarize
-from dmprs.reproduce.stats import cell
+from dmprs.reproduce.stats import cell, trial_stats
 from dmprs.reproduce.tables import BEGIN, END, SUMMARY_PATH, TABLES, documents, render, update_docs
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,6 +36,29 @@ def test_every_generated_table_matches_the_committed_summary():
             f"{path.relative_to(ROOT)}: a generated table differs from {SUMMARY_PATH}; run "
             "`dmprs reproduce --update-docs .` (or dmprs.reproduce.tables.update_docs with the summary)")
     assert found == set(TABLES), f"tables no document holds: {set(TABLES) - found}"
+
+
+def _refuse(token: str) -> float:
+    raise ValueError(f"{token} is not JSON")
+
+
+def test_the_committed_summary_is_strict_json():
+    # Python's json writes NaN and Infinity as bare tokens, which other JSON readers refuse
+    json.loads((ROOT / SUMMARY_PATH).read_text(), parse_constant=_refuse)
+
+
+@pytest.mark.parametrize(("values", "median", "shown"), [
+    ([3, 5, 4], 4, "4 [3-5]"),
+    ([3, None, 5], 5, "5 [3-5], 2/3 succeeded"),
+    ([3, None, None], None, ">9 [3-3], 1/3 succeeded"),
+    ([2, 3, None, None], None, ">9 [2-3], 2/4 succeeded"),
+    ([None, None], None, "none within 9"),
+])
+def test_a_median_beyond_the_cap_is_none_and_shown_as_more_than_the_cap(values, median, shown):
+    stats = trial_stats(values, budget=9)
+    assert stats["median"] == median
+    assert cell(stats) == shown
+    json.dumps(stats, allow_nan=False)
 
 
 def test_the_readme_states_the_arms_spread_over_liquids():

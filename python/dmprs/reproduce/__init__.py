@@ -22,6 +22,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from dmprs._io import strict_json
 from dmprs.parallel import pmap
 from dmprs.reproduce.figures import write_figures
 from dmprs.reproduce.plan import LearnSpec, plan, skipped
@@ -58,7 +59,8 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
         report = summarize(results)
         report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1),
                       skipped=skipped(quick))
-        (out / "report.json").write_text(json.dumps({"summary": report, "runs": results}, indent=1, default=str))
+        text = json.dumps(strict_json({"summary": report, "runs": results}), indent=1, default=str, allow_nan=False)
+        (out / "report.json").write_text(text)
         figures = write_figures(results, out)  # the arm's frame strip reads the cached calibration
     finally:
         if saved is None:

@@ -4,19 +4,24 @@ the reproduction reports for every setting, and their one way of being written i
 
 from __future__ import annotations
 
+import math
 import statistics
 from typing import Any
 
 
 def trial_stats(values: list[int | None], budget: int | None = None) -> dict[str, Any]:
     """Of the trials to success of some runs (None: the run never succeeded): how many runs, how
-    many succeeded, the median (a failed run counts as infinitely many trials when some succeeded),
-    the range of the successful ones, and the trial cap ``budget``.
+    many succeeded, the median, the range of the successful ones, and the trial cap ``budget``.
+
+    A failed run counts as more trials than any success, so the median is None when at least
+    half the runs failed (it lies beyond the cap). None, not infinity: the summary is stored as
+    JSON, which has no infinity.
     """
-    ok = [v for v in values if v is not None]
+    ok = sorted(v for v in values if v is not None)
+    failed = len(values) - len(ok)
+    median = statistics.median(ok + [math.inf] * failed) if ok else None
     return {"runs": len(values), "successes": len(ok),
-            "median": statistics.median(ok) if len(ok) == len(values) and ok else
-            (statistics.median(ok + [float("inf")] * (len(values) - len(ok))) if ok else None),
+            "median": median if median is not None and math.isfinite(median) else None,
             "min": min(ok) if ok else None, "max": max(ok) if ok else None, "budget": budget}
 
 
@@ -29,7 +34,7 @@ def cell(row: dict[str, Any]) -> str:
             return f"not solved: {row['stop_reason']}"
         return f"none within {row['budget'] or 'the cap'}"
     med = row["median"]
-    med_s = f">{row['budget']}" if med == float("inf") else f"{med:g}"
+    med_s = f">{row['budget']}" if med is None else f"{med:g}"
     if row["runs"] == 1:
         return med_s
     ok = "" if row["successes"] == row["runs"] else f", {row['successes']}/{row['runs']} succeeded"

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from dmprs._io import strict_json
 from dmprs.reproduce.stats import cell
 
 #: the line before a generated table; ``{name}`` is a key of :data:`TABLES`
@@ -170,5 +171,5 @@ def update_docs(root: str | Path, summary: dict[str, Any]) -> list[Path]:
         if new != text:
             path.write_text(new)
             changed.append(path)
-    (root / SUMMARY_PATH).write_text(json.dumps(summary, indent=1, default=str) + "\n")
+    (root / SUMMARY_PATH).write_text(json.dumps(strict_json(summary), indent=1, default=str, allow_nan=False) + "\n")
     return changed
