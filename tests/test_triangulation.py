@@ -130,6 +130,18 @@ def test_repeats_are_averaged():
                                core.parameters(1.7), rtol=1e-12, atol=1e-12)
 
 
+def test_each_repeated_query_gets_the_mean_of_its_demos_bit_for_bit():
+    # three demos at one query, two at another, interleaved with single ones
+    db = database([0.0, 1.0, 2.0, 3.0])
+    for q, shape in [(3.0, 1.3), (1.0, 1.6), (2.0, 2.2), (1.0, 0.7)]:
+        db.add(q, trajectory(shape), on_duplicate="keep")
+    dmps = dmprs.Generalizer(db, "linear", n_basis=N_BASIS).demo_dmps
+    thetas = np.array([flat(d) for d in dmps])
+    lin = PiecewiseLinear(db.queries, dmps)
+    for node, q in enumerate([0.0, 1.0, 2.0, 3.0]):
+        assert np.array_equal(lin._theta[node], thetas[db.queries[:, 0] == q].mean(axis=0))
+
+
 def test_degenerate_and_far_queries_are_clear_errors(gen2d):
     with pytest.raises(InvalidInputError, match="lower-dimensional"):
         dmprs.Generalizer(database([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]]), "linear", n_basis=N_BASIS)

@@ -72,7 +72,14 @@ class PiecewiseLinear:
                 f"are {nodes[0].tolist()}")
         inverse = inverse.reshape(-1)
         # Repeats: the mean of their parameters (np.unique sorts the nodes, so 1-D nodes are sorted).
-        self._theta = np.array([thetas[inverse == j].mean(axis=0) for j in range(len(nodes))])
+        # Grouped through one stable sort (a scan per node would be quadratic in the demos); a
+        # group keeps its demos' order, so its mean is the one numpy takes of them in place.
+        counts = np.bincount(inverse, minlength=len(nodes))
+        order = np.argsort(inverse, kind="stable")
+        starts = np.cumsum(counts) - counts
+        self._theta = thetas[order[starts]]
+        for j in np.flatnonzero(counts > 1):
+            self._theta[j] = thetas[order[starts[j]:starts[j] + counts[j]]].mean(axis=0)
         self._nodes = nodes
         n = nodes.shape[1]
         taus = [d.tau for d in self._dmps]
