@@ -100,6 +100,18 @@ def test_lwr_gp_reproduces_each_demo_and_predicts_cartesian_dmps() -> None:
     assert np.abs(np.linalg.norm(tr.quaternion, axis=1) - 1).max() < 1e-12
 
 
+def test_local_gps_serve_pose_demos_too() -> None:
+    qs = list(np.linspace(0.0, 1.4, 8))
+    db = database(qs)
+    exact = dmprs.Generalizer(db, "lwr-gp", n_basis=10)
+    assert np.array_equal(dmprs.Generalizer(db, "lwr-gp", n_basis=10, gp_neighbours=8).parameters(0.33),
+                          exact.parameters(0.33))
+    local = dmprs.Generalizer(db, "lwr-gp", n_basis=10, gp_neighbours=4)
+    for dmp, q in zip(local.demo_dmps, qs, strict=True):
+        got = local.predict(q)
+        assert angle(got.goal[3:], dmp.goal[3:]) < 1e-4 and np.allclose(got.goal[:3], dmp.goal[:3], atol=1e-4)
+
+
 def test_the_numerical_jacobian_works_for_poses() -> None:
     gen = dmprs.Generalizer(database([0.0, 2.0]), "linear", n_basis=15)
     jac = gen.jacobian(0.7, rel_step=1e-3)

@@ -327,13 +327,48 @@ def test_a_bad_demo_is_named():
         )
 
 
-def test_lwr_gp_refuses_more_demos_than_its_gps_can_take():
+def test_lwr_gp_refuses_more_demos_than_its_exact_gps_can_take_and_local_gps_take_them():
     t = np.linspace(0.0, 1.0, 10)
     db = dmprs.Database(("a", "b"))
     for k in range(MAX_GP_DEMOS + 1):
         db.add([k % 40, k // 40], dmprs.Trajectory(t, np.outer(t, [1.0 + k % 7])))
-    with pytest.raises(InvalidInputError, match=rf"'lwr-gp' over {MAX_GP_DEMOS + 1} demonstrations is refused.*"
-                                                r"'linear'.*db\.nearest\(q, k\)"):
+    refused = rf"exact Gaussian processes over {MAX_GP_DEMOS + 1} demonstrations is refused.*gp_neighbours.*'linear'"
+    with pytest.raises(InvalidInputError, match=refused):
         dmprs.Generalizer(db, "lwr-gp")
-    local = dmprs.Generalizer(db.nearest([3.0, 4.0], 12), "lwr-gp", n_basis=5)  # the local route
-    assert local.n_demos == 12
+    with pytest.raises(InvalidInputError, match=refused):
+        dmprs.Generalizer(db, "lwr-gp", gp_neighbours=5000)  # as many as the database: exact again
+    local = dmprs.Generalizer(db, "lwr-gp", n_basis=5, gp_neighbours=12)
+    assert local.n_demos == MAX_GP_DEMOS + 1
+    for k in (0, 517, MAX_GP_DEMOS):  # each demo back, to the GP noise
+        demo = db[k]
+        want = flat(dmprs.DMP.fit(demo.trajectory.t, demo.trajectory.y, 5))
+        assert np.allclose(flat(local.predict(demo.query)), want, rtol=1e-5, atol=1e-6)
+
+
+def test_local_gps_over_every_demo_are_the_exact_generalizer_bit_for_bit():
+    db = database([[a, b] for a in np.linspace(0.0, 1.0, 5) for b in np.linspace(0.0, 2.0, 4)])
+    exact = dmprs.Generalizer(db, "lwr-gp", n_basis=10)
+    for k in (len(db), 100):
+        local = dmprs.Generalizer(db, "lwr-gp", n_basis=10, gp_neighbours=k)
+        for q in ([0.0, 0.0], [0.37, 1.21], [0.9, 2.4]):
+            assert np.array_equal(local.parameters(q), exact.parameters(q))
+
+
+def test_local_gps_stay_close_to_the_exact_ones_between_the_demos():
+    # the GPs of tau, goal and start over the 8 nearest of 20 demos, hyperparameters fitted on the 8
+    # around the central one, against the GPs over all 20 with their own ML-II hyperparameters
+    db = database([[a, b] for a in np.linspace(0.0, 1.0, 5) for b in np.linspace(0.0, 2.0, 4)])
+    exact = dmprs.Generalizer(db, "lwr-gp", n_basis=10)
+    local = dmprs.Generalizer(db, "lwr-gp", n_basis=10, gp_neighbours=8)
+    nw = 10 * 2
+    for q in ([0.1, 0.3], [0.37, 1.21], [0.62, 1.9]):
+        a, b = local.parameters(q), exact.parameters(q)
+        assert np.array_equal(a[:nw], b[:nw])  # the weights are the LWR's, the same in both
+        assert np.allclose(a[nw:], b[nw:], rtol=1e-3, atol=0), (q, a[nw:] - b[nw:])
+
+
+@pytest.mark.parametrize("value", [3, 0, -1, 2.5, True, "8"])
+def test_gp_neighbours_must_be_a_count_of_at_least_four(value):
+    db = database([0.0, 1.0, 2.0])
+    with pytest.raises(InvalidInputError, match="gp_neighbours"):
+        dmprs.Generalizer(db, "lwr-gp", gp_neighbours=value)

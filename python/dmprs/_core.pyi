@@ -578,6 +578,7 @@ class Generalizer:
         gp_noise: float,
         gp_optimize: bool | None,
         gp_restarts: int,
+        gp_neighbours: int | None = None,
         trend: str = "constant",
     ) -> Generalizer: ...
     def predict(self, q: NDArray[np.float64]) -> Dmp: ...
@@ -633,6 +634,7 @@ class CartesianGeneralizer:
         gp_noise: float,
         gp_optimize: bool | None,
         gp_restarts: int,
+        gp_neighbours: int | None = None,
         trend: str = "constant",
     ) -> CartesianGeneralizer: ...
     def predict(self, q: NDArray[np.float64]) -> CartesianDmp: ...

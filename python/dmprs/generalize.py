@@ -21,8 +21,8 @@ from dmprs.triangulation import PiecewiseLinear
 
 __all__ = ["Generalizer"]
 
-#: The most demonstrations "lwr-gp" takes: its GPs' build grows with the cube of their number
-#: (docs/growing.md measures it).
+#: The most demonstrations the exact GPs of "lwr-gp" take: their build grows with the cube of
+#: their number (docs/growing.md measures it). Local GPs (``gp_neighbours``) take any number.
 MAX_GP_DEMOS = 1000
 _METHODS = ("linear", "lwr-gp")
 _KERNELS = ("tricube", "gaussian")
@@ -83,6 +83,15 @@ class Generalizer:
     demos are noisy or repeated samples of a smooth map, or the query too high-dimensional to
     triangulate densely. To extrapolate, ``"linear"`` or ``trend="affine"``.
 
+    Many demonstrations (a large dataset): the exact GPs of ``"lwr-gp"`` cost the cube of the
+    number of demos, so beyond ``MAX_GP_DEMOS`` they are refused. ``gp_neighbours=k`` makes
+    them local: each prediction conditions the GPs on the ``k`` demos nearest to the query
+    (distance scaled by the demos' query range), with hyperparameters fitted once by the same
+    ML-II on the ``k`` demos around the most central one, so build and prediction no longer
+    grow with ``M`` (the LWR of the weights already is local). With ``k >= M`` it is
+    the exact generalizer, bit for bit; below, close to it where the neighbourhood spans a few
+    GP length scales (docs/growing.md measures a choice of k). ``"linear"`` takes any number.
+
     Pose demonstrations (:class:`~dmprs.CartesianTrajectory`) work the same way and give a
     :class:`~dmprs.CartesianDMP`: weights and tau as above, positions like goals and starts, and
     the goal and start orientations as rotation vectors in the tangent space of demonstration
@@ -111,6 +120,7 @@ class Generalizer:
         gp_noise: float = 1e-4,
         gp_optimize: bool | None = None,
         gp_restarts: int = 4,
+        gp_neighbours: int | None = None,
         triangulate: bool | None = None,
         trend: str = "constant",
     ) -> None:
@@ -128,13 +138,14 @@ class Generalizer:
             raise InvalidInputError(
                 f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
             )
-        if method == "lwr-gp" and len(db) > MAX_GP_DEMOS:
+        neighbours = None if gp_neighbours is None else as_count(gp_neighbours, "gp_neighbours", 4)
+        if method == "lwr-gp" and min(len(db), neighbours or len(db)) > MAX_GP_DEMOS:
             raise InvalidInputError(
-                f"method 'lwr-gp' over {len(db)} demonstrations is refused: its Gaussian processes "
-                f"cost the cube of the number of demos per hyperparameter step, and beyond "
-                f"{MAX_GP_DEMOS} the build takes many minutes to days. Use method 'linear' (any number "
-                "of demos), or 'lwr-gp' over the demos near the query: Generalizer(db.nearest(q, k), "
-                "'lwr-gp') with k in the hundreds"
+                f"method 'lwr-gp' with exact Gaussian processes over {min(len(db), neighbours or len(db))} "
+                f"demonstrations is refused: they cost the cube of the number of demos per "
+                f"hyperparameter step, and beyond {MAX_GP_DEMOS} the build takes many minutes to days. "
+                "Use local GPs over the demos nearest to each query (gp_neighbours=100, say), or "
+                "method 'linear' (any number of demos)"
             )
         if method == "lwr-gp" and len(np.unique(db.queries, axis=0)) < len(db):
             raise InvalidInputError(
@@ -164,6 +175,7 @@ class Generalizer:
             gp_noise=as_scalar(gp_noise, "gp_noise", positive=True),
             gp_optimize=None if gp_optimize is None else bool(gp_optimize),
             gp_restarts=as_count(gp_restarts, "gp_restarts", 0),
+            gp_neighbours=neighbours,
             trend=trend,
         )
         if db.is_cartesian:

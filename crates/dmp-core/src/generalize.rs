@@ -22,9 +22,9 @@ use nalgebra::{DMatrix, DVector};
 use crate::basis::Basis;
 use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
-use crate::error::{Error, Result, check_scalar, fmt_g};
-use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales};
+use crate::error::{Error, Result, check_scalar};
 use crate::lwr::{Lwr, LwrOptions};
+use crate::output_gp::{GpMean, GpSettings, OutputGps};
 
 /// tau(q) must lie strictly inside `(TAU_LOW x min tau_k, TAU_HIGH x max tau_k)` (docs/method.md §3.3).
 pub const TAU_LOW: f64 = 0.2;
@@ -48,13 +48,11 @@ pub struct LwrGpOptions {
     /// affine fit leaves). Needs n + 1 demos whose queries span the query space; with fewer
     /// the mean stays constant.
     pub gp_mean: GpMean,
-}
-
-/// The prior mean of the GPs of tau, goal and start ([`LwrGpOptions::gp_mean`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum GpMean {
-    Constant,
-    Affine,
+    /// `Some(k)`: local GPs, over the `k` demos nearest to each query (range-scaled query
+    /// distance), with hyperparameters fitted on the `k` demos around the most central one
+    /// ([`crate::output_gp`]); their cost does not grow with the number of demos. `None` (the
+    /// default): the exact GPs over every demo. With `k >= M` both are the same.
+    pub gp_neighbours: Option<usize>,
 }
 
 impl Default for LwrGpOptions {
@@ -65,6 +63,7 @@ impl Default for LwrGpOptions {
             gp_optimize: None,
             gp_restarts: 4,
             gp_mean: GpMean::Constant,
+            gp_neighbours: None,
         }
     }
 }
@@ -106,45 +105,8 @@ struct Linear {
 #[derive(Debug, Clone)]
 struct LwrGp {
     lwr: Lwr,
-    tau: TrendGp,
-    goal: Vec<TrendGp>,
-    y0: Vec<TrendGp>,
-}
-
-/// A GP over what an optional affine trend `c_0 + sum_d c_d q_d` leaves of the outputs.
-#[derive(Debug, Clone)]
-struct TrendGp {
-    trend: Option<Vec<f64>>,
-    gp: GaussianProcess,
-}
-
-impl TrendGp {
-    fn mean_at(&self, q: &[f64]) -> f64 {
-        let gp = self.gp.predict_mean_at(q);
-        match &self.trend {
-            None => gp,
-            Some(c) => c[0] + c[1..].iter().zip(q).map(|(c, q)| c * q).sum::<f64>() + gp,
-        }
-    }
-}
-
-/// The least-squares affine fit of `y` over the queries (columns of `x`, `n x m`), or None when
-/// the queries do not span the query space (fewer than n + 1 affinely independent).
-fn affine_trend(x: &DMatrix<f64>, y: &[f64]) -> Option<Vec<f64>> {
-    let (n, m) = x.shape();
-    if m < n + 1 {
-        return None;
-    }
-    let a = DMatrix::from_fn(m, n + 1, |k, j| if j == 0 { 1.0 } else { x[(j - 1, k)] });
-    let svd = a.svd(true, true);
-    let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
-    if smin.is_nan() || smin <= 1e-10 * smax {
-        return None;
-    }
-    let c = svd.solve(&DVector::from_column_slice(y), 0.0).ok()?;
-    c.iter()
-        .all(|v| v.is_finite())
-        .then(|| c.iter().copied().collect())
+    /// The GPs of tau, then each goal coordinate, then each start coordinate.
+    gps: OutputGps,
 }
 
 /// A generalizer over M demonstrations.
@@ -345,55 +307,19 @@ impl Generalizer {
         let lwr = Lwr::new(queries, normal, opts.lwr)?;
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
-        let optimize = opts.gp_optimize.unwrap_or(m >= 4);
-        let fit = |y: Vec<f64>| -> Result<TrendGp> {
-            let trend = match opts.gp_mean {
-                GpMean::Constant => None,
-                GpMean::Affine => affine_trend(&x, &y),
-            };
-            let y: Vec<f64> = match &trend {
-                None => y,
-                Some(c) => (0..m)
-                    .map(|k| y[k] - c[0] - (0..n).map(|d| c[1 + d] * x[(d, k)]).sum::<f64>())
-                    .collect(),
-            };
-            let (ranges, var) = data_scales(&x.as_view(), &y);
-            let noise = opts.gp_noise * opts.gp_noise * var;
-            if !(noise > 0.0 && noise.is_finite()) {
-                return Err(Error::InvalidParameter {
-                    name: "gp_noise",
-                    value: fmt_g(opts.gp_noise),
-                    requirement: "gives a noise variance gp_noise^2 x var outside the range of f64",
-                });
-            }
-            let initial = Hyperparameters {
-                length_scales: ranges.clone(),
-                signal_var: var,
-                noise_var: noise,
-            };
-            let bounds = HyperBounds {
-                length_scales: ranges.iter().map(|r| (1e-2 * r, 1e2 * r)).collect(),
-                signal_var: (1e-4 * var, 1e4 * var),
-                noise_var: (noise, noise),
-            };
-            let gp_opts = GpOptions {
-                optimize,
-                n_restarts: opts.gp_restarts,
-                bounds: Some(bounds),
-                ..GpOptions::default()
-            };
-            let gp = GaussianProcess::fit(&x.as_view(), &y, Some(initial), &gp_opts)?;
-            Ok(TrendGp { trend, gp })
-        };
         let n_dof = dmps[0].n_dof();
-        let tau = fit(dmps.iter().map(|d| d.tau()).collect())?;
-        let goal = (0..n_dof)
-            .map(|i| fit(dmps.iter().map(|d| d.goal()[i]).collect()))
-            .collect::<Result<_>>()?;
-        let y0 = (0..n_dof)
-            .map(|i| fit(dmps.iter().map(|d| d.y0()[i]).collect()))
-            .collect::<Result<_>>()?;
-        Ok(LwrGp { lwr, tau, goal, y0 })
+        let mut outputs = vec![dmps.iter().map(|d| d.tau()).collect::<Vec<f64>>()];
+        outputs.extend((0..n_dof).map(|i| dmps.iter().map(|d| d.goal()[i]).collect()));
+        outputs.extend((0..n_dof).map(|i| dmps.iter().map(|d| d.y0()[i]).collect()));
+        let settings = GpSettings {
+            noise: opts.gp_noise,
+            optimize: opts.gp_optimize,
+            restarts: opts.gp_restarts,
+            mean: opts.gp_mean,
+            neighbours: opts.gp_neighbours,
+        };
+        let gps = OutputGps::fit(&x, outputs, &settings, |q, k| lwr.nearest(q, k))?;
+        Ok(LwrGp { lwr, gps })
     }
 
     pub fn method(&self) -> &'static str {
@@ -475,10 +401,14 @@ impl Generalizer {
             }
             Model::LwrGp(model) => {
                 let w = model.lwr.weights_at(q)?;
-                let tau = model.tau.mean_at(q);
-                let goal = DVector::from_iterator(n_dof, model.goal.iter().map(|g| g.mean_at(q)));
-                let y0 = DVector::from_iterator(n_dof, model.y0.iter().map(|g| g.mean_at(q)));
-                Ok((w, tau, goal, y0))
+                let nearest = match model.gps.neighbours() {
+                    Some(k) => model.lwr.nearest(q, k),
+                    None => Vec::new(),
+                };
+                let means = model.gps.means_at(q, &nearest)?;
+                let goal = DVector::from_column_slice(&means[1..1 + n_dof]);
+                let y0 = DVector::from_column_slice(&means[1 + n_dof..]);
+                Ok((w, means[0], goal, y0))
             }
         }
     }
@@ -689,14 +619,65 @@ mod tests {
         assert!((cst.parameters(&[2.5]).unwrap() - &want).amax() > 0.1 * want.amax());
     }
 
+    fn lwr_gp(neighbours: Option<usize>) -> Method {
+        Method::LwrGp(LwrGpOptions {
+            gp_neighbours: neighbours,
+            ..LwrGpOptions::default()
+        })
+    }
+
     #[test]
-    fn the_affine_trend_needs_queries_that_span_the_query_space() {
-        let x = DMatrix::from_row_slice(2, 3, &[0.0, 1.0, 2.0, 0.0, 1.0, 2.0]); // on a line
-        assert!(affine_trend(&x, &[1.0, 2.0, 3.0]).is_none());
-        let x = DMatrix::from_row_slice(2, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
-        let c = affine_trend(&x, &[1.0, 3.0, 0.0]).unwrap();
+    fn local_gps_over_every_demo_are_the_exact_ones_bit_for_bit() {
+        let qs: Vec<f64> = (0..12).map(|k| 0.2 * k as f64).collect();
+        let exact = build(&qs, lwr_gp(None)).unwrap();
+        for k in [12, 50] {
+            let local = build(&qs, lwr_gp(Some(k))).unwrap();
+            for q in [0.0, 0.3, 1.17, 2.2, 2.9] {
+                assert_eq!(
+                    local.parameters(&[q]).unwrap(),
+                    exact.parameters(&[q]).unwrap()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn local_gps_reproduce_the_demos_and_stay_near_the_exact_ones() {
+        let qs: Vec<f64> = (0..40).map(|k| 0.05 * k as f64).collect();
+        let exact = build(&qs, lwr_gp(None)).unwrap();
+        let local = build(&qs, lwr_gp(Some(10))).unwrap();
+        let nw = exact.config().n_basis * exact.n_dof();
+        for (k, &q) in qs.iter().enumerate() {
+            let got = local.parameters(&[q]).unwrap();
+            let want = flatten(&local.demo_dmps()[k]);
+            let err = (got.rows(nw, want.len() - nw) - want.rows(nw, want.len() - nw)).amax();
+            assert!(err < 1e-5 * want.amax(), "demo {k}: {err}");
+        }
+        for q in [0.025, 0.51, 1.333, 1.96] {
+            let (a, b) = (
+                local.parameters(&[q]).unwrap(),
+                exact.parameters(&[q]).unwrap(),
+            );
+            // the weights are the LWR's, which both share
+            assert_eq!(a.rows(0, nw), b.rows(0, nw));
+            let err = (a.rows(nw, a.len() - nw) - b.rows(nw, b.len() - nw)).amax();
+            assert!(err < 1e-4 * b.amax(), "q={q}: {err}");
+        }
+    }
+
+    #[test]
+    fn fewer_than_four_neighbours_are_refused() {
+        let qs: Vec<f64> = (0..8).map(|k| 0.2 * k as f64).collect();
+        let err = build(&qs, lwr_gp(Some(3))).unwrap_err();
         assert!(
-            (c[0] - 1.0).abs() < 1e-12 && (c[1] - 2.0).abs() < 1e-12 && (c[2] + 1.0).abs() < 1e-12
+            matches!(
+                err,
+                Error::InvalidParameter {
+                    name: "gp_neighbours",
+                    ..
+                }
+            ),
+            "{err}"
         );
     }
 

@@ -175,12 +175,11 @@ impl Lwr {
         self.normal.len()
     }
 
-    /// The normalized weight of each demo at `q` (they sum to 1).
-    pub fn demo_weights(&self, q: &[f64]) -> Vec<f64> {
+    /// The distance from `q` to each demo's query, each dimension scaled by the demos' range.
+    fn distances(&self, q: &[f64]) -> Vec<f64> {
         let n = self.n_dim;
-        let m = self.n_demos();
         let qs: Vec<f64> = q.iter().zip(&self.inv_range).map(|(v, s)| v * s).collect();
-        let dist: Vec<f64> = (0..m)
+        (0..self.n_demos())
             .map(|k| {
                 let qk = &self.scaled_queries[k * n..(k + 1) * n];
                 qk.iter()
@@ -189,7 +188,30 @@ impl Lwr {
                     .sum::<f64>()
                     .sqrt()
             })
-            .collect();
+            .collect()
+    }
+
+    /// The indices of the `k` demos nearest to `q` in the distance of [`Self::demo_weights`]
+    /// (of equally distant ones, the lower index), in ascending order; every demo if `k >= M`.
+    pub fn nearest(&self, q: &[f64], k: usize) -> Vec<usize> {
+        if k == 0 {
+            return Vec::new();
+        }
+        let dist = self.distances(q);
+        let mut idx: Vec<usize> = (0..dist.len()).collect();
+        if k < idx.len() {
+            idx.select_nth_unstable_by(k - 1, |&a, &b| dist[a].total_cmp(&dist[b]).then(a.cmp(&b)));
+            idx.truncate(k);
+            idx.sort_unstable();
+        }
+        idx
+    }
+
+    /// The normalized weight of each demo at `q` (they sum to 1).
+    pub fn demo_weights(&self, q: &[f64]) -> Vec<f64> {
+        let n = self.n_dim;
+        let m = self.n_demos();
+        let dist = self.distances(q);
         let mut sorted = dist.clone();
         sorted.sort_by(f64::total_cmp);
         let d_min = sorted[0];
@@ -291,6 +313,29 @@ mod tests {
     fn spd(n: usize, seed: f64) -> DMatrix<f64> {
         let b = DMatrix::from_fn(n, n, |i, j| ((i * 5 + j * 3) as f64 * seed).sin());
         &b * b.transpose() + DMatrix::identity(n, n)
+    }
+
+    #[test]
+    fn nearest_is_the_head_of_the_stable_sort_by_distance() {
+        // a 5 x 5 grid: many demos at the same distance from its centre and from a node
+        let queries: Vec<Vec<f64>> = (0..25)
+            .map(|k| vec![(k % 5) as f64, 2.0 * (k / 5) as f64])
+            .collect();
+        let ne = NormalEquations {
+            ata: spd(3, 0.3),
+            atf: DMatrix::zeros(3, 1),
+        };
+        let lwr = Lwr::new(&queries, vec![ne; 25], LwrOptions::default()).unwrap();
+        for q in [[2.0, 4.0], [0.0, 0.0], [1.5, 3.0], [9.0, -1.0]] {
+            let dist = lwr.distances(&q);
+            let mut sorted: Vec<usize> = (0..25).collect();
+            sorted.sort_by(|&a, &b| dist[a].total_cmp(&dist[b]));
+            for k in [0, 1, 4, 5, 9, 24, 25, 40] {
+                let mut want = sorted[..k.min(25)].to_vec();
+                want.sort_unstable();
+                assert_eq!(lwr.nearest(&q, k), want, "q={q:?} k={k}");
+            }
+        }
     }
 
     #[test]

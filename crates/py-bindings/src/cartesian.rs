@@ -231,7 +231,7 @@ impl PyCartesianGeneralizer {
     #[new]
     #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
                         kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts,
-                        trend="constant"))]
+                        gp_neighbours=None, trend="constant"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -250,6 +250,7 @@ impl PyCartesianGeneralizer {
         gp_noise: f64,
         gp_optimize: Option<bool>,
         gp_restarts: usize,
+        gp_neighbours: Option<usize>,
         trend: &str,
     ) -> PyResult<Self> {
         let method = parse_method(
@@ -261,6 +262,7 @@ impl PyCartesianGeneralizer {
             gp_noise,
             gp_optimize,
             gp_restarts,
+            gp_neighbours,
             trend,
         )?;
         let qs = parse_queries(&queries)?;

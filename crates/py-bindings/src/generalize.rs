@@ -31,6 +31,7 @@ pub(crate) fn parse_method(
     gp_noise: f64,
     gp_optimize: Option<bool>,
     gp_restarts: usize,
+    gp_neighbours: Option<usize>,
     trend: &str,
 ) -> PyResult<Method> {
     // "affine": first-order LWR for the weights and an affine prior mean for the GPs.
@@ -66,6 +67,7 @@ pub(crate) fn parse_method(
             gp_optimize,
             gp_restarts,
             gp_mean,
+            gp_neighbours,
         }),
         other => {
             return Err(invalid_input(format!(
@@ -108,7 +110,7 @@ impl PyGeneralizer {
     #[new]
     #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
                         kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts,
-                        trend="constant"))]
+                        gp_neighbours=None, trend="constant"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -127,6 +129,7 @@ impl PyGeneralizer {
         gp_noise: f64,
         gp_optimize: Option<bool>,
         gp_restarts: usize,
+        gp_neighbours: Option<usize>,
         trend: &str,
     ) -> PyResult<Self> {
         let method = parse_method(
@@ -138,6 +141,7 @@ impl PyGeneralizer {
             gp_noise,
             gp_optimize,
             gp_restarts,
+            gp_neighbours,
             trend,
         )?;
         let qs = parse_queries(&queries)?;
