@@ -44,7 +44,7 @@ pub(crate) struct TrendGp {
 }
 
 /// One parameter of the local GPs: its trend, what the trend leaves at every demo, and the
-/// hyperparameters fitted on the spread-out sample.
+/// hyperparameters fitted on the neighbourhood of the most central demo.
 #[derive(Debug, Clone)]
 pub(crate) struct LocalOutput {
     trend: Option<Vec<f64>>,
