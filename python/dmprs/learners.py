@@ -381,7 +381,9 @@ class IllinoisRootFinder(_Learner):
     (a property test checks this on random monotone maps), and far fewer on smooth maps.
     Stops on ``|eps| < tol``, a bracket narrower than ``q_tol`` (``"bracketed"``, or
     ``"hit-bound"`` when an end is an untried limit), or ``max_trials``. [low, high] is widened
-    to contain q0.
+    to contain q0. With ``max_expansions`` > 0 a limit no trial confirmed is moved outwards when a
+    trial next to it says the root lies beyond it, as :class:`GoldenSection`'s robust mode does
+    (at most that many times per side; docs/method.md §6.4).
     """
 
     __slots__ = ()
@@ -396,6 +398,7 @@ class IllinoisRootFinder(_Learner):
         tol: float | None = None,
         q_tol: float | None = None,
         max_trials: int | None = None,
+        max_expansions: int | None = None,
     ) -> None:
         self._core = _native.IllinoisRootFinder(
             _vector(q0, "q0"),
@@ -404,12 +407,18 @@ class IllinoisRootFinder(_Learner):
             tol=_real(tol, "tol"),
             q_tol=_real(q_tol, "q_tol"),
             max_trials=_count(max_trials, "max_trials"),
+            max_expansions=_count(max_expansions, "max_expansions"),
         )
 
     @property
     def bracket(self) -> tuple[float, float]:
         """The current bracket (a, b)."""
         return self._core.bracket
+
+    @property
+    def expansions(self) -> tuple[int, int]:
+        """How often the lower and the upper limit were expanded."""
+        return self._core.expansions
 
 
 class PolicyGradient(_Learner):

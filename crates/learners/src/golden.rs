@@ -52,9 +52,9 @@ use crate::error::{Result, check_scalar, invalid};
 pub const GOLDEN_HIGH: f64 = 0.618;
 pub const GOLDEN_LOW: f64 = 0.382;
 /// §6.3 (b): expand when q is within this fraction of the reference width of an unconfirmed limit.
-const EXPAND_WINDOW: f64 = 0.05;
+pub(crate) const EXPAND_WINDOW: f64 = 0.05;
 /// §6.3 (b): the expansion factor.
-const EXPAND_FACTOR: f64 = 1.618;
+pub(crate) const EXPAND_FACTOR: f64 = 1.618;
 /// Paper mode: a bracket narrower than this fraction of the first one has collapsed.
 const COLLAPSE: f64 = 1e-9;
 /// Noise guard 1: a mean of n readings with |mean| < DOUBT_SIGMAS sigma / sqrt(n) has a doubtful sign.

@@ -20,14 +20,20 @@
 //! new brackets within that width. So whenever golden section would stop on bracket width,
 //! this finder has stopped too; when interpolation works it stops much earlier.
 //!
+//! With `max_expansions > 0` it also expands a limit no trial has confirmed, as golden section's
+//! robust mode does (docs/method.md §6.3 (b)): when a trial lands within 5 % of the first
+//! bracket's width W0 of such a limit and eps still points past it, the limit moves out by
+//! 1.618^k W0 on the k-th expansion of that side, and the golden schedule restarts from the new
+//! bracket. So a root outside the demos' queries is found, not reported as `HitBound`.
+//!
 //! Stops: |eps| < tol (`Converged`); a bracket narrower than `q_tol` (`Bracketed`, or
 //! `HitBound` when one end is an untried limit: the root lies outside [low, high] or the sign
-//! convention is wrong); the trial cap.
+//! convention is wrong, and the expansions are spent); the trial cap.
 
 use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
 use crate::bracket::check_bracket;
 use crate::error::Result;
-use crate::golden::GOLDEN_HIGH;
+use crate::golden::{EXPAND_FACTOR, EXPAND_WINDOW, GOLDEN_HIGH};
 
 #[derive(Debug, Clone)]
 pub struct RootFinderConfig {
@@ -37,6 +43,8 @@ pub struct RootFinderConfig {
     /// of [low, high].
     pub q_tol: Option<f64>,
     pub max_trials: usize,
+    /// Expansions of an unconfirmed limit allowed per side (0: the limits are fixed).
+    pub max_expansions: usize,
 }
 
 impl Default for RootFinderConfig {
@@ -45,6 +53,7 @@ impl Default for RootFinderConfig {
             tol: 1e-3,
             q_tol: None,
             max_trials: 50,
+            max_expansions: 0,
         }
     }
 }
@@ -66,6 +75,11 @@ pub struct IllinoisRootFinder {
     /// The largest bracket width allowed after the next trial (the golden schedule).
     allowed: f64,
     next: f64,
+    /// The width of [low, high] widened to contain q0: the unit of an expansion.
+    first_width: f64,
+    max_expansions: usize,
+    /// Expansions so far, of the low and the high limit.
+    expansions: [usize; 2],
     rec: Record,
 }
 
@@ -86,6 +100,9 @@ impl IllinoisRootFinder {
             last_replaced_b: None,
             allowed: f64::INFINITY,
             next: q0,
+            first_width: b - a,
+            max_expansions: cfg.max_expansions,
+            expansions: [0, 0],
             rec: Record::new(cfg.max_trials)?,
         })
     }
@@ -110,6 +127,34 @@ impl IllinoisRootFinder {
             }
         }
         -1.0
+    }
+
+    /// The expansions of `(low, high)` so far.
+    pub fn expansions(&self) -> (usize, usize) {
+        (self.expansions[0], self.expansions[1])
+    }
+
+    /// Moves an unconfirmed limit outwards when the trial at `q` lies next to it and its eps
+    /// points past it (`up`: eps > 0, the root is above q). Returns whether it moved.
+    fn expand(&mut self, q: f64, up: bool) -> bool {
+        let window = EXPAND_WINDOW * self.first_width;
+        let side = usize::from(up);
+        let (near, untried) = if up {
+            (self.b - q <= window, self.fb.is_none())
+        } else {
+            (q - self.a <= window, self.fa.is_none())
+        };
+        if !near || !untried || self.expansions[side] >= self.max_expansions {
+            return false;
+        }
+        self.expansions[side] += 1;
+        let step = EXPAND_FACTOR.powi(self.expansions[side] as i32) * self.first_width;
+        if up {
+            self.b += step;
+        } else {
+            self.a -= step;
+        }
+        true
     }
 
     fn candidate(&self) -> f64 {
@@ -177,6 +222,9 @@ impl AskTell for IllinoisRootFinder {
         // Golden section's worst case from the same first trial: W_1, then x 0.618 per trial.
         self.allowed = if first { self.b - self.a } else { self.allowed };
         self.allowed *= GOLDEN_HIGH;
+        if self.expand(q, !replaced_b) {
+            self.allowed = self.b - self.a; // the schedule restarts from the expanded bracket
+        }
 
         let width = self.b - self.a;
         let stop = if width < self.q_tol {

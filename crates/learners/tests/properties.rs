@@ -50,7 +50,7 @@ proptest! {
         let hi = lo + width;
         let (r, q0) = (lo + r_frac * width, lo + q0_frac * width);
         let eps = make_eps(r, s1, s3, jump);
-        let cfg = RootFinderConfig { tol, q_tol: Some(q_tol), max_trials: 1000 };
+        let cfg = RootFinderConfig { tol, q_tol: Some(q_tol), max_trials: 1000, ..Default::default() };
         let mut f = IllinoisRootFinder::new(q0, lo, hi, cfg).unwrap();
         let n = common::run(&mut f, |q| vec![eps(q[0])]);
         let bound = golden_worst_case(q0, lo, hi, eps(q0), q_tol);
@@ -65,6 +65,30 @@ proptest! {
         let mut g = GoldenSection::new(q0, lo, hi, gcfg).unwrap();
         let ng = common::run(&mut g, |q| vec![eps(q[0])]);
         prop_assert!(ng <= bound, "golden {} > its own worst case {}", ng, bound);
+    }
+
+    #[test]
+    fn root_finder_with_expansions_finds_a_root_outside_its_limits(
+        lo in -2.0..0.0f64, width in 0.5..4.0f64, beyond in 0.01..1.5f64, above in any::<bool>(),
+        q0_frac in 0.0..1.0f64, s1 in 0.05..5.0f64, s3 in 0.0..5.0f64,
+    ) {
+        let hi = lo + width;
+        // a root up to 1.5 widths past one limit: within reach of 4 expansions (1.618 + 2.618 + ...)
+        let r = if above { hi + beyond * width } else { lo - beyond * width };
+        let q0 = lo + q0_frac * width;
+        let eps = make_eps(r, s1, s3, 0.0);
+        let fixed = RootFinderConfig { tol: 1e-6, q_tol: Some(1e-9), max_trials: 1000, ..Default::default() };
+        let mut f = IllinoisRootFinder::new(q0, lo, hi, fixed.clone()).unwrap();
+        common::run(&mut f, |q| vec![eps(q[0])]);
+        prop_assert!(matches!(f.status(), Status::HitBound { .. }), "without expansions: {:?}", f.status());
+        let cfg = RootFinderConfig { max_expansions: 4, ..fixed };
+        let mut f = IllinoisRootFinder::new(q0, lo, hi, cfg).unwrap();
+        common::run(&mut f, |q| vec![eps(q[0])]);
+        prop_assert!(matches!(f.status(), Status::Converged | Status::Bracketed), "{:?}", f.status());
+        let (a, b) = f.bracket();
+        prop_assert!(a <= r && r <= b, "root {} outside the final bracket [{}, {}]", r, a, b);
+        let (el, eh) = f.expansions();
+        prop_assert!(el + eh >= 1 && el.max(eh) <= 4);
     }
 
     #[test]

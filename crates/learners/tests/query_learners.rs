@@ -46,6 +46,7 @@ fn finder(q0: f64, lo: f64, hi: f64) -> IllinoisRootFinder {
             tol: 1e-3,
             q_tol: Some(1e-4),
             max_trials: 60,
+            ..Default::default()
         },
     )
     .unwrap()
@@ -482,6 +483,7 @@ fn noisy_measurements_still_converge_near_the_root() {
                 tol: 0.01,
                 q_tol: Some(1e-3),
                 max_trials: 40,
+                ..Default::default()
             },
         )
         .unwrap();
@@ -616,6 +618,7 @@ fn bad_input_is_a_clear_error() {
             tol: 1e-3,
             q_tol: Some(1e-4),
             max_trials: 10,
+            ..Default::default()
         },
     )
     .unwrap_err();

@@ -286,7 +286,8 @@ ask_tell_class!(
     IllinoisRootFinder,
     {
         #[new]
-        #[pyo3(signature = (q0, *, low=None, high=None, tol=None, q_tol=None, max_trials=None))]
+        #[pyo3(signature = (q0, *, low=None, high=None, tol=None, q_tol=None, max_trials=None,
+                            max_expansions=None))]
         fn new(
             q0: PyReadonlyArray1<'_, f64>,
             low: Option<PyReadonlyArray1<'_, f64>>,
@@ -294,12 +295,14 @@ ask_tell_class!(
             tol: Option<f64>,
             q_tol: Option<f64>,
             max_trials: Option<usize>,
+            max_expansions: Option<usize>,
         ) -> PyResult<Self> {
             let d = RootFinderConfig::default();
             let cfg = RootFinderConfig {
                 tol: tol.unwrap_or(d.tol),
                 q_tol: q_tol.or(d.q_tol),
                 max_trials: max_trials.unwrap_or(d.max_trials),
+                max_expansions: max_expansions.unwrap_or(d.max_expansions),
             };
             let q0 = scalar_entry("q0", slice("q0", &q0)?).py_err()?;
             let (low, high) = (
@@ -315,6 +318,12 @@ ask_tell_class!(
         #[getter]
         fn bracket(&self) -> (f64, f64) {
             self.inner.bracket()
+        }
+
+        /// The expansions of (low, high) so far.
+        #[getter]
+        fn expansions(&self) -> (usize, usize) {
+            self.inner.expansions()
         }
     }
 );
