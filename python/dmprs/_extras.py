@@ -12,6 +12,7 @@ from dmprs.errors import DmprsError
 EXTRA_OF: dict[str, str] = {
     "matplotlib": "plot",
     "cma": "cma",
+    "bayes_opt": "bo",
     "mujoco": "robot",
     "rosbags": "io",
     "pyarrow": "io",

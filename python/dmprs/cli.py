@@ -54,7 +54,7 @@ def main() -> None:
 @main.command("learn")
 @click.argument("task")
 @click.option("--learner", default=None,
-              help=f"{learner_help()} (default: the paper's choice for the task; each task offers some)")
+              help=f"{learner_help()} (default: auto; each task offers some)")
 @click.option("--desired", type=float, default=None, help="desired query (task units)")
 @click.option("--max-trials", type=click.IntRange(min=1, max=10**6), default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")

@@ -12,11 +12,11 @@ from typing import Any
 
 from dmprs.errors import InvalidInputError
 from dmprs.experiments import analytic, arm_pouring, arm_throwing, matchbox, pouring
-from dmprs.experiments.base import LEARNERS, ExperimentSetup, LearnerSettings, learner_help
+from dmprs.experiments.base import DEFAULT_LEARNER, LEARNERS, ExperimentSetup, LearnerSettings, learner_help
 from dmprs.loop import LearningResult, learn
 from dmprs.runlog import TrialRecord
 
-__all__ = ["EXPERIMENTS", "LEARNERS", "ExperimentSetup", "LearnerSettings", "learner_help", "make", "run"]
+__all__ = ["DEFAULT_LEARNER", "EXPERIMENTS", "LEARNERS", "ExperimentSetup", "LearnerSettings", "learner_help", "make", "run"]
 
 #: Every experiment by the name the command line uses, with the function that sets it up.
 EXPERIMENTS: dict[str, Callable[..., ExperimentSetup]] = {
@@ -43,7 +43,7 @@ def run(name: str, *, learner: str | None = None, learner_options: dict[str, Any
     resume`` can rebuild it.
     """
     setup = make(name, **setup_options)
-    learner_name = learner or setup.default_learner
+    learner_name = learner or DEFAULT_LEARNER
     lrn = setup.make_learner(learner_name, **(learner_options or {}))
     meta = {"experiment": name, "setup_options": setup_options, "learner_name": learner_name,
             "learner_options": learner_options or {}}

@@ -18,5 +18,5 @@ def setup(noise: float | Noise = 0.0, tol: float = 0.01, desired: float = 1.5,
     demos = [task.demonstration(a) for a in amplitudes]
     labels = [float(q[0]) for q, _ in demos]
     settings = LearnerSettings(low=min(labels), high=max(labels), weight_scale=1.0, task_scale=1.0)
-    return build(task, lambda: demos, desired, generalizer={"method": "linear", "n_basis": 25}, default_learner="error",
+    return build(task, lambda: demos, desired, generalizer={"method": "linear", "n_basis": 25}, paper_learner="error",
                  learner_names=SCALAR_LEARNERS, settings=settings)

@@ -39,6 +39,8 @@ from dmprs.trajectory import CartesianTrajectory
 DEMO_BRACKET = (1.4, 2.7)
 #: the DMPs' kernels (docs/method.md §9.3, as in 2-D)
 N_BASIS = 40
+#: the trial cap the reproduction learns the arm's pour with (each trial is seconds of granular flow)
+MAX_TRIALS = 6
 #: l: eq. 17's scale and the step scale of the policy gradient and Broyden, as in 2-D
 SCALE = 0.05
 
@@ -91,7 +93,7 @@ def setup(bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME, tol:
 
     settings = LearnerSettings(low=min(DEMO_VOLUMES), high=max(DEMO_VOLUMES), weight_scale=SCALE, task_scale=SCALE)
     return build(task, demos, bottle_volume, generalizer={"method": "linear", "n_basis": N_BASIS},
-                 default_learner="golden", learner_names=SCALAR_LEARNERS, settings=settings,
+                 paper_learner="golden", learner_names=SCALAR_LEARNERS, settings=settings,
                  desired_name="bottle_volume")
 
 

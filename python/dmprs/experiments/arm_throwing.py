@@ -32,7 +32,7 @@ GENERALIZERS: dict[str, dict[str, Any]] = {
     "lwr-gp": {"method": "lwr-gp"},
     "lwr-gp-affine": {"method": "lwr-gp", "trend": "affine"},
 }
-LEARNER_NAMES = ("secant", "error", "finite-difference", "broyden", "weighted", "cma")
+LEARNER_NAMES = ("auto", "secant", "error", "finite-difference", "broyden", "weighted", "cma", "bo", "bo-default")
 #: the learners' settings in m: eq. 17's scale (the demos' landings span about half a metre), the
 #: finite-difference probe, Broyden's trust radius and CMA-ES's first step
 SETTINGS = LearnerSettings(weight_scale=0.3, probe=0.05, trust_radius=0.5, weighted_jacobian="secant",
@@ -71,7 +71,7 @@ def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: floa
     Five scripted throws labelled with their measured landing points; ``generalizer``:
     ``"linear"`` (piecewise linear on their Delaunay triangulation, affine extrapolation from the
     nearest triangle outside it), ``"lwr-gp"`` or ``"lwr-gp-affine"`` (with an affine trend,
-    which extrapolates); DMPs of ``n_basis`` kernels. Learners: ``secant`` (default: error
+    which extrapolates); DMPs of ``n_basis`` kernels. Learners: ``auto`` (the default: the secant below), ``secant`` (the paper-style choice: error
     learning with Broyden's update of the Jacobian), ``error`` (eq. 16, K = J = I),
     ``finite-difference``, ``broyden``, ``weighted`` (eq. 17), ``cma``. ``tol``: the basket's
     radius (m). ``noise``: a :class:`dmprs.tasks.noise.Noise` (execution in rad, measurement in
@@ -94,4 +94,4 @@ def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: floa
 
         task.adapter = throwing_adapter(domain)
     return build(task, lambda: demonstrations(n_basis), target, generalizer={"n_basis": n_basis, **GENERALIZERS[generalizer]},
-                 default_learner="secant", learner_names=LEARNER_NAMES, settings=settings, desired_name="target")
+                 paper_learner="secant", learner_names=LEARNER_NAMES, settings=settings, desired_name="target")

@@ -8,6 +8,7 @@ help is written from it.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
@@ -18,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs import learners as L
 from dmprs._arrays import as_count, short
 from dmprs._extras import require
+from dmprs.bayesopt import BayesOpt
 from dmprs.cmaes import CMAES
 from dmprs.database import Database
 from dmprs.errors import InvalidInputError
@@ -26,7 +28,7 @@ from dmprs.loop import AskTell
 from dmprs.tasks.base import Task
 from dmprs.trajectory import AnyTrajectory
 
-__all__ = ["LEARNERS", "ExperimentSetup", "LearnerKind", "LearnerSettings", "build", "database_of", "learner_help"]
+__all__ = ["DEFAULT_LEARNER", "LEARNERS", "ExperimentSetup", "LearnerKind", "LearnerSettings", "build", "database_of", "learner_help", "search_box"]
 
 
 @dataclass(frozen=True)
@@ -38,7 +40,8 @@ class LearnerSettings:
     the policy gradient, Broyden's trust region and, without limits, CMA-ES; ``probe`` the
     finite-difference step; ``weighted_jacobian`` the J of the weighted learner; ``cma_sigma``
     CMA-ES's first step (default: a quarter of the search range, else ``task_scale``); ``gain``
-    the fixed K of the ``fixed`` learner.
+    the fixed K of the ``fixed`` learner; ``box`` the (lower, upper) search box of Bayesian
+    optimization (default, set by :func:`build`: :func:`search_box` of the demos' queries).
     """
 
     max_trials: int = 50
@@ -51,6 +54,7 @@ class LearnerSettings:
     weighted_jacobian: str | None = None
     cma_sigma: float | None = None
     gain: float | None = None
+    box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
     def bracket(self, learner: str) -> tuple[float, float]:
         """The search limits (low, high), or an error naming ``learner``, which needs them."""
@@ -84,6 +88,26 @@ def _cma(s: LearnerSettings, q0: NDArray[np.float64], kw: dict[str, Any]) -> Ask
     return CMAES(q0, sigma, first_x0=True, **kw)
 
 
+def _bo(random_starts: int) -> Callable[[LearnerSettings, NDArray[np.float64], dict[str, Any]], AskTell]:
+    def make(s: LearnerSettings, q0: NDArray[np.float64], kw: dict[str, Any]) -> AskTell:
+        lower, upper = s.box if s.box is not None else search_box([], q0)
+        kw.setdefault("max_trials", s.max_trials)
+        kw.setdefault("random_starts", random_starts)
+        return BayesOpt(q0, lower=lower, upper=upper, **kw)
+    return make
+
+
+def _auto(s: LearnerSettings, q0: NDArray[np.float64], kw: dict[str, Any]) -> AskTell:
+    # One-dimensional queries between the demos' queries: the root finder, which needs no more
+    # trials than golden section's worst case (docs/method.md §6.4) and expands a limit when the
+    # root lies beyond it; otherwise (n-D, or no limits) error learning with Broyden's secant
+    # estimate of J (§5.4), which needs no probe trials.
+    if q0.size == 1 and s.low is not None and s.high is not None:
+        kw.setdefault("max_expansions", AUTO_EXPANSIONS)
+        return L.IllinoisRootFinder(q0, low=s.low, high=s.high, max_trials=s.max_trials, **kw)
+    return L.ErrorLearning(q0, jacobian="secant", max_trials=s.max_trials, **kw)
+
+
 def _golden(name: str, mode: str, s: LearnerSettings, q0: NDArray[np.float64], kw: dict[str, Any]) -> AskTell:
     low, high = s.bracket(name)
     return L.GoldenSection(q0, low=low, high=high, mode=mode, max_trials=s.max_trials, **kw)
@@ -102,7 +126,14 @@ def _fixed(s: LearnerSettings, q0: NDArray[np.float64], kw: dict[str, Any]) -> A
     return L.ErrorLearning(q0, **kw)
 
 
+#: how often the ``auto`` learner may expand each limit (golden section's robust mode allows as many)
+AUTO_EXPANSIONS = 4
+#: the learner of ``dmprs learn`` and :meth:`ExperimentSetup.make_learner` when none is named
+DEFAULT_LEARNER = "auto"
+
 LEARNERS: dict[str, LearnerKind] = {k.name: k for k in (
+    LearnerKind("auto", "the project's default: the root finder expanding its limits for a 1-D query, Broyden's "
+                "secant for n-D", _auto),
     LearnerKind("error", "eq. 16 with K = J = I (the paper's matchbox learner)",
                 lambda s, q0, kw: L.ErrorLearning(q0, max_trials=s.max_trials, **kw)),
     LearnerKind("weighted", "eq. 17: steps weighted by exp(-|eps / scale|^2)",
@@ -129,11 +160,15 @@ LEARNERS: dict[str, LearnerKind] = {k.name: k for k in (
                 lambda s, q0, kw: L.PolicyGradient(q0, scale=kw.pop("scale", s.task_scale),
                                                    max_trials=s.max_trials, **kw)),
     LearnerKind("cma", "CMA-ES in the query space from the same first trial (black-box baseline)", _cma),
+    LearnerKind("bo", "Bayesian optimization (bayesian-optimization's GP) from the same first trial, one "
+                "random trial, then the model (black-box baseline)", _bo(1)),
+    LearnerKind("bo-default", "the same with the package's default of 5 random trials before the model", _bo(5)),
     LearnerKind("fixed", "eq. 16 with the experiment's fixed gain K (pouring: 1 l/l)", _fixed),
 )}
 
 #: The learners a one-dimensional experiment offers.
-SCALAR_LEARNERS = ("error", "weighted", "secant", "broyden", "golden", "golden-robust", "root", "pg", "cma")
+SCALAR_LEARNERS = ("auto", "error", "weighted", "secant", "broyden", "golden", "golden-robust", "root", "pg", "cma", "bo",
+                   "bo-default")
 
 
 def learner_help() -> str:
@@ -144,14 +179,15 @@ def learner_help() -> str:
 @dataclass
 class ExperimentSetup:
     """Everything :func:`dmprs.learn` needs, and the learners this experiment offers with its
-    settings. ``make_learner(name)`` builds one starting from the desired query.
+    settings. ``make_learner(name)`` builds one starting from the desired query;
+    ``paper_learner`` is the one the paper used for this experiment.
     """
 
     task: Task
     database: Database
     generalizer: Generalizer
     desired_query: NDArray[np.float64]
-    default_learner: str
+    paper_learner: str
     learner_names: tuple[str, ...]
     settings: LearnerSettings = field(default_factory=LearnerSettings)
 
@@ -166,10 +202,10 @@ class ExperimentSetup:
         return self.settings.high
 
     def make_learner(self, name: str | None = None, q0: ArrayLike | None = None, **options: Any) -> AskTell:
-        """The learner ``name`` (default: the experiment's) from ``q0`` (default: the desired
-        query), with ``options`` passed on to its class.
+        """The learner ``name`` (default: :data:`DEFAULT_LEARNER`) from ``q0`` (default: the
+        desired query), with ``options`` passed on to its class.
         """
-        name = name or self.default_learner
+        name = name or DEFAULT_LEARNER
         if name not in self.learner_names:
             raise InvalidInputError(
                 f"unknown learner {name!r} for {self.task.name}; choose from {', '.join(sorted(self.learner_names))}")
@@ -189,6 +225,19 @@ def ros2_domain(robot: Any, domain_id: Any) -> int | None:
     return as_count(domain_id, "domain_id", 0)
 
 
+def search_box(queries: Iterable[ArrayLike], q0: ArrayLike) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The box a black-box optimizer searches: the smallest box holding the demos' ``queries``
+    and the desired query ``q0`` (which may lie beyond the demos, as the matchbox's pi/2 does with
+    both demos flipped back), widened by a tenth of its extent on each side (a throw beyond the
+    demos' landings asks a little beyond its basket; much wider boxes ask for bottles of no volume
+    or throws faster than the arm's joints allow). A zero extent is taken as 1 (the query's unit).
+    """
+    points = np.array([np.atleast_1d(np.asarray(q, dtype=np.float64)) for q in (*queries, q0)])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    margin = np.where(hi > lo, 0.1 * (hi - lo), 1.0)
+    return tuple((lo - margin).tolist()), tuple((hi + margin).tolist())
+
+
 def database_of(task: Task, demos: Iterable[tuple[ArrayLike, AnyTrajectory]]) -> Database:
     """The database of ``task``'s demonstrations ``(query, trajectory)``, with its query names
     and units.
@@ -200,7 +249,7 @@ def database_of(task: Task, demos: Iterable[tuple[ArrayLike, AnyTrajectory]]) ->
 
 
 def build(task: Task, demos: Callable[[], Iterable[tuple[ArrayLike, AnyTrajectory]]], desired_query: ArrayLike, *,
-          generalizer: dict[str, Any], default_learner: str, learner_names: tuple[str, ...],
+          generalizer: dict[str, Any], paper_learner: str, learner_names: tuple[str, ...],
           settings: LearnerSettings, desired_name: str = "desired_query") -> ExperimentSetup:
     """The one way from a task's demonstrations to an experiment: their database, its
     generalizer (``Generalizer(db, **generalizer)``) and the desired query. The task checks the
@@ -209,5 +258,7 @@ def build(task: Task, demos: Callable[[], Iterable[tuple[ArrayLike, AnyTrajector
     """
     desired = task.validate_query(desired_query, desired_name)
     db = database_of(task, demos())
-    return ExperimentSetup(task, db, Generalizer(db, **generalizer), desired, default_learner, learner_names,
+    if settings.box is None:
+        settings = dataclasses.replace(settings, box=search_box(db.queries, desired))
+    return ExperimentSetup(task, db, Generalizer(db, **generalizer), desired, paper_learner, learner_names,
                            settings)

@@ -16,7 +16,7 @@ def setup(demos: str = "default", *, noise: Noise | None = None, **config: float
 
     ``demos="default"``: one strike that flips back and one that flips over (paper Fig. 4);
     ``"both_flipped_back"``: two that flip back, so pi/2 lies outside the demos and the
-    generalizer extrapolates (Fig. 7). Learners: ``error`` (default; eq. 16, K = I, the paper's),
+    generalizer extrapolates (Fig. 7). Learners: ``auto`` (the default), ``error`` (eq. 16, K = I, the paper's),
     ``weighted`` (eq. 17 with scale 1 rad, recommended for extrapolation), ``secant``, and the
     bracketing ones between the demos' labels. ``config`` overrides simulation parameters;
     ``noise`` is a :class:`dmprs.tasks.noise.Noise` for the trials (the demos are measured exactly).
@@ -28,5 +28,5 @@ def setup(demos: str = "default", *, noise: Noise | None = None, **config: float
     labels = [float(q[0]) for q, _ in recorded]
     settings = LearnerSettings(low=min(labels), high=max(labels), weight_scale=1.0, task_scale=1.0)
     return build(task, lambda: recorded, math.pi / 2, generalizer={"method": "linear", "n_basis": 25},
-                 default_learner="error", learner_names=SCALAR_LEARNERS, settings=settings)
+                 paper_learner="error", learner_names=SCALAR_LEARNERS, settings=settings)
 

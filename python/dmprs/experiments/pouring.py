@@ -36,7 +36,7 @@ def setup(bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME, tol:
     queries are those volumes; their peak tilts are calibrated in the simulation with the liquid
     of ``demo_seed``, and cached, see :func:`dmprs.tasks.pouring.calibrate_peak_tilt`);
     linear generalization with N = 40 kernels; the desired query is the true ``bottle_volume``.
-    Learners: ``golden`` (default, the paper's choice, paper mode, bracket [0.3, 1.0] l),
+    Learners: ``auto`` (the default), ``golden`` (the paper's choice, paper mode, bracket [0.3, 1.0] l),
     ``fixed`` (eq. 16 with the scalar gain ``fixed_gain`` in l/l) and the scalar query learners.
     ``noise``: a :class:`dmprs.tasks.noise.Noise` for the trials (the demonstrations stay exact).
     """
@@ -50,4 +50,4 @@ def setup(bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME, tol:
     settings = LearnerSettings(low=min(demo_volumes), high=max(demo_volumes), weight_scale=SCALE,
                                task_scale=SCALE, gain=gain)
     return build(task, demos, bottle_volume, generalizer={"method": "linear", "n_basis": 40},
-                 default_learner="golden", learner_names=(*SCALAR_LEARNERS, "fixed"), settings=settings)
+                 paper_learner="golden", learner_names=(*SCALAR_LEARNERS, "fixed"), settings=settings)

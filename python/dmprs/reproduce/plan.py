@@ -8,11 +8,11 @@ from typing import Any
 
 from dmprs._extras import available, install_hint
 from dmprs.baselines import BaselineSpec
+from dmprs.experiments.arm_pouring import MAX_TRIALS
 from dmprs.reproduce.parts import PARTS
 
-#: l: the bottles the arm learns to pour from, and its trial cap per run
+#: l: the bottles the arm learns to pour from
 ARM_VOLUMES = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
-ARM_MAX_TRIALS = 6
 #: the arm's liquids: granular flow is chaotic (docs/arm.md, noise floor), so one liquid's trial
 #: count is one draw, and each setting is learned with several liquids
 ARM_LIQUID_SEEDS = (0, 1, 2, 3, 4)
@@ -76,7 +76,7 @@ def _paper_specs(quick: bool) -> list[Any]:
     for v in [0.6] if quick else ARM_VOLUMES:
         for learner in ["golden"] if quick else ["golden", "root"]:
             for seed in ARM_LIQUID_SEEDS[:1] if quick else ARM_LIQUID_SEEDS:
-                specs.append(LearnSpec("arm_pouring", "arm-pouring", learner, ARM_MAX_TRIALS,
+                specs.append(LearnSpec("arm_pouring", "arm-pouring", learner, MAX_TRIALS,
                                        (("bottle_volume", v), ("liquid_seed", seed))))
     return specs
 

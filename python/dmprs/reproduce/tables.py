@@ -16,6 +16,7 @@ from typing import Any
 
 from dmprs._io import strict_json
 from dmprs.reproduce.stats import cell
+from dmprs.reproduce.versus_bo import markdown_versus
 
 #: the line before a generated table; ``{name}`` is a key of :data:`TABLES`
 BEGIN = "<!-- generated from docs/reproduction.json by `dmprs reproduce --update-docs`: {name} -->"
@@ -137,8 +138,14 @@ def arm_pouring(summary: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def versus_bo(summary: dict[str, Any]) -> str:
+    """The comparison with Bayesian optimization and CMA-ES, as the report gives it."""
+    return markdown_versus(_section(summary, "versus"))
+
+
 #: every table a Markdown file may hold, by the name its :data:`BEGIN` line gives
-TABLES: dict[str, Callable[[dict[str, Any]], str]] = {"readme": readme, "arm-pouring": arm_pouring}
+TABLES: dict[str, Callable[[dict[str, Any]], str]] = {"readme": readme, "arm-pouring": arm_pouring,
+                                                      "versus-bo": versus_bo}
 
 
 def render(text: str, summary: dict[str, Any]) -> str:
