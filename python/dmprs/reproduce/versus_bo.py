@@ -19,6 +19,7 @@ import numpy as np
 
 from dmprs import experiments
 from dmprs._extras import available
+from dmprs.experiments import ExperimentSetup
 from dmprs.experiments.arm_pouring import MAX_TRIALS as ARM_MAX_TRIALS
 from dmprs.loop import learn
 from dmprs.plots import pyplot, save_figure
@@ -90,23 +91,31 @@ def plan_versus(quick: bool = False) -> list[VersusSpec]:
             for column in COLUMNS for seed in range(SEEDS if s.draw or column in RANDOMIZED else 1)]
 
 
-def run_versus(spec: VersusSpec) -> dict[str, Any]:
-    """Learns one run of the comparison; plain data."""
-    s = SETTINGS[spec.setting]
+def prepare(setting: int, seed: int) -> tuple[ExperimentSetup, int]:
+    """Setting ``setting`` of :data:`SETTINGS` with draw ``seed``: its experiment and the seed its
+    trials are reset with.
+    """
+    s = SETTINGS[setting]
     options = dict(s.options)
-    seed = 0
+    trial_seed = 0
     if s.draw == "liquid":
-        options["liquid_seed"] = spec.seed
+        options["liquid_seed"] = seed
     elif s.draw == "basket":
-        options["target"] = baskets(SEEDS)[options.pop("region")][spec.seed]
+        options["target"] = baskets(SEEDS)[options.pop("region")][seed]
     elif s.draw == "noise":
         execution, measurement, contact = NOISY_ROBOT[s.experiment]
         options["noise"] = Noise(execution=execution, measurement=measurement, contact=contact)
-        seed = 1000 * spec.seed
-    setup = experiments.make(s.experiment, **options)
+        trial_seed = 1000 * seed
+    return experiments.make(s.experiment, **options), trial_seed
+
+
+def run_versus(spec: VersusSpec) -> dict[str, Any]:
+    """Learns one run of the comparison; plain data."""
+    s = SETTINGS[spec.setting]
+    setup, trial_seed = prepare(spec.setting, spec.seed)
     learner = setup.paper_learner if spec.column == "paper" else spec.column
     made = setup.make_learner(learner, **({"seed": spec.seed} if learner in RANDOMIZED else {}))
-    r = learn(setup.task, setup.generalizer, setup.desired_query, made, max_trials=s.max_trials, seed=seed)
+    r = learn(setup.task, setup.generalizer, setup.desired_query, made, max_trials=s.max_trials, seed=trial_seed)
     return {"kind": "versus", "setting": spec.setting, "name": s.name, "column": spec.column, "learner": learner,
             "seed": spec.seed, "max_trials": s.max_trials, "converged": r.converged,
             "trials_to_success": r.trials_to_success, "stop_reason": r.stop_reason,
