@@ -1,5 +1,5 @@
 """CMA-ES (Hansen's ``cma`` package) as a one-candidate-at-a-time ask/tell learner: the black-box
-optimizer users would reach for, as a baseline beside the paper's learners (issue 16 item 6).
+optimizer users would reach for, as a baseline beside the paper's learners.
 
 ``cma`` asks and tells a whole population; the learn loops of :mod:`dmprs.loop` and
 :mod:`dmprs.baselines` run one trial at a time. :class:`CMAES` hands out the population's
@@ -16,11 +16,7 @@ copy of that state (seeded with ``seed``) and swaps it in only while ``cma`` sam
 seed gives the same candidates, whatever else uses numpy's global state in between, which is
 what resuming a logged run needs.
 
-Measured on the matchbox (5 seeds, from the same first trial G(q0)): in the weight space (sigma =
-0.05 x max|w| per DOF, budget 200) it stands the box up in 2-5 trials with the default demos and
-in none of 5 seeds when both demos flip back (PoWER and PI²: 2 of 5 each, in 51-114 trials); in
-the query space (learner "cma") in 2-8 trials with the default demos, and in none within 30 when
-both flip back: every candidate flips the box over alike, a plateau of equal costs.
+How it fares against the paper's learners and the weight-space baselines: docs/method.md §7.3.
 """
 
 from __future__ import annotations

@@ -76,12 +76,11 @@ class Generalizer:
     docs/throwing.md).
     "lwr-gp" refuses repeated queries; "linear" averages them.
 
-    Which for a growing database (``learn(..., database=db)``; measured on 2-D pouring,
-    docs/growing.md): ``"linear"``, with its defaults, for a low-dimensional query (1.7 trials
-    per new volume; with 8 or more demos 77 % of first trials succeeded); ``"lwr-gp"`` with
-    ``bandwidth=2.5, trend="affine"`` (1.8 trials, 63 %; without the trend 2.4 and 47 %) where
-    demos are noisy or repeated samples of a smooth map, or the query too high-dimensional to
-    triangulate densely. To extrapolate, ``"linear"`` or ``trend="affine"``.
+    Which for a growing database (``learn(..., database=db)``; docs/growing.md compares them on
+    2-D pouring): ``"linear"``, with its defaults, for a low-dimensional query; ``"lwr-gp"`` with
+    ``bandwidth=2.5, trend="affine"`` where demos are noisy or repeated samples of a smooth map,
+    or the query too high-dimensional to triangulate densely. To extrapolate, ``"linear"`` or
+    ``trend="affine"``.
 
     Many demonstrations (a large dataset): the exact GPs of ``"lwr-gp"`` cost the cube of the
     number of demos, so beyond ``MAX_GP_DEMOS`` they are refused. ``gp_neighbours=k`` makes

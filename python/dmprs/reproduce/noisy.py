@@ -1,4 +1,4 @@
-"""Reproduction part "a noisy robot" (issue 16 item 5; the paper's real-robot Figs. 6 and 11):
+"""Reproduction part "a noisy robot" (the paper's real-robot Figs. 6 and 11):
 trials to success over 10 noise seeds for the matchbox and 2-D pouring, with execution and
 measurement noise (:class:`dmprs.tasks.noise.Noise`) drawn from each trial's seed; and golden
 section's bracket under measurement noise up to 5 times the tolerance, with and without its

@@ -1,4 +1,4 @@
-"""Reproduction part "throwing into a basket" (issue 16 items 4 and 5; the paper's example of a
+"""Reproduction part "throwing into a basket" (the paper's example of a
 query: "the relationship between the basket positions and the DMP parameters"): the 7-DOF arm
 learns to hit unseen baskets on the floor from five demonstration throws, with each generalizer
 and the n-D query learners, on an exact and on a noisy robot.
@@ -31,11 +31,11 @@ from dmprs.reproduce.stats import trial_stats
 from dmprs.tasks.noise import Noise
 
 MAX_TRIALS = 15
-#: the issue's floors: median trials to success for baskets inside / up to 20 % outside the demos
+#: the project's floors: median trials to success for baskets inside / up to 20 % outside the demos
 FLOORS = {"inside": 5, "outside": 8}
-#: the noisy robot (item 5): 3 mrad joint tracking noise, 1 cm on each measured landing coordinate
+#: the noisy robot: 3 mrad joint tracking noise, 1 cm on each measured landing coordinate
 NOISE = (0.003, 0.01)
-PAPER = "not in the paper (its example of a query, section 3); issue 16 floors: inside <= 5, outside <= 8 median"
+PAPER = "not in the paper (its example of a query, section 3); the project's floors: inside <= 5, outside <= 8 median"
 
 
 @dataclass(frozen=True)

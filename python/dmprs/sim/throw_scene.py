@@ -1,4 +1,4 @@
-"""Throwing a ball into a basket with the arm of :mod:`dmprs.sim.arm_model` (issue 16 item 4).
+"""Throwing a ball into a basket with the arm of :mod:`dmprs.sim.arm_model`.
 
 The scene is composed from the arm model's pieces: the same KUKA LBR iiwa 14 links, joints,
 limits, masses and joint servo at 1 kHz (``arm_model.arm_bodies``, ``KP``, ``KV``,

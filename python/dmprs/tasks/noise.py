@@ -1,4 +1,4 @@
-"""A noisy robot (issue 16 item 5, the paper's real-robot runs of Figs. 6 and 11): execution noise
+"""A noisy robot (the paper's real-robot runs of Figs. 6 and 11): execution noise
 and measurement noise, drawn from the seed the trial runner gives ``adapter.reset`` (seed + trial
 index), so a noisy run is still reproducible bit for bit.
 
