@@ -26,15 +26,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs._arrays import as_count, as_float_array
 from dmprs._extras import require
-from dmprs.errors import InvalidInputError, LearnerStateError
-from dmprs.learners import Trial
+from dmprs.candidates import CandidateLearner
+from dmprs.errors import InvalidInputError
 
 __all__ = ["BayesOpt"]
 
 
-class BayesOpt:
+class BayesOpt(CandidateLearner):
     """Bayesian optimization from ``x0`` within ``lower``/``upper`` (one bound per query
     dimension, or a scalar for all), ``random_starts`` uniform draws after ``x0``, at most
     ``max_trials`` told trials, converged when every ``|eps_i| < tol``.
@@ -55,8 +55,7 @@ class BayesOpt:
                                     f"x0 = {x.tolist()}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise InvalidInputError(f"seed = {seed!r} must be a non-negative integer")
-        self._tol = None if tol is None else as_scalar(tol, "tol", positive=True)
-        self._max_trials = as_count(max_trials, "max_trials", 1)
+        super().__init__(tol=tol, max_trials=max_trials)
         self._keys = [f"q{i:03d}" for i in range(x.size)]  # sorted like the package sorts them
         self._opt = BayesianOptimization(f=None, pbounds={k: (float(a), float(b)) for k, a, b in zip(self._keys, lo, hi, strict=True)},
                                          random_state=np.random.RandomState(int(seed)), verbose=0,
@@ -64,10 +63,6 @@ class BayesOpt:
         starts = as_count(random_starts, "random_starts", 0)
         self._queue = [x.copy(), *(self._array(p) for p in self._opt.random_sample(starts))] if starts else [x.copy()]
         self._x0, self._lower, self._upper = x, lo, hi
-        self._pending: NDArray[np.float64] | None = None
-        self._history: list[Trial] = []
-        self._status = "running"
-        self._detail = "running"
 
     def _array(self, params: Any) -> NDArray[np.float64]:
         if isinstance(params, dict):
@@ -77,8 +72,7 @@ class BayesOpt:
     # --- ask / tell -------------------------------------------------------------------------
     def ask(self) -> NDArray[np.float64]:
         """The next query (asking again before :meth:`tell` returns the same one)."""
-        if self.done:
-            raise LearnerStateError(f"BayesOpt has stopped ({self._detail}); ask() after done")
+        self._check_can_ask()
         if self._pending is None:
             if self._queue:
                 self._pending = self._queue.pop(0)
@@ -92,11 +86,7 @@ class BayesOpt:
 
     def tell(self, q: ArrayLike, feedback: ArrayLike) -> None:
         """Scores the query :meth:`ask` returned with its signed error eps."""
-        if self._pending is None:
-            raise LearnerStateError("tell() without a pending ask()")
-        qq = np.atleast_1d(as_float_array(q, "q", (0, 1)))
-        if qq.shape != self._pending.shape or not np.array_equal(qq, self._pending):
-            raise LearnerStateError(f"tell() of {qq.tolist()}, but the pending query is {self._pending.tolist()}")
+        qq = self._answered(q)
         eps = np.atleast_1d(as_float_array(feedback, "feedback", (0, 1)))
         if not np.isfinite(eps).all():
             raise InvalidInputError(f"eps {eps.tolist()} is not finite")
@@ -104,48 +94,7 @@ class BayesOpt:
             raise InvalidInputError(f"eps has shape {eps.shape}; the query has {qq.shape}")
         score = float(np.linalg.norm(eps))
         self._opt.register(dict(zip(self._keys, qq.tolist(), strict=True)), -score)
-        self._history.append(Trial(qq.copy(), eps.copy(), score))
-        self._pending = None
-        if self._tol is not None and np.all(np.abs(eps) < self._tol):
-            self._status, self._detail = "converged", f"converged: every |eps| < {self._tol:g}"
-        elif len(self._history) >= self._max_trials:
-            self._status, self._detail = "trial-cap", f"trial cap of {self._max_trials} reached"
-
-    # --- what the loops read ----------------------------------------------------------------
-    @property
-    def done(self) -> bool:
-        """Whether it stopped: it asks nothing more."""
-        return self._status != "running"
-
-    @property
-    def converged(self) -> bool:
-        """Whether a told trial succeeded."""
-        return self._status == "converged"
-
-    @property
-    def status(self) -> str:
-        """``running``, ``converged`` or ``trial-cap``."""
-        return self._status
-
-    @property
-    def status_detail(self) -> str:
-        """Why it stopped, in words."""
-        return self._detail
-
-    @property
-    def history(self) -> list[Trial]:
-        """Every told trial, in order."""
-        return list(self._history)
-
-    @property
-    def best(self) -> Trial | None:
-        """The told trial with the smallest |eps|, or None before any."""
-        return min(self._history, key=lambda t: t.score) if self._history else None
-
-    @property
-    def n_trials(self) -> int:
-        """How many trials were told."""
-        return len(self._history)
+        self._record(qq, eps, score, eps=eps)
 
     @property
     def box(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -26,17 +26,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs._arrays import as_count, as_float_array
 from dmprs._extras import require
-from dmprs.errors import InvalidInputError, LearnerStateError
-from dmprs.learners import Trial
+from dmprs.candidates import CandidateLearner
+from dmprs.errors import InvalidInputError
 
 __all__ = ["CMAES"]
 
 _FEEDBACK = ("error", "cost")
 
 
-class CMAES:
+class CMAES(CandidateLearner):
     """CMA-ES from ``x0`` with step ``sigma0`` (a scalar, or one standard deviation per
     coordinate), population ``popsize`` (default cma's ``4 + 3 ln n``), at most ``max_trials``
     told trials, optional box ``lower``/``upper``. With ``first_x0=True`` the first trial is
@@ -61,9 +61,8 @@ class CMAES:
             raise InvalidInputError(f"feedback = {feedback!r} is invalid: use one of {_FEEDBACK}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise InvalidInputError(f"seed = {seed!r} must be a non-negative integer")
+        super().__init__(tol=tol, max_trials=max_trials)
         self._feedback = feedback
-        self._tol = None if tol is None else as_scalar(tol, "tol", positive=True)
-        self._max_trials = as_count(max_trials, "max_trials", 1)
         opts: dict[str, Any] = {"seed": int(seed) + 1, "verbose": -9, "CMA_stds": sig / sig.max()}
         if popsize is not None:
             opts["popsize"] = as_count(popsize, "popsize", 2)
@@ -82,16 +81,11 @@ class CMAES:
         self._first = bool(first_x0)
         self._batch: list[NDArray[np.float64]] = []
         self._scores: list[float] = []
-        self._pending: NDArray[np.float64] | None = None
-        self._history: list[Trial] = []
-        self._status = "running"
-        self._detail = "running"
 
     # --- ask / tell -------------------------------------------------------------------------
     def ask(self) -> NDArray[np.float64]:
         """The next candidate (asking again before :meth:`tell` returns the same one)."""
-        if self.done:
-            raise LearnerStateError(f"CMAES has stopped ({self._detail}); ask() after done")
+        self._check_can_ask()
         if self._pending is None:
             if self._first:
                 self._pending = self._x0.copy()
@@ -113,11 +107,7 @@ class CMAES:
 
     def tell(self, q: ArrayLike, feedback: ArrayLike) -> None:
         """Scores the candidate :meth:`ask` returned: eps (``feedback="error"``) or a cost."""
-        if self._pending is None:
-            raise LearnerStateError("tell() without a pending ask()")
-        qq = np.atleast_1d(as_float_array(q, "q", (0, 1)))
-        if qq.shape != self._pending.shape or not np.array_equal(qq, self._pending):
-            raise LearnerStateError(f"tell() of {qq.tolist()}, but the pending query is {self._pending.tolist()}")
+        qq = self._answered(q)
         fb = np.atleast_1d(as_float_array(feedback, "feedback", (0, 1)))
         if not np.isfinite(fb).all():
             raise InvalidInputError(f"feedback {fb.tolist()} is not finite")
@@ -129,57 +119,17 @@ class CMAES:
             if fb.size != 1:
                 raise InvalidInputError(f"a cost is one number; got shape {fb.shape}")
             score = float(fb[0])
-        self._history.append(Trial(qq.copy(), fb.copy(), score))
-        self._pending = None
         if self._first:
             self._first = False
         else:
             self._scores.append(score)
             if len(self._scores) == len(self._batch):
                 self._es.tell(self._batch, self._scores)
-        if self._feedback == "error" and self._tol is not None and np.all(np.abs(fb) < self._tol):
-            self._status, self._detail = "converged", f"converged: every |eps| < {self._tol:g}"
-        elif len(self._history) >= self._max_trials:
-            self._status, self._detail = "trial-cap", f"trial cap of {self._max_trials} reached"
-        elif len(self._scores) == len(self._batch) and self._es.stop():
+        self._record(qq, fb, score, eps=fb if self._feedback == "error" else None)
+        if not self.done and len(self._scores) == len(self._batch) and self._es.stop():
             self._status, self._detail = "stopped", f"cma stopped: {dict(self._es.stop())}"
 
-    # --- what the loops read ----------------------------------------------------------------
-    @property
-    def done(self) -> bool:
-        """Whether CMA-ES stopped: it asks nothing more."""
-        return self._status != "running"
-
-    @property
-    def converged(self) -> bool:
-        """Whether a told trial succeeded."""
-        return self._status == "converged"
-
-    @property
-    def status(self) -> str:
-        """``running``, ``converged``, ``trial-cap`` or ``stopped`` (cma's own criteria)."""
-        return self._status
-
-    @property
-    def status_detail(self) -> str:
-        """Why it stopped, in words."""
-        return self._detail
-
-    @property
-    def history(self) -> list[Trial]:
-        """Every told trial, in order."""
-        return list(self._history)
-
-    @property
-    def best(self) -> Trial | None:
-        """The told trial with the lowest score, or None before any."""
-        return min(self._history, key=lambda t: t.score) if self._history else None
-
-    @property
-    def n_trials(self) -> int:
-        """How many trials were told."""
-        return len(self._history)
-
+    # --- what the loops read beyond CandidateLearner's ---------------------------------------
     @property
     def popsize(self) -> int:
         """cma's population size."""
