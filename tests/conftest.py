@@ -30,6 +30,16 @@ def outside(tmp_path):
     return folder
 
 
+def drive(learner, feedback):
+    """Runs an ask/tell learner until it stops, telling it ``feedback(q)`` for every ``q`` it
+    asks; returns the learner.
+    """
+    while not learner.done:
+        q = learner.ask()
+        learner.tell(q, feedback(q))
+    return learner
+
+
 def crash_after(run_dir, n_trials: int) -> None:
     """Leaves a run directory as a crash after ``n_trials`` finished trials would: their lines in
     trials.jsonl, and beyond them at most the next trial's arrays (written just before its line).

@@ -14,20 +14,13 @@ from dmprs.bayesopt import BayesOpt
 from dmprs.errors import InvalidInputError, LearnerStateError
 from dmprs.experiments.base import search_box
 from dmprs.loop import learn
-from tests.conftest import crash_after
+from tests.conftest import crash_after, drive
 
 
 def eps_of(root):
     """A smooth monotone map with its root at ``root``; eps > 0 below it (docs/method.md §5.3)."""
     root = np.asarray(root, dtype=float)
     return lambda x: (root + 0.2 * np.sin(root)) - (x + 0.2 * np.sin(x))
-
-
-def run(learner, eps):
-    while not learner.done:
-        q = learner.ask()
-        learner.tell(q, eps(q))
-    return learner
 
 
 def test_asks_what_the_package_asks_in_its_own_loop():
@@ -53,7 +46,7 @@ def test_asks_what_the_package_asks_in_its_own_loop():
 @pytest.mark.parametrize("root", [[0.7], [0.3, -1.2]])
 def test_finds_the_root_of_a_smooth_map_within_its_box(root):
     lower, upper = np.full(len(root), -2.0), np.full(len(root), 2.0)
-    lrn = run(BayesOpt(np.zeros(len(root)), lower=lower, upper=upper, seed=1, random_starts=1, max_trials=60,
+    lrn = drive(BayesOpt(np.zeros(len(root)), lower=lower, upper=upper, seed=1, random_starts=1, max_trials=60,
                        tol=0.01), eps_of(root))
     assert lrn.converged, lrn.status_detail
     np.testing.assert_allclose(lrn.history[-1].q, root, atol=0.02)  # |eps| < 0.01, slope >= 0.8
@@ -63,7 +56,7 @@ def test_finds_the_root_of_a_smooth_map_within_its_box(root):
 
 
 def queries(seed):
-    lrn = run(BayesOpt([0.5, 0.5], lower=0.0, upper=1.0, seed=seed, random_starts=1, max_trials=8),
+    lrn = drive(BayesOpt([0.5, 0.5], lower=0.0, upper=1.0, seed=seed, random_starts=1, max_trials=8),
               eps_of([0.2, 0.8]))
     return np.array([t.q for t in lrn.history])
 
@@ -97,7 +90,7 @@ def test_out_of_order_and_bad_input_are_clear_errors():
         BayesOpt([0.0], lower=-1.0, upper=1.0, seed=-1)
     with pytest.raises(InvalidInputError, match="random_starts"):
         BayesOpt([0.0], lower=-1.0, upper=1.0, random_starts=-2)
-    lrn = run(BayesOpt([0.0], lower=-1.0, upper=1.0, max_trials=2), eps_of([0.9]))
+    lrn = drive(BayesOpt([0.0], lower=-1.0, upper=1.0, max_trials=2), eps_of([0.9]))
     assert lrn.status == "trial-cap"
     with pytest.raises(LearnerStateError, match="after done"):
         lrn.ask()

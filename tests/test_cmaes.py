@@ -12,23 +12,16 @@ from dmprs.cmaes import CMAES
 from dmprs.errors import InvalidInputError, LearnerStateError
 from dmprs.loop import learn
 from dmprs.runlog import RunLog
-from tests.conftest import crash_after
+from tests.conftest import crash_after, drive
 
 TARGET = np.array([0.3, -1.2, 2.0])
-
-
-def minimize(learner, f):
-    while not learner.done:
-        x = learner.ask()
-        learner.tell(x, f(x))
-    return learner
 
 
 def test_solves_a_smooth_problem_as_cma_does_with_its_own_loop():
     def f(x):
         return float(np.sum((x - TARGET) ** 2 * [1.0, 4.0, 0.25]))
 
-    ours = minimize(CMAES(np.zeros(3), 0.5, seed=7, max_trials=600, feedback="cost"), f)
+    ours = drive(CMAES(np.zeros(3), 0.5, seed=7, max_trials=600, feedback="cost"), f)
     assert ours.best is not None and ours.best.score < 1e-8
     np.testing.assert_allclose(ours.best.q, TARGET, atol=1e-3)
     # the same candidates as cma's own population loop, with cma's own seed handling
@@ -51,7 +44,7 @@ def test_error_feedback_finds_a_root_and_converges():
     def eps(x):  # a smooth monotone map, eps > 0 below the root (docs/method.md §5.3)
         return (root + 0.2 * np.sin(root)) - (x + 0.2 * np.sin(x))
 
-    lrn = minimize(CMAES([0.0, 0.0], 0.5, seed=1, max_trials=400, tol=1e-4), eps)
+    lrn = drive(CMAES([0.0, 0.0], 0.5, seed=1, max_trials=400, tol=1e-4), eps)
     assert lrn.converged and np.all(np.abs(eps(lrn.history[-1].q)) < 1e-4)
     np.testing.assert_allclose(lrn.history[-1].q, root, atol=1e-3)
 

@@ -9,13 +9,12 @@ import pytest
 
 from dmprs import learners as L
 from dmprs.errors import InvalidInputError, LearnerStateError
+from tests.conftest import drive
 
 
 def run(learner, eps_of: Callable[[np.ndarray], object]) -> int:
-    while not learner.done:
-        q = learner.ask()
-        learner.tell(q, eps_of(q))
-    return learner.n_trials
+    """How many trials ``learner`` takes on ``eps_of`` until it stops."""
+    return int(drive(learner, eps_of).n_trials)
 
 
 def sine_eps(q0: float):
