@@ -44,17 +44,13 @@
 //! eps > 0 means the query must increase (docs/method.md §5.3).
 
 use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
-use crate::bracket::check_bracket;
+use crate::bracket::{Expansion, Expansions, check_bracket};
 use crate::error::{Result, check_scalar, invalid};
 
 /// The paper's constants: the next point sits at 0.618 (eps > 0) or 0.382 (eps <= 0) of the
 /// new bracket.
 pub const GOLDEN_HIGH: f64 = 0.618;
 pub const GOLDEN_LOW: f64 = 0.382;
-/// §6.3 (b): expand when q is within this fraction of the reference width of an unconfirmed limit.
-pub(crate) const EXPAND_WINDOW: f64 = 0.05;
-/// §6.3 (b): the expansion factor.
-pub(crate) const EXPAND_FACTOR: f64 = 1.618;
 /// Paper mode: a bracket narrower than this fraction of the first one has collapsed.
 const COLLAPSE: f64 = 1e-9;
 /// Noise guard 1: a mean of n readings with |mean| < DOUBT_SIGMAS sigma / sqrt(n) has a doubtful sign.
@@ -112,8 +108,7 @@ pub struct GoldenSection {
     high_confirmed: bool,
     /// W0, the bracket width at the start (after widening to contain q0).
     first_width: f64,
-    expansions: [usize; 2],
-    max_expansions: usize,
+    expansions: Expansions,
     noise: Option<f64>,
     max_repeats: usize,
     /// Noise guard 1: the readings so far at the q being repeated (q, sum of eps, count).
@@ -152,8 +147,7 @@ impl GoldenSection {
             low_confirmed: false,
             high_confirmed: false,
             first_width: qh - ql,
-            expansions: [0, 0],
-            max_expansions: cfg.max_expansions,
+            expansions: Expansions::new(qh - ql, cfg.max_expansions),
             noise: cfg.noise,
             max_repeats: cfg.max_repeats,
             readings: None,
@@ -277,36 +271,18 @@ impl GoldenSection {
 
     /// Robust mode §6.3 (b). `up`: eps > 0 at q. Returns `HitBound` when expansions are spent.
     fn expand(&mut self, q: f64, up: bool) -> Option<Status> {
-        let window = EXPAND_WINDOW * self.first_width;
-        let (near, confirmed, side) = if up {
-            (self.qh - q <= window, self.high_confirmed, 1)
+        let (limit, confirmed) = if up {
+            (&mut self.qh, self.high_confirmed)
         } else {
-            (q - self.ql <= window, self.low_confirmed, 0)
+            (&mut self.ql, self.low_confirmed)
         };
-        if !near || confirmed {
-            return None;
+        match self.expansions.expand(q, up, limit, confirmed) {
+            Expansion::Spent => Some(Status::HitBound {
+                high: up,
+                value: *limit,
+            }),
+            Expansion::NotNeeded | Expansion::Moved => None,
         }
-        if self.expansions[side] >= self.max_expansions {
-            return Some(if up {
-                Status::HitBound {
-                    high: true,
-                    value: self.qh,
-                }
-            } else {
-                Status::HitBound {
-                    high: false,
-                    value: self.ql,
-                }
-            });
-        }
-        self.expansions[side] += 1;
-        let step = EXPAND_FACTOR.powi(self.expansions[side] as i32) * self.first_width;
-        if up {
-            self.qh += step;
-        } else {
-            self.ql -= step;
-        }
-        None
     }
 }
 

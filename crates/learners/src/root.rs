@@ -31,9 +31,9 @@
 //! convention is wrong, and the expansions are spent); the trial cap.
 
 use crate::ask_tell::{AskTell, Record, Status, diverged_unless_finite};
-use crate::bracket::check_bracket;
+use crate::bracket::{Expansion, Expansions, check_bracket};
 use crate::error::Result;
-use crate::golden::{EXPAND_FACTOR, EXPAND_WINDOW, GOLDEN_HIGH};
+use crate::golden::GOLDEN_HIGH;
 
 #[derive(Debug, Clone)]
 pub struct RootFinderConfig {
@@ -75,11 +75,8 @@ pub struct IllinoisRootFinder {
     /// The largest bracket width allowed after the next trial (the golden schedule).
     allowed: f64,
     next: f64,
-    /// The width of [low, high] widened to contain q0: the unit of an expansion.
-    first_width: f64,
-    max_expansions: usize,
-    /// Expansions so far, of the low and the high limit.
-    expansions: [usize; 2],
+    /// Of [low, high] widened to contain q0.
+    expansions: Expansions,
     rec: Record,
 }
 
@@ -100,9 +97,7 @@ impl IllinoisRootFinder {
             last_replaced_b: None,
             allowed: f64::INFINITY,
             next: q0,
-            first_width: b - a,
-            max_expansions: cfg.max_expansions,
-            expansions: [0, 0],
+            expansions: Expansions::new(b - a, cfg.max_expansions),
             rec: Record::new(cfg.max_trials)?,
         })
     }
@@ -131,30 +126,18 @@ impl IllinoisRootFinder {
 
     /// The expansions of `(low, high)` so far.
     pub fn expansions(&self) -> (usize, usize) {
-        (self.expansions[0], self.expansions[1])
+        self.expansions.used()
     }
 
     /// Moves an unconfirmed limit outwards when the trial at `q` lies next to it and its eps
     /// points past it (`up`: eps > 0, the root is above q). Returns whether it moved.
     fn expand(&mut self, q: f64, up: bool) -> bool {
-        let window = EXPAND_WINDOW * self.first_width;
-        let side = usize::from(up);
-        let (near, untried) = if up {
-            (self.b - q <= window, self.fb.is_none())
+        let (limit, untried) = if up {
+            (&mut self.b, self.fb.is_none())
         } else {
-            (q - self.a <= window, self.fa.is_none())
+            (&mut self.a, self.fa.is_none())
         };
-        if !near || !untried || self.expansions[side] >= self.max_expansions {
-            return false;
-        }
-        self.expansions[side] += 1;
-        let step = EXPAND_FACTOR.powi(self.expansions[side] as i32) * self.first_width;
-        if up {
-            self.b += step;
-        } else {
-            self.a -= step;
-        }
-        true
+        self.expansions.expand(q, up, limit, !untried) == Expansion::Moved
     }
 
     fn candidate(&self) -> f64 {
