@@ -339,6 +339,7 @@ def serve_cmd(task: str, domain_id: int, speed: float, volume: float, liquid_see
     /clock and the task's sensor: the landing camera or the glass's scale) until interrupted.
     """
     require("cyclonedds", "dmprs robot serve")
+    # here, not at the top: it loads cyclonedds and the arm tasks, which no other command needs
     from dmprs.ros2.served import CONTROLLER, LANDING_TOPIC, SCALE_TOPIC, serve
 
     def ready() -> None:
