@@ -10,6 +10,11 @@ from dmprs import _core
 from dmprs.errors import ExtrapolationError, InvalidInputError
 from dmprs.generalize import MAX_GP_DEMOS
 
+#: what dmprs.Generalizer hands the core, for the tests that call the core directly
+CONSTANTS = {"alpha_z": 48.0, "beta_z": 12.0, "alpha_x": 2.0, "width_factor": 2.0}
+OPTIONS = {"kernel": "tricube", "bandwidth": 1.5, "ridge": 1e-8, "interpolate": True, "gp_noise": 1e-3,
+           "gp_optimize": None, "gp_restarts": 0, "gp_neighbours": None, "trend": "constant"}
+
 
 def min_jerk(s):
     return 10 * s**3 - 15 * s**4 + 6 * s**5
@@ -264,9 +269,7 @@ def test_duplicate_queries():
     demo = (tr.t, tr.y, None, None)
     with pytest.raises(InvalidInputError, match="demonstrations 0 and 1 have the same query"):
         _core.Generalizer(
-            np.array([[0.0], [0.0]]), [demo, demo], "linear", n_basis=10, alpha_z=48.0, beta_z=12.0,
-            alpha_x=2.0, width_factor=2.0, kernel="tricube", bandwidth=1.5, ridge=1e-8,
-            interpolate=True, gp_noise=1e-3, gp_optimize=None, gp_restarts=0,
+            np.array([[0.0], [0.0]]), [demo, demo], "linear", 10, CONSTANTS, OPTIONS
         )
 
 
@@ -297,9 +300,8 @@ def test_demos_with_different_dof_counts():
     a, b = trajectory(0.0, n_dof=2), trajectory(1.0, n_dof=3)
     with pytest.raises(InvalidInputError, match="demonstration 1 has 3 degrees of freedom, but demonstration 0 has 2"):
         _core.Generalizer(
-            np.array([[0.0], [1.0]]), [(a.t, a.y, None, None), (b.t, b.y, None, None)], "lwr-gp",
-            n_basis=10, alpha_z=48.0, beta_z=12.0, alpha_x=2.0, width_factor=2.0, kernel="tricube",
-            bandwidth=1.5, ridge=1e-8, interpolate=True, gp_noise=1e-3, gp_optimize=None, gp_restarts=0,
+            np.array([[0.0], [1.0]]), [(a.t, a.y, None, None), (b.t, b.y, None, None)], "lwr-gp", 10,
+            CONSTANTS, OPTIONS,
         )
 
 
@@ -321,9 +323,7 @@ def test_a_bad_demo_is_named():
         tr = trajectory(0.0)
         _core.Generalizer(
             np.array([[0.0], [1.0]]), [(tr.t, tr.y, None, None), (t, np.zeros((4, 2)), None, None)],
-            "linear", n_basis=10, alpha_z=48.0, beta_z=12.0, alpha_x=2.0, width_factor=2.0,
-            kernel="tricube", bandwidth=1.5, ridge=1e-8, interpolate=True, gp_noise=1e-3,
-            gp_optimize=None, gp_restarts=0,
+            "linear", 10, CONSTANTS, OPTIONS,
         )
 
 

@@ -1,6 +1,6 @@
 # Type stubs for the Rust extension dmprs._core (crates/py-bindings). The documented API is in
 # dmprs.dmp; these low-level entry points take arrays that are already float64 and C-contiguous.
-from typing import ClassVar, Self, TypeAlias, final
+from typing import ClassVar, Self, TypeAlias, TypedDict, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -72,6 +72,19 @@ class _Primitive:
 
 #: The constants as the core takes them: alpha_z, beta_z, alpha_x, width_factor.
 _Constants: TypeAlias = dict[str, float]
+
+class _GeneralizerOptions(TypedDict):
+    """The generalizers' options as the core takes them (dmprs.Generalizer documents them)."""
+
+    kernel: str
+    bandwidth: float
+    ridge: float
+    interpolate: bool
+    gp_noise: float
+    gp_optimize: bool | None
+    gp_restarts: int
+    gp_neighbours: int | None
+    trend: str
 
 @final
 class Dmp(_Primitive):
@@ -568,21 +581,9 @@ class Generalizer:
         queries: NDArray[np.float64],
         demos: list[_DemoArrays],
         method: str,
-        *,
         n_basis: int,
-        alpha_z: float,
-        beta_z: float,
-        alpha_x: float,
-        width_factor: float,
-        kernel: str,
-        bandwidth: float,
-        ridge: float,
-        interpolate: bool,
-        gp_noise: float,
-        gp_optimize: bool | None,
-        gp_restarts: int,
-        gp_neighbours: int | None = None,
-        trend: str = "constant",
+        constants: _Constants,
+        options: _GeneralizerOptions,
     ) -> Generalizer: ...
     def predict(self, q: NDArray[np.float64]) -> Dmp: ...
     def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]: ...
@@ -624,21 +625,9 @@ class CartesianGeneralizer:
         queries: NDArray[np.float64],
         demos: list[_PoseDemoArrays],
         method: str,
-        *,
         n_basis: int,
-        alpha_z: float,
-        beta_z: float,
-        alpha_x: float,
-        width_factor: float,
-        kernel: str,
-        bandwidth: float,
-        ridge: float,
-        interpolate: bool,
-        gp_noise: float,
-        gp_optimize: bool | None,
-        gp_restarts: int,
-        gp_neighbours: int | None = None,
-        trend: str = "constant",
+        constants: _Constants,
+        options: _GeneralizerOptions,
     ) -> CartesianGeneralizer: ...
     def predict(self, q: NDArray[np.float64]) -> CartesianDmp: ...
     def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]: ...

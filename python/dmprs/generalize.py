@@ -164,33 +164,33 @@ class Generalizer:
                     for tr in (d.trajectory for d in db) if isinstance(tr, Trajectory)]
             self._core = PiecewiseLinear(db.queries, dmps)
             return
-        options: dict[str, Any] = dict(
-            n_basis=as_count(n_basis, "n_basis", 2),
-            **_constants(alpha_z, beta_z, alpha_x, width_factor),
-            kernel=kernel,
-            bandwidth=as_scalar(bandwidth, "bandwidth", positive=True),
-            ridge=as_scalar(ridge, "ridge", positive=True),
-            interpolate=bool(interpolate),
-            gp_noise=as_scalar(gp_noise, "gp_noise", positive=True),
-            gp_optimize=None if gp_optimize is None else bool(gp_optimize),
-            gp_restarts=as_count(gp_restarts, "gp_restarts", 0),
-            gp_neighbours=neighbours,
-            trend=trend,
-        )
+        n = as_count(n_basis, "n_basis", 2)
+        constants = _constants(alpha_z, beta_z, alpha_x, width_factor)
+        options: _core._GeneralizerOptions = {
+            "kernel": kernel,
+            "bandwidth": as_scalar(bandwidth, "bandwidth", positive=True),
+            "ridge": as_scalar(ridge, "ridge", positive=True),
+            "interpolate": bool(interpolate),
+            "gp_noise": as_scalar(gp_noise, "gp_noise", positive=True),
+            "gp_optimize": None if gp_optimize is None else bool(gp_optimize),
+            "gp_restarts": as_count(gp_restarts, "gp_restarts", 0),
+            "gp_neighbours": neighbours,
+            "trend": trend,
+        }
         if db.is_cartesian:
             poses = [
                 (tr.t, tr.pose, tr.velocity, tr.acceleration, tr.angular_velocity, tr.angular_acceleration)
                 for tr in (d.trajectory for d in db)
                 if isinstance(tr, CartesianTrajectory)
             ]
-            self._core = _core.CartesianGeneralizer(db.queries, poses, method, **options)
+            self._core = _core.CartesianGeneralizer(db.queries, poses, method, n, constants, options)
         else:
             demos = [
                 (tr.t, tr.y, tr.yd, tr.ydd)
                 for tr in (d.trajectory for d in db)
                 if isinstance(tr, Trajectory)
             ]
-            self._core = _core.Generalizer(db.queries, demos, method, **options)
+            self._core = _core.Generalizer(db.queries, demos, method, n, constants, options)
         self._db_names = db.query_names
 
     def _query(self, q: ArrayLike) -> NDArray[np.float64]:

@@ -3,7 +3,7 @@
 
 use dmp_core::cartesian::POSE_WIDTH;
 use dmp_core::{
-    CartesianDemonstration, CartesianDmp, CartesianGeneralizer, CartesianTrajectory, DmpConfig,
+    CartesianDemonstration, CartesianDmp, CartesianGeneralizer, CartesianTrajectory,
     RolloutOptions, rollout_batch_cartesian,
 };
 use nalgebra::{DMatrix, DMatrixView};
@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 
 use crate::dmp::{contiguous, time_major};
 use crate::errors::{IntoPyResult, invalid_input};
-use crate::generalize::{parse_method, parse_queries, query, row_major};
+use crate::generalize::{GeneralizerOptions, parse_method, parse_queries, query, row_major};
 use crate::primitive::{Constants, parameter_getters};
 
 /// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
@@ -229,42 +229,17 @@ pub struct PyCartesianGeneralizer {
 impl PyCartesianGeneralizer {
     /// `queries` `(M, n)`; `demos` a list of [`PoseDemoArrays`] with `pose` `(T, 7)`.
     #[new]
-    #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
-                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts,
-                        gp_neighbours=None, trend="constant"))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (queries, demos, method, n_basis, constants, options))]
     fn new(
         py: Python<'_>,
         queries: PyReadonlyArray2<'_, f64>,
         demos: Vec<PoseDemoArrays<'_>>,
         method: &str,
         n_basis: usize,
-        alpha_z: f64,
-        beta_z: f64,
-        alpha_x: f64,
-        width_factor: f64,
-        kernel: &str,
-        bandwidth: f64,
-        ridge: f64,
-        interpolate: bool,
-        gp_noise: f64,
-        gp_optimize: Option<bool>,
-        gp_restarts: usize,
-        gp_neighbours: Option<usize>,
-        trend: &str,
+        constants: Constants,
+        options: GeneralizerOptions,
     ) -> PyResult<Self> {
-        let method = parse_method(
-            method,
-            kernel,
-            bandwidth,
-            ridge,
-            interpolate,
-            gp_noise,
-            gp_optimize,
-            gp_restarts,
-            gp_neighbours,
-            trend,
-        )?;
+        let method = parse_method(method, &options)?;
         let qs = parse_queries(&queries)?;
         let mut views = Vec::with_capacity(demos.len());
         for (t, pose, v, a, w, wd) in &demos {
@@ -279,13 +254,7 @@ impl PyCartesianGeneralizer {
                 normalize: false,
             });
         }
-        let config = DmpConfig {
-            n_basis,
-            alpha_z,
-            beta_z,
-            alpha_x,
-            width_factor,
-        };
+        let config = constants.config(n_basis);
         let inner = py
             .detach(|| CartesianGeneralizer::new(&qs, &views, config, method))
             .py_err()?;

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 
 use crate::dmp::{PyDmp, contiguous, demonstration, time_major};
 use crate::errors::{IntoPyResult, invalid_input};
-use crate::primitive::dmp_config;
+use crate::primitive::Constants;
 
 type DemoArrays<'py> = (
     PyReadonlyArray1<'py, f64>,
@@ -20,11 +20,12 @@ pub(crate) fn query<'a>(q: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]>
     contiguous("q", q)
 }
 
-/// The generalization method and its options, from the keyword arguments of the constructors.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn parse_method(
-    method: &str,
-    kernel: &str,
+/// The generalizer's options as Python passes them: a dict with these keys
+/// (`dmprs.generalize.Generalizer` builds it, validated), for joint and Cartesian demos alike.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub(crate) struct GeneralizerOptions {
+    kernel: String,
     bandwidth: f64,
     ridge: f64,
     interpolate: bool,
@@ -32,10 +33,13 @@ pub(crate) fn parse_method(
     gp_optimize: Option<bool>,
     gp_restarts: usize,
     gp_neighbours: Option<usize>,
-    trend: &str,
-) -> PyResult<Method> {
+    trend: String,
+}
+
+/// The generalization method `method` with `options`.
+pub(crate) fn parse_method(method: &str, options: &GeneralizerOptions) -> PyResult<Method> {
     // "affine": first-order LWR for the weights and an affine prior mean for the GPs.
-    let (local_model, gp_mean) = match trend {
+    let (local_model, gp_mean) = match options.trend.as_str() {
         "constant" => (LocalModel::Constant, GpMean::Constant),
         "affine" => (LocalModel::Linear, GpMean::Affine),
         other => {
@@ -44,7 +48,7 @@ pub(crate) fn parse_method(
             )));
         }
     };
-    let kernel = match kernel {
+    let kernel = match options.kernel.as_str() {
         "tricube" => Kernel::Tricube,
         "gaussian" => Kernel::Gaussian,
         other => {
@@ -58,16 +62,16 @@ pub(crate) fn parse_method(
         "lwr-gp" => Method::LwrGp(LwrGpOptions {
             lwr: LwrOptions {
                 kernel,
-                bandwidth,
-                ridge,
-                interpolate,
+                bandwidth: options.bandwidth,
+                ridge: options.ridge,
+                interpolate: options.interpolate,
                 local_model,
             },
-            gp_noise,
-            gp_optimize,
-            gp_restarts,
+            gp_noise: options.gp_noise,
+            gp_optimize: options.gp_optimize,
+            gp_restarts: options.gp_restarts,
             gp_mean,
-            gp_neighbours,
+            gp_neighbours: options.gp_neighbours,
         }),
         other => {
             return Err(invalid_input(format!(
@@ -108,48 +112,23 @@ pub struct PyGeneralizer {
 impl PyGeneralizer {
     /// `queries` `(M, n)`; `demos` a list of `(t, y, yd, ydd)` with `y` `(T, D)`.
     #[new]
-    #[pyo3(signature = (queries, demos, method, *, n_basis, alpha_z, beta_z, alpha_x, width_factor,
-                        kernel, bandwidth, ridge, interpolate, gp_noise, gp_optimize, gp_restarts,
-                        gp_neighbours=None, trend="constant"))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (queries, demos, method, n_basis, constants, options))]
     fn new(
         py: Python<'_>,
         queries: PyReadonlyArray2<'_, f64>,
         demos: Vec<DemoArrays<'_>>,
         method: &str,
         n_basis: usize,
-        alpha_z: f64,
-        beta_z: f64,
-        alpha_x: f64,
-        width_factor: f64,
-        kernel: &str,
-        bandwidth: f64,
-        ridge: f64,
-        interpolate: bool,
-        gp_noise: f64,
-        gp_optimize: Option<bool>,
-        gp_restarts: usize,
-        gp_neighbours: Option<usize>,
-        trend: &str,
+        constants: Constants,
+        options: GeneralizerOptions,
     ) -> PyResult<Self> {
-        let method = parse_method(
-            method,
-            kernel,
-            bandwidth,
-            ridge,
-            interpolate,
-            gp_noise,
-            gp_optimize,
-            gp_restarts,
-            gp_neighbours,
-            trend,
-        )?;
+        let method = parse_method(method, &options)?;
         let qs = parse_queries(&queries)?;
         let mut views = Vec::with_capacity(demos.len());
         for (t, y, yd, ydd) in &demos {
             views.push(demonstration(t, y, yd.as_ref(), ydd.as_ref())?);
         }
-        let config = dmp_config(n_basis, alpha_z, beta_z, alpha_x, width_factor);
+        let config = constants.config(n_basis);
         let inner = py
             .detach(|| Generalizer::new(&qs, &views, config, method))
             .py_err()?;

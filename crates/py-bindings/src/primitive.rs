@@ -30,23 +30,6 @@ impl Constants {
     }
 }
 
-/// The core's configuration from constants passed one by one (the generalizers' keywords).
-pub(crate) fn dmp_config(
-    n_basis: usize,
-    alpha_z: f64,
-    beta_z: f64,
-    alpha_x: f64,
-    width_factor: f64,
-) -> DmpConfig {
-    Constants {
-        alpha_z,
-        beta_z,
-        alpha_x,
-        width_factor,
-    }
-    .config(n_basis)
-}
-
 /// The parameters every primitive of the core has, as the getters read them.
 pub(crate) trait Parameters {
     fn config(&self) -> &DmpConfig;
