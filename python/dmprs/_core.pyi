@@ -73,6 +73,23 @@ class _Primitive:
 #: The constants as the core takes them: alpha_z, beta_z, alpha_x, width_factor.
 _Constants: TypeAlias = dict[str, float]
 
+class _StepperOptions(TypedDict):
+    """The options both steppers share, as the core takes them (dmprs.stepper documents them)."""
+
+    substeps: int | None
+    alpha_e: list[float]
+    goal_filter: float | None
+    velocity_max: list[float] | None
+    acceleration_max: list[float] | None
+    position_min: list[float] | None
+    position_max: list[float] | None
+    limit_margin: list[float] | None
+    limit_gain: float
+    gamma_nominal: float
+    gamma_a: float
+    eps: float
+    rest_tol: float
+
 class _GeneralizerOptions(TypedDict):
     """The generalizers' options as the core takes them (dmprs.Generalizer documents them)."""
 
@@ -181,20 +198,7 @@ class Stepper:
         cls,
         dmp: Dmp,
         dt: float,
-        *,
-        substeps: int | None,
-        alpha_e: list[float],
-        goal_filter: float | None,
-        velocity_max: list[float] | None,
-        acceleration_max: list[float] | None,
-        position_min: list[float] | None,
-        position_max: list[float] | None,
-        limit_margin: list[float] | None,
-        limit_gain: float,
-        gamma_nominal: float,
-        gamma_a: float,
-        eps: float,
-        rest_tol: float,
+        options: _StepperOptions,
     ) -> Self: ...
     def step(self, measured: object | None = None, coupling: object | None = None) -> _StepOutput: ...
     def reset(self, start: object | None = None) -> None: ...
@@ -228,20 +232,7 @@ class CartesianStepper:
         cls,
         dmp: CartesianDmp,
         dt: float,
-        *,
-        substeps: int | None,
-        alpha_e: list[float],
-        goal_filter: float | None,
-        velocity_max: list[float] | None,
-        acceleration_max: list[float] | None,
-        position_min: list[float] | None,
-        position_max: list[float] | None,
-        limit_margin: list[float] | None,
-        limit_gain: float,
-        gamma_nominal: float,
-        gamma_a: float,
-        eps: float,
-        rest_tol: float,
+        options: _StepperOptions,
         obstacles: NDArray[np.float64] | None,
         obstacle_gain: float,
         obstacle_beta: float,

@@ -129,7 +129,7 @@ def _options(
     gamma_a: Any,
     eps: Any,
     rest_tol: Any,
-) -> tuple[float, dict[str, Any]]:
+) -> tuple[float, _core._StepperOptions]:
     """The options both steppers share, validated: ``n`` coordinates, ``n_position`` of them
     positions (the ones position limits act on).
     """
@@ -226,7 +226,7 @@ class JointStepper(_core.Stepper):
             n, n, "DOF", dt, substeps, alpha_e, goal_filter, velocity_max, acceleration_max,
             position_min, position_max, limit_margin, limit_gain, gamma_nominal, gamma_a, eps, rest_tol,
         )
-        return super().__new__(cls, core, period, **opts)
+        return super().__new__(cls, core, period, opts)
 
 
 class CartesianStepper(_core.CartesianStepper):
@@ -281,8 +281,8 @@ class CartesianStepper(_core.CartesianStepper):
         if beta < 1:
             raise InvalidInputError(f"obstacle_beta = {beta:g} is invalid: must be >= 1")
         return super().__new__(
-            cls, core, period, **opts, obstacles=_obstacles(obstacles),
-            obstacle_gain=as_scalar(obstacle_gain, "obstacle_gain", positive=True), obstacle_beta=beta,
+            cls, core, period, opts, _obstacles(obstacles),
+            as_scalar(obstacle_gain, "obstacle_gain", positive=True), beta,
         )
 
     def set_obstacles(self, obstacles: ArrayLike | None) -> None:

@@ -93,10 +93,11 @@ fn read_vector(name: &str, value: &Bound<'_, PyAny>, buf: &mut Vec<f64>) -> PyRe
     }
 }
 
-/// The options shared by both steppers, as they arrive from `dmprs.stepper`.
-#[allow(clippy::too_many_arguments)]
-fn options(
-    dt: f64,
+/// The options both steppers share, as `dmprs.stepper` passes them: a dict with these keys,
+/// validated there.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct SharedOptions {
     substeps: Option<usize>,
     alpha_e: Vec<f64>,
     goal_filter: Option<f64>,
@@ -110,24 +111,29 @@ fn options(
     gamma_a: f64,
     eps: f64,
     rest_tol: f64,
-) -> StepperOptions {
-    StepperOptions {
-        dt,
-        substeps,
-        alpha_e,
-        goal_filter,
-        velocity_max,
-        acceleration_max,
-        temporal_coupling: TemporalCouplingGains {
-            nominal: gamma_nominal,
-            potential: gamma_a,
-            eps,
-        },
-        position_min,
-        position_max,
-        limit_margin,
-        limit_gain,
-        rest_tol,
+}
+
+impl SharedOptions {
+    /// The core's options at control period `dt`.
+    fn at(self, dt: f64) -> StepperOptions {
+        StepperOptions {
+            dt,
+            substeps: self.substeps,
+            alpha_e: self.alpha_e,
+            goal_filter: self.goal_filter,
+            velocity_max: self.velocity_max,
+            acceleration_max: self.acceleration_max,
+            temporal_coupling: TemporalCouplingGains {
+                nominal: self.gamma_nominal,
+                potential: self.gamma_a,
+                eps: self.eps,
+            },
+            position_min: self.position_min,
+            position_max: self.position_max,
+            limit_margin: self.limit_margin,
+            limit_gain: self.limit_gain,
+            rest_tol: self.rest_tol,
+        }
     }
 }
 
@@ -166,44 +172,14 @@ impl PyStepper {
     }
 
     #[new]
-    #[pyo3(signature = (dmp, dt, *, substeps, alpha_e, goal_filter, velocity_max, acceleration_max,
-                        position_min, position_max, limit_margin, limit_gain, gamma_nominal,
-                        gamma_a, eps, rest_tol))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (dmp, dt, options))]
     fn new(
         py: Python<'_>,
         dmp: PyRef<'_, PyDmp>,
         dt: f64,
-        substeps: Option<usize>,
-        alpha_e: Vec<f64>,
-        goal_filter: Option<f64>,
-        velocity_max: Option<Vec<f64>>,
-        acceleration_max: Option<Vec<f64>>,
-        position_min: Option<Vec<f64>>,
-        position_max: Option<Vec<f64>>,
-        limit_margin: Option<Vec<f64>>,
-        limit_gain: f64,
-        gamma_nominal: f64,
-        gamma_a: f64,
-        eps: f64,
-        rest_tol: f64,
+        options: SharedOptions,
     ) -> PyResult<Self> {
-        let opts = options(
-            dt,
-            substeps,
-            alpha_e,
-            goal_filter,
-            velocity_max,
-            acceleration_max,
-            position_min,
-            position_max,
-            limit_margin,
-            limit_gain,
-            gamma_nominal,
-            gamma_a,
-            eps,
-            rest_tol,
-        );
+        let opts = options.at(dt);
         let inner = Stepper::new(&dmp.inner, &opts).py_err()?;
         let n = inner.n_dof();
         let s = Self {
@@ -349,48 +325,18 @@ fn spheres(obstacles: Option<PyReadonlyArray2<'_, f64>>) -> PyResult<Vec<SphereO
 #[pymethods]
 impl PyCartesianStepper {
     #[new]
-    #[pyo3(signature = (dmp, dt, *, substeps, alpha_e, goal_filter, velocity_max, acceleration_max,
-                        position_min, position_max, limit_margin, limit_gain, gamma_nominal,
-                        gamma_a, eps, rest_tol, obstacles, obstacle_gain, obstacle_beta))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (dmp, dt, options, obstacles, obstacle_gain, obstacle_beta))]
     fn new(
         py: Python<'_>,
         dmp: PyRef<'_, PyCartesianDmp>,
         dt: f64,
-        substeps: Option<usize>,
-        alpha_e: Vec<f64>,
-        goal_filter: Option<f64>,
-        velocity_max: Option<Vec<f64>>,
-        acceleration_max: Option<Vec<f64>>,
-        position_min: Option<Vec<f64>>,
-        position_max: Option<Vec<f64>>,
-        limit_margin: Option<Vec<f64>>,
-        limit_gain: f64,
-        gamma_nominal: f64,
-        gamma_a: f64,
-        eps: f64,
-        rest_tol: f64,
+        options: SharedOptions,
         obstacles: Option<PyReadonlyArray2<'_, f64>>,
         obstacle_gain: f64,
         obstacle_beta: f64,
     ) -> PyResult<Self> {
         let opts = CartesianStepperOptions {
-            base: options(
-                dt,
-                substeps,
-                alpha_e,
-                goal_filter,
-                velocity_max,
-                acceleration_max,
-                position_min,
-                position_max,
-                limit_margin,
-                limit_gain,
-                gamma_nominal,
-                gamma_a,
-                eps,
-                rest_tol,
-            ),
+            base: options.at(dt),
             obstacles: spheres(obstacles)?,
             obstacle_gains: ObstacleGains {
                 lambda: obstacle_gain,
