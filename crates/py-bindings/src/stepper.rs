@@ -192,92 +192,6 @@ impl PyStepper {
         Ok(s)
     }
 
-    /// One control period: `(y, yd, ydd)` of this period (read-only arrays that the next call
-    /// overwrites), then the state advances by dt.
-    #[pyo3(signature = (measured=None, coupling=None))]
-    fn step(
-        &mut self,
-        py: Python<'_>,
-        measured: Option<&Bound<'_, PyAny>>,
-        coupling: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Py<PyTuple>> {
-        if let Some(m) = measured {
-            read_vector("measured", m, &mut self.measured)?;
-        }
-        if let Some(c) = coupling {
-            read_vector("coupling", c, &mut self.coupling)?;
-        }
-        self.inner
-            .step_coupled(
-                measured.map(|_| self.measured.as_slice()),
-                coupling.map(|_| self.coupling.as_slice()),
-            )
-            .py_err()?;
-        self.publish(py)?;
-        Ok(self.out.tuple(py))
-    }
-
-    #[pyo3(signature = (start=None))]
-    fn reset(&mut self, py: Python<'_>, start: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-        match start {
-            Some(s) => {
-                read_vector("start", s, &mut self.measured)?;
-                self.inner.reset(Some(&self.measured)).py_err()?;
-            }
-            None => self.inner.reset(None).py_err()?,
-        }
-        self.publish(py)
-    }
-
-    fn set_goal(&mut self, goal: &Bound<'_, PyAny>) -> PyResult<()> {
-        read_vector("goal", goal, &mut self.measured)?;
-        self.inner.set_goal(&self.measured).py_err()
-    }
-
-    fn set_tau(&mut self, tau: f64) -> PyResult<()> {
-        self.inner.set_tau(tau).py_err()
-    }
-
-    /// The last command `(y, yd, ydd)` (the start at rest before the first step).
-    #[getter]
-    fn output(&self, py: Python<'_>) -> Py<PyTuple> {
-        self.out.tuple(py)
-    }
-    #[getter]
-    fn phase(&self) -> f64 {
-        self.inner.phase()
-    }
-    #[getter]
-    fn tau(&self) -> f64 {
-        self.inner.tau()
-    }
-    #[getter]
-    fn nominal_tau(&self) -> f64 {
-        self.inner.nominal_tau()
-    }
-    fn done(&self) -> bool {
-        self.inner.done()
-    }
-    #[getter]
-    fn steps(&self) -> u64 {
-        self.inner.steps()
-    }
-    #[getter]
-    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.inner.goal())
-    }
-    #[getter]
-    fn goal_target<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.inner.goal_target())
-    }
-    #[getter]
-    fn dt(&self) -> f64 {
-        self.inner.dt()
-    }
-    #[getter]
-    fn substeps(&self) -> usize {
-        self.inner.substeps()
-    }
     #[getter]
     fn n_dof(&self) -> usize {
         self.inner.n_dof()
@@ -354,88 +268,10 @@ impl PyCartesianStepper {
         Ok(s)
     }
 
-    /// One control period: `(pose, velocity, acceleration)` of this period, pose
-    /// `[x, y, z, qw, qx, qy, qz]`, velocity `[v, omega]`, acceleration `[a, omegadot]` (read-only
-    /// arrays that the next call overwrites), then the state advances by dt.
-    #[pyo3(signature = (measured=None, coupling=None))]
-    fn step(
-        &mut self,
-        py: Python<'_>,
-        measured: Option<&Bound<'_, PyAny>>,
-        coupling: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Py<PyTuple>> {
-        if let Some(m) = measured {
-            read_vector("measured", m, &mut self.measured)?;
-        }
-        if let Some(c) = coupling {
-            read_vector("coupling", c, &mut self.coupling)?;
-        }
-        self.inner
-            .step_coupled(
-                measured.map(|_| self.measured.as_slice()),
-                coupling.map(|_| self.coupling.as_slice()),
-            )
-            .py_err()?;
-        self.publish(py)?;
-        Ok(self.out.tuple(py))
-    }
-
-    #[pyo3(signature = (start=None))]
-    fn reset(&mut self, py: Python<'_>, start: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-        match start {
-            Some(s) => {
-                read_vector("start", s, &mut self.measured)?;
-                self.inner.reset(Some(&self.measured)).py_err()?;
-            }
-            None => self.inner.reset(None).py_err()?,
-        }
-        self.publish(py)
-    }
-
-    fn set_goal(&mut self, goal: &Bound<'_, PyAny>) -> PyResult<()> {
-        read_vector("goal", goal, &mut self.measured)?;
-        self.inner.set_goal(&self.measured).py_err()
-    }
-
-    fn set_tau(&mut self, tau: f64) -> PyResult<()> {
-        self.inner.set_tau(tau).py_err()
-    }
-
     fn set_obstacles(&mut self, obstacles: Option<PyReadonlyArray2<'_, f64>>) -> PyResult<()> {
         self.inner.set_obstacles(&spheres(obstacles)?).py_err()
     }
 
-    #[getter]
-    fn output(&self, py: Python<'_>) -> Py<PyTuple> {
-        self.out.tuple(py)
-    }
-    #[getter]
-    fn phase(&self) -> f64 {
-        self.inner.phase()
-    }
-    #[getter]
-    fn tau(&self) -> f64 {
-        self.inner.tau()
-    }
-    #[getter]
-    fn nominal_tau(&self) -> f64 {
-        self.inner.nominal_tau()
-    }
-    fn done(&self) -> bool {
-        self.inner.done()
-    }
-    #[getter]
-    fn steps(&self) -> u64 {
-        self.inner.steps()
-    }
-    #[getter]
-    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.goal())
-    }
-    #[getter]
-    fn goal_target<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.goal_target())
-    }
     #[getter]
     fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let rows: Vec<f64> = self
@@ -447,14 +283,6 @@ impl PyCartesianStepper {
         let m = rows.len() / 4;
         PyArray1::from_vec(py, rows).reshape([m, 4])
     }
-    #[getter]
-    fn dt(&self) -> f64 {
-        self.inner.dt()
-    }
-    #[getter]
-    fn substeps(&self) -> usize {
-        self.inner.substeps()
-    }
 }
 
 impl PyCartesianStepper {
@@ -465,3 +293,110 @@ impl PyCartesianStepper {
         self.out.write(py, 2, a)
     }
 }
+
+/// The methods both stepper classes share, over their `inner` core stepper, `out` arrays and
+/// `measured`/`coupling` buffers; `$step_doc` documents `step`'s output.
+macro_rules! stepper_methods {
+    ($class:ty, $step_doc:literal) => {
+        #[pymethods]
+        impl $class {
+            #[doc = $step_doc]
+            #[pyo3(signature = (measured=None, coupling=None))]
+            fn step(
+                &mut self,
+                py: Python<'_>,
+                measured: Option<&Bound<'_, PyAny>>,
+                coupling: Option<&Bound<'_, PyAny>>,
+            ) -> PyResult<Py<PyTuple>> {
+                if let Some(m) = measured {
+                    read_vector("measured", m, &mut self.measured)?;
+                }
+                if let Some(c) = coupling {
+                    read_vector("coupling", c, &mut self.coupling)?;
+                }
+                self.inner
+                    .step_coupled(
+                        measured.map(|_| self.measured.as_slice()),
+                        coupling.map(|_| self.coupling.as_slice()),
+                    )
+                    .py_err()?;
+                self.publish(py)?;
+                Ok(self.out.tuple(py))
+            }
+
+            #[pyo3(signature = (start=None))]
+            fn reset(&mut self, py: Python<'_>, start: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+                match start {
+                    Some(s) => {
+                        read_vector("start", s, &mut self.measured)?;
+                        self.inner.reset(Some(&self.measured)).py_err()?;
+                    }
+                    None => self.inner.reset(None).py_err()?,
+                }
+                self.publish(py)
+            }
+
+            fn set_goal(&mut self, goal: &Bound<'_, PyAny>) -> PyResult<()> {
+                read_vector("goal", goal, &mut self.measured)?;
+                self.inner.set_goal(&self.measured).py_err()
+            }
+
+            fn set_tau(&mut self, tau: f64) -> PyResult<()> {
+                self.inner.set_tau(tau).py_err()
+            }
+
+            /// The last command (the start at rest before the first step).
+            #[getter]
+            fn output(&self, py: Python<'_>) -> Py<PyTuple> {
+                self.out.tuple(py)
+            }
+            #[getter]
+            fn phase(&self) -> f64 {
+                self.inner.phase()
+            }
+            #[getter]
+            fn tau(&self) -> f64 {
+                self.inner.tau()
+            }
+            #[getter]
+            fn nominal_tau(&self) -> f64 {
+                self.inner.nominal_tau()
+            }
+            fn done(&self) -> bool {
+                self.inner.done()
+            }
+            #[getter]
+            fn steps(&self) -> u64 {
+                self.inner.steps()
+            }
+            #[getter]
+            fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+                PyArray1::from_slice(py, &self.inner.goal()[..])
+            }
+            #[getter]
+            fn goal_target<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+                PyArray1::from_slice(py, &self.inner.goal_target()[..])
+            }
+            #[getter]
+            fn dt(&self) -> f64 {
+                self.inner.dt()
+            }
+            #[getter]
+            fn substeps(&self) -> usize {
+                self.inner.substeps()
+            }
+        }
+    };
+}
+
+stepper_methods!(
+    PyStepper,
+    "One control period: `(y, yd, ydd)` of this period (read-only arrays that the next call \
+     overwrites), then the state advances by dt."
+);
+stepper_methods!(
+    PyCartesianStepper,
+    "One control period: `(pose, velocity, acceleration)` of this period, pose \
+     `[x, y, z, qw, qx, qy, qz]`, velocity `[v, omega]`, acceleration `[a, omegadot]` (read-only \
+     arrays that the next call overwrites), then the state advances by dt."
+);
