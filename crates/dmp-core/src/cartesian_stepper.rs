@@ -24,7 +24,9 @@ use crate::error::{Error, Result, fmt_g};
 use crate::forcing::Forcing;
 use crate::quaternion::{self, Quaternion};
 use crate::rollout::MAX_SUBSTEPS;
-use crate::stepper::{Clock, StepperOptions, check_coordinates, implicit_step, position_limits};
+use crate::stepper::{
+    Clock, StepperOptions, check_coordinates, check_state, implicit_step, position_limits,
+};
 
 /// The coordinates of the underlying DMP: x, y, z, then the three of the orientation.
 const N: usize = 6;
@@ -529,17 +531,7 @@ impl CartesianStepper {
             .chain(&self.q)
             .chain(&self.z)
             .chain(&self.out_acceleration);
-        if !state.fold(!self.x.is_finite(), |bad, v| bad | !v.is_finite()) {
-            return Ok(());
-        }
-        Err(Error::Numerical {
-            context: "Cartesian DMP stepper",
-            detail: format!(
-                "the state became non-finite after {} steps (a coupling term or goal too large \
-                 for f64, or a dt too coarse); reset() to start again",
-                self.steps
-            ),
-        })
+        check_state("Cartesian DMP stepper", self.x, state, self.steps)
     }
 
     /// The phase `x` of the last command (1 before the first step).

@@ -90,6 +90,28 @@ impl StepperOptions {
     }
 }
 
+/// Whether a stepper's phase `x` and `state` are finite after `steps` steps; the error says how
+/// to go on.
+#[inline(always)]
+pub(crate) fn check_state<'a>(
+    context: &'static str,
+    x: f64,
+    state: impl Iterator<Item = &'a f64>,
+    steps: u64,
+) -> Result<()> {
+    // Without short-circuiting, so that the loop vectorizes.
+    if !state.fold(!x.is_finite(), |bad, v| bad | !v.is_finite()) {
+        return Ok(());
+    }
+    Err(Error::Numerical {
+        context,
+        detail: format!(
+            "the state became non-finite after {steps} steps (a coupling term or goal too large \
+             for f64, or a dt too coarse); reset() to start again"
+        ),
+    })
+}
+
 /// A coordinate vector passed to a stepper, checked: `n` finite values.
 pub(crate) fn check_coordinates(name: &'static str, v: &[f64], n: usize) -> Result<()> {
     if v.len() != n {
@@ -663,19 +685,8 @@ impl Stepper {
 
     #[inline(always)]
     fn check_finite(&self) -> Result<()> {
-        // Without short-circuiting, so that the loop vectorizes.
         let state = self.y.iter().chain(&self.z).chain(&self.out_ydd);
-        if !state.fold(!self.x.is_finite(), |bad, v| bad | !v.is_finite()) {
-            return Ok(());
-        }
-        Err(Error::Numerical {
-            context: "DMP stepper",
-            detail: format!(
-                "the state became non-finite after {} steps (a coupling term or goal too large \
-                 for f64, or a dt too coarse); reset() to start again",
-                self.steps
-            ),
-        })
+        check_state("DMP stepper", self.x, state, self.steps)
     }
 
     /// The phase `x` of the last command (1 before the first step).
