@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 
 use crate::dmp::{contiguous, time_major};
 use crate::errors::{IntoPyResult, invalid_input};
-use crate::generalize::{GeneralizerOptions, parse_method, parse_queries, query, row_major};
+use crate::generalize::{GeneralizerOptions, generalizer_methods, parse_method, parse_queries};
 use crate::primitive::{Constants, parameter_getters};
 
 /// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
@@ -261,66 +261,10 @@ impl PyCartesianGeneralizer {
         Ok(Self { inner })
     }
 
-    fn predict(&self, q: PyReadonlyArray1<'_, f64>) -> PyResult<PyCartesianDmp> {
-        Ok(PyCartesianDmp {
-            inner: self.inner.predict(query(&q)?).py_err()?,
-        })
-    }
-
-    fn parameters<'py>(
-        &self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'_, f64>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let p = self.inner.parameters(query(&q)?).py_err()?;
-        Ok(p.as_slice().to_vec().into_pyarray(py))
-    }
-
-    /// `(n_parameters, n)`.
-    fn jacobian<'py>(
-        &self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'_, f64>,
-        rel_step: f64,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
-        row_major(py, &jac)
-    }
-
-    #[getter]
-    fn demo_dmps(&self) -> Vec<PyCartesianDmp> {
-        self.inner
-            .demo_dmps()
-            .iter()
-            .map(|d| PyCartesianDmp { inner: d.clone() })
-            .collect()
-    }
-    #[getter]
-    fn method(&self) -> &'static str {
-        self.inner.method()
-    }
-    #[getter]
-    fn n_query(&self) -> usize {
-        self.inner.n_query()
-    }
     #[getter]
     fn n_dof(&self) -> usize {
         6
     }
-    #[getter]
-    fn n_demos(&self) -> usize {
-        self.inner.n_demos()
-    }
-    #[getter]
-    fn n_basis(&self) -> usize {
-        self.inner.config().n_basis
-    }
-    #[getter]
-    fn n_parameters(&self) -> usize {
-        self.inner.n_parameters()
-    }
-    #[getter]
-    fn tau_bounds(&self) -> (f64, f64) {
-        self.inner.tau_bounds()
-    }
 }
+
+generalizer_methods!(PyCartesianGeneralizer, PyCartesianDmp);

@@ -103,6 +103,86 @@ pub(crate) fn row_major<'py>(
     data.into_pyarray(py).reshape([p, n])
 }
 
+/// The methods both generalizer classes share, over their `inner` core generalizer; `$dmp` is
+/// the Python class of the DMPs they predict.
+macro_rules! generalizer_methods {
+    ($class:ty, $dmp:ident) => {
+        #[pymethods]
+        impl $class {
+            fn predict(&self, q: PyReadonlyArray1<'_, f64>) -> PyResult<$dmp> {
+                Ok($dmp {
+                    inner: self
+                        .inner
+                        .predict($crate::generalize::query(&q)?)
+                        .py_err()?,
+                })
+            }
+
+            fn parameters<'py>(
+                &self,
+                py: Python<'py>,
+                q: PyReadonlyArray1<'_, f64>,
+            ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+                Ok(self
+                    .inner
+                    .parameters($crate::generalize::query(&q)?)
+                    .py_err()?
+                    .as_slice()
+                    .to_vec()
+                    .into_pyarray(py))
+            }
+
+            /// `(n_parameters, n)`.
+            fn jacobian<'py>(
+                &self,
+                py: Python<'py>,
+                q: PyReadonlyArray1<'_, f64>,
+                rel_step: f64,
+            ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+                let jac = self
+                    .inner
+                    .jacobian($crate::generalize::query(&q)?, rel_step)
+                    .py_err()?;
+                $crate::generalize::row_major(py, &jac)
+            }
+
+            #[getter]
+            fn demo_dmps(&self) -> Vec<$dmp> {
+                self.inner
+                    .demo_dmps()
+                    .iter()
+                    .map(|d| $dmp { inner: d.clone() })
+                    .collect()
+            }
+            #[getter]
+            fn method(&self) -> &'static str {
+                self.inner.method()
+            }
+            #[getter]
+            fn n_query(&self) -> usize {
+                self.inner.n_query()
+            }
+            #[getter]
+            fn n_demos(&self) -> usize {
+                self.inner.n_demos()
+            }
+            #[getter]
+            fn n_basis(&self) -> usize {
+                self.inner.config().n_basis
+            }
+            #[getter]
+            fn n_parameters(&self) -> usize {
+                self.inner.n_parameters()
+            }
+            #[getter]
+            fn tau_bounds(&self) -> (f64, f64) {
+                self.inner.tau_bounds()
+            }
+        }
+    };
+}
+pub(crate) use generalizer_methods;
+
 #[pyclass(name = "Generalizer", module = "dmprs._core", frozen)]
 pub struct PyGeneralizer {
     inner: Generalizer,
@@ -135,71 +215,10 @@ impl PyGeneralizer {
         Ok(Self { inner })
     }
 
-    fn predict(&self, q: PyReadonlyArray1<'_, f64>) -> PyResult<PyDmp> {
-        Ok(PyDmp {
-            inner: self.inner.predict(query(&q)?).py_err()?,
-        })
-    }
-
-    fn parameters<'py>(
-        &self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'_, f64>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        Ok(self
-            .inner
-            .parameters(query(&q)?)
-            .py_err()?
-            .as_slice()
-            .to_vec()
-            .into_pyarray(py))
-    }
-
-    /// `(n_parameters, n)`.
-    fn jacobian<'py>(
-        &self,
-        py: Python<'py>,
-        q: PyReadonlyArray1<'_, f64>,
-        rel_step: f64,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let jac = self.inner.jacobian(query(&q)?, rel_step).py_err()?;
-        row_major(py, &jac)
-    }
-
-    #[getter]
-    fn demo_dmps(&self) -> Vec<PyDmp> {
-        self.inner
-            .demo_dmps()
-            .iter()
-            .map(|d| PyDmp { inner: d.clone() })
-            .collect()
-    }
-    #[getter]
-    fn method(&self) -> &'static str {
-        self.inner.method()
-    }
-    #[getter]
-    fn n_query(&self) -> usize {
-        self.inner.n_query()
-    }
     #[getter]
     fn n_dof(&self) -> usize {
         self.inner.n_dof()
     }
-    #[getter]
-    fn n_demos(&self) -> usize {
-        self.inner.n_demos()
-    }
-    #[getter]
-    fn n_basis(&self) -> usize {
-        self.inner.config().n_basis
-    }
-    #[getter]
-    fn n_parameters(&self) -> usize {
-        self.inner.n_parameters()
-    }
-    #[getter]
-    fn tau_bounds(&self) -> (f64, f64) {
-        self.inner.tau_bounds()
-    }
 }
+
+generalizer_methods!(PyGeneralizer, PyDmp);
