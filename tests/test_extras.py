@@ -14,6 +14,7 @@ import pytest
 
 from dmprs import _extras
 from dmprs.baselines import BaselineSpec
+from dmprs.reproduce import versus_bo
 
 plan_module = importlib.import_module("dmprs.reproduce.plan")  # the package re-exports the function plan
 
@@ -59,6 +60,19 @@ def test_a_reproduction_without_cma_leaves_its_runs_out_and_says_why(monkeypatch
     notes = plan_module.skipped(quick=True)
     assert len([n for n in notes if "cma" in n]) == 1
     assert "run(s) of cma not run: they need cma (pip install 'dmprs[cma]')" in notes[0]
+
+
+def test_a_reproduction_without_mujoco_says_which_rows_of_the_comparison_it_leaves_out(monkeypatch):
+    # the comparison with BO runs without MuJoCo, but without its arm's settings
+    monkeypatch.setattr(versus_bo, "available", lambda module: module != "mujoco")
+    monkeypatch.setattr(plan_module, "available", lambda module: module != "mujoco")
+    arm = [s for s in versus_bo.SETTINGS if s.experiment.startswith("arm-")]
+    assert arm and not any(versus_bo.SETTINGS[s.setting].experiment.startswith("arm-")
+                           for s in versus_bo.plan_versus())
+    notes = [n for n in plan_module.skipped() if n.startswith(versus_bo.TITLE)]
+    assert notes == [(f"{versus_bo.TITLE}: {len(arm)} setting(s) of the arm not run: they need mujoco "
+                     "(pip install 'dmprs[robot]')")]
+    assert not [n for n in plan_module.skipped(quick=True) if n.startswith(versus_bo.TITLE)]
 
 
 def test_nothing_is_skipped_when_everything_is_installed():

@@ -1,5 +1,6 @@
 """What a part of the reproduction beyond the paper's three experiments is: its plan, its runner,
-its Markdown section and its figure, and the optional package it may need.
+its Markdown section and its figure, the optional package it needs, and what it leaves out for
+lack of another one.
 """
 
 from __future__ import annotations
@@ -27,6 +28,9 @@ class Part:
     figure: Callable[[list[dict[str, Any]], Path], Path | None]
     #: an importable module the part needs (from an optional extra), or None
     needs: str | None = None
+    #: one line per group of runs the part, available, leaves out for lack of an optional
+    #: package (``quick`` as for :attr:`plan`), naming the extra that brings them
+    left_out: Callable[[bool], list[str]] = lambda quick: []
 
     def available(self) -> bool:
         """Whether the packages this part needs are installed."""

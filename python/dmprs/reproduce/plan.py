@@ -102,6 +102,7 @@ def skipped(quick: bool = False) -> list[str]:
              for (need, what), n in missing.items()]
     notes += [f"{part.title}: not run, it needs {part.needs} ({install_hint(part.needs)})"
               for part in PARTS if part.needs is not None and not part.available()]
+    notes += [line for part in PARTS if part.available() for line in part.left_out(quick)]
     if not available("matplotlib"):
         notes.append(f"figures: not drawn, they need matplotlib ({install_hint('matplotlib')})")
     return notes

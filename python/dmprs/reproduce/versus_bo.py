@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from dmprs import experiments
-from dmprs._extras import available
+from dmprs._extras import available, install_hint
 from dmprs.experiments import ExperimentSetup
 from dmprs.experiments.arm_pouring import MAX_TRIALS as ARM_MAX_TRIALS
 from dmprs.loop import learn
@@ -29,6 +29,7 @@ from dmprs.reproduce.stats import cell, trial_stats
 from dmprs.reproduce.throwing import baskets
 from dmprs.tasks.noise import Noise
 
+TITLE = "Bayesian optimization beside the query-space learners (docs/method.md §7.3)"
 SEEDS = 5
 #: the learners that draw random numbers: they run once per seed everywhere
 RANDOMIZED = ("bo", "bo-default", "cma")
@@ -89,6 +90,14 @@ def plan_versus(quick: bool = False) -> list[VersusSpec]:
     arm = available("mujoco")
     return [VersusSpec(i, column, seed) for i, s in enumerate(SETTINGS) if arm or not s.experiment.startswith("arm-")
             for column in COLUMNS for seed in range(SEEDS if s.draw or column in RANDOMIZED else 1)]
+
+
+def left_out(quick: bool = False) -> list[str]:
+    """The arm's settings, which :func:`plan_versus` leaves out without MuJoCo."""
+    arm = [s for s in SETTINGS if s.experiment.startswith("arm-")]
+    if quick or available("mujoco") or not arm:
+        return []
+    return [f"{TITLE}: {len(arm)} setting(s) of the arm not run: they need mujoco ({install_hint('mujoco')})"]
 
 
 def prepare(setting: int, seed: int) -> tuple[ExperimentSetup, int]:
@@ -191,7 +200,6 @@ def figure_versus(results: list[dict[str, Any]], out: str | Path) -> Path:
 
 
 PART = Part(
-    "versus", "Bayesian optimization beside the query-space learners (docs/method.md §7.3)",
-    plan=plan_versus, run=run_versus, summarize=summarize_versus, markdown_of=markdown_versus,
-    figure=figure_versus, needs="bayes_opt",
+    "versus", TITLE, plan=plan_versus, run=run_versus, summarize=summarize_versus, markdown_of=markdown_versus,
+    figure=figure_versus, needs="bayes_opt", left_out=left_out,
 )
