@@ -7,6 +7,7 @@ from numpy.typing import NDArray
 from typing_extensions import disjoint_base
 
 __all__ = [
+    "MIN_GP_NEIGHBOURS",
     "PI2",
     "UNIT_TOLERANCE",
     "CartesianDmp",
@@ -37,6 +38,7 @@ __all__ = [
 
 __version__: str
 UNIT_TOLERANCE: float
+MIN_GP_NEIGHBOURS: int
 
 _TrajectoryArrays: TypeAlias = tuple[
     NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]

@@ -137,7 +137,7 @@ class Generalizer:
             raise InvalidInputError(
                 f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
             )
-        neighbours = None if gp_neighbours is None else as_count(gp_neighbours, "gp_neighbours", 4)
+        neighbours = None if gp_neighbours is None else as_count(gp_neighbours, "gp_neighbours", _core.MIN_GP_NEIGHBOURS)
         if method == "lwr-gp" and min(len(db), neighbours or len(db)) > MAX_GP_DEMOS:
             raise InvalidInputError(
                 f"method 'lwr-gp' with exact Gaussian processes over {min(len(db), neighbours or len(db))} "

@@ -47,6 +47,8 @@ mod _core {
         use pyo3::types::PyModuleMethods;
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         // The one unit-norm tolerance of quaternions, which the Python side checks with too.
-        m.add("UNIT_TOLERANCE", dmp_core::cartesian::UNIT_TOLERANCE)
+        m.add("UNIT_TOLERANCE", dmp_core::cartesian::UNIT_TOLERANCE)?;
+        // The fewest demos a local GP takes, which the Python side validates with first.
+        m.add("MIN_GP_NEIGHBOURS", dmp_core::output_gp::MIN_NEIGHBOURS)
     }
 }
