@@ -47,7 +47,7 @@ non-finite query: when a step, a gain or a return overflows it stops with ``"div
 from __future__ import annotations
 
 import numbers
-from typing import Any, NamedTuple, Protocol
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -138,32 +138,11 @@ def _flag(value: Any, name: str) -> bool | None:
     return bool(value)
 
 
-class _CoreLearner(Protocol):
-    """What every class of ``dmprs._core``'s learners offers."""
-
-    def ask(self) -> NDArray[np.float64]: ...
-    def tell(self, q: NDArray[np.float64], feedback: NDArray[np.float64]) -> None: ...
-    @property
-    def dim(self) -> int: ...
-    @property
-    def status(self) -> str: ...
-    @property
-    def status_detail(self) -> str: ...
-    @property
-    def converged(self) -> bool: ...
-    @property
-    def n_told(self) -> int: ...
-    @property
-    def best(self) -> tuple[NDArray[np.float64], NDArray[np.float64], float] | None: ...
-    @property
-    def history(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], float]]: ...
-
-
 class _Learner:
     """The ask/tell interface shared by every learner (see the module docs)."""
 
     __slots__ = ("_core",)
-    _core: _CoreLearner
+    _core: _native._AskTell
     _feedback_name = "eps"
 
     def ask(self) -> NDArray[np.float64]:
