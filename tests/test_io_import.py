@@ -96,6 +96,13 @@ def test_clear_errors_name_what_exists(tmp_path):
         read_csv_trajectory(tmp_path / "x.csv")
     with pytest.raises(InvalidInputError, match=r"no column 'b'; the columns are time, a"):
         read_csv_trajectory(tmp_path / "x.csv", "time", ["b"])
+    # a binary header is named with its escapes, not printed raw; a wide one is cut short
+    (tmp_path / "binary.csv").write_bytes(b"garbage\x00\x01,x\n0,1\n")
+    with pytest.raises(InvalidInputError, match=r"the columns are 'garbage\\x00\\x01', x$"):
+        read_csv_trajectory(tmp_path / "binary.csv")
+    (tmp_path / "wide.csv").write_text(",".join(f"c{i}" for i in range(50)) + "\n" + ",".join("1" * 50) + "\n")
+    with pytest.raises(InvalidInputError, match=r"the columns are c0, c1, .*, c19 and 30 more$"):
+        read_csv_trajectory(tmp_path / "wide.csv")
     (tmp_path / "bad.csv").write_text("q,v\n1,2\n")
     with pytest.raises(InvalidInputError, match="no 'demo' column"):
         read_query_table(tmp_path / "bad.csv")

@@ -80,20 +80,29 @@ def _number(text: str, path: Path, line: int, column: str) -> float:
     return x
 
 
+def _columns(header: Sequence[str], most: int = 20) -> str:
+    """The header's names for a message: unprintable ones quoted with their escapes, at most
+    ``most`` of them.
+    """
+    names = [h if h.isprintable() else repr(h) for h in header[:most]]
+    more = f" and {len(header) - most} more" if len(header) > most else ""
+    return ", ".join(names) + more
+
+
 def read_csv_trajectory(path: str | Path, time_column: str = "t",
                         columns: Sequence[str] | None = None) -> tuple[Trajectory, tuple[str, ...]]:
     """The trajectory in a CSV file and the names of its columns (default: all but the time)."""
     p = Path(path)
     header, rows = _rows(p, CSV_MAX_BYTES, "CSV file")
     if time_column not in header:
-        raise InvalidInputError(f"{p}: no time column {time_column!r}; the columns are {', '.join(header)}")
+        raise InvalidInputError(f"{p}: no time column {time_column!r}; the columns are {_columns(header)}")
     names = tuple(c for c in header if c != time_column) if columns is None else tuple(columns)
     if not names:
         raise InvalidInputError(f"{p}: no column besides the time {time_column!r}")
     missing = [c for c in names if c not in header]
     if missing:
         raise InvalidInputError(
-            f"{p}: no column {', '.join(map(repr, missing))}; the columns are {', '.join(header)}")
+            f"{p}: no column {', '.join(map(repr, missing))}; the columns are {_columns(header)}")
     index = [header.index(c) for c in (time_column, *names)]
     data, lines = np.empty((64, len(index))), np.empty(64, dtype=np.int64)
     n = 0
@@ -158,7 +167,7 @@ def read_query_table(path: str | Path) -> QueryTable:
         return _json_table(p)
     header, rows = _rows(p, TABLE_MAX_BYTES, "query table")
     if "demo" not in header:
-        raise InvalidInputError(f"{p}: no 'demo' column naming each demonstration; the columns are {', '.join(header)}")
+        raise InvalidInputError(f"{p}: no 'demo' column naming each demonstration; the columns are {_columns(header)}")
     cols = [i for i, h in enumerate(header) if h != "demo"]
     if not cols:
         raise InvalidInputError(f"{p}: no query column besides 'demo'")
