@@ -16,7 +16,8 @@ copy of that state (seeded with ``seed``) and swaps it in only while ``cma`` sam
 seed gives the same candidates, whatever else uses numpy's global state in between, which is
 what resuming a logged run needs.
 
-How it fares against the paper's learners and the weight-space baselines: docs/method.md §7.3.
+How it fares: against PoWER and PI² in the weight space, the README's baselines table; against
+the paper's learners and Bayesian optimization in the query space, docs/method.md §7.3.
 """
 
 from __future__ import annotations
