@@ -16,7 +16,8 @@ from dmprs.experiments.base import DEFAULT_LEARNER, LEARNERS, ExperimentSetup, L
 from dmprs.loop import LearningResult, learn
 from dmprs.runlog import TrialRecord
 
-__all__ = ["DEFAULT_LEARNER", "EXPERIMENTS", "LEARNERS", "ExperimentSetup", "LearnerSettings", "learner_help", "make", "run"]
+__all__ = ["DEFAULT_LEARNER", "EXPERIMENTS", "LEARNERS", "ExperimentSetup", "LearnerSettings", "learner_help", "make",
+           "needs", "run"]
 
 #: Every experiment by the name the command line uses, with the function that sets it up.
 EXPERIMENTS: dict[str, Callable[..., ExperimentSetup]] = {
@@ -26,6 +27,14 @@ EXPERIMENTS: dict[str, Callable[..., ExperimentSetup]] = {
     "arm-pouring": arm_pouring.setup,
     "arm-throwing": arm_throwing.setup,
 }
+
+#: The optional package (an extra) an experiment needs beyond the core install.
+_NEEDS = {"arm-pouring": "mujoco", "arm-throwing": "mujoco"}
+
+
+def needs(name: str) -> str | None:
+    """The optional package experiment ``name`` needs, or None."""
+    return _NEEDS.get(name)
 
 
 def make(name: str, **setup_options: Any) -> ExperimentSetup:

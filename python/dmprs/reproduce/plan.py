@@ -8,6 +8,7 @@ from typing import Any
 
 from dmprs._extras import available, install_hint
 from dmprs.baselines import BaselineSpec
+from dmprs.experiments import needs
 from dmprs.experiments.arm_pouring import MAX_TRIALS
 from dmprs.reproduce.parts import PARTS
 
@@ -42,8 +43,8 @@ def _needs(spec: Any) -> str | None:
     """The optional package a spec of the paper's experiments needs, if any."""
     if isinstance(spec, BaselineSpec) and spec.method == "cma":
         return "cma"
-    if isinstance(spec, LearnSpec) and spec.experiment.startswith("arm-"):
-        return "mujoco"
+    if isinstance(spec, LearnSpec):
+        return needs(spec.experiment)
     return None
 
 

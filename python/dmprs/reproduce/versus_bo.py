@@ -11,6 +11,7 @@ robot's noise draw differ from run to run (the same index for every learner).
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -19,7 +20,7 @@ import numpy as np
 
 from dmprs import experiments
 from dmprs._extras import available, install_hint
-from dmprs.experiments import ExperimentSetup
+from dmprs.experiments import ExperimentSetup, needs
 from dmprs.experiments.arm_pouring import MAX_TRIALS as ARM_MAX_TRIALS
 from dmprs.loop import learn
 from dmprs.plots import pyplot, save_figure
@@ -80,6 +81,12 @@ class VersusSpec:
         return f"versus BO: {SETTINGS[self.setting].name} / {self.column} / seed {self.seed}"
 
 
+def _runnable(s: Setting) -> bool:
+    """Whether the optional package setting ``s`` needs, if any, is installed."""
+    need = needs(s.experiment)
+    return need is None or available(need)
+
+
 def plan_versus(quick: bool = False) -> list[VersusSpec]:
     """Every column on every setting, :data:`SEEDS` runs where something is drawn (the arm's
     settings only with MuJoCo installed); ``quick``: the default learner and Bayesian
@@ -87,17 +94,17 @@ def plan_versus(quick: bool = False) -> list[VersusSpec]:
     """
     if quick:
         return [VersusSpec(1, column, 0) for column in ("auto", "bo")]
-    arm = available("mujoco")
-    return [VersusSpec(i, column, seed) for i, s in enumerate(SETTINGS) if arm or not s.experiment.startswith("arm-")
+    return [VersusSpec(i, column, seed) for i, s in enumerate(SETTINGS) if _runnable(s)
             for column in COLUMNS for seed in range(SEEDS if s.draw or column in RANDOMIZED else 1)]
 
 
 def left_out(quick: bool = False) -> list[str]:
-    """The arm's settings, which :func:`plan_versus` leaves out without MuJoCo."""
-    arm = [s for s in SETTINGS if s.experiment.startswith("arm-")]
-    if quick or available("mujoco") or not arm:
+    """The settings :func:`plan_versus` leaves out because a package they need is missing."""
+    missing = Counter(need for s in SETTINGS if (need := needs(s.experiment)) and not available(need))
+    if quick:
         return []
-    return [f"{TITLE}: {len(arm)} setting(s) of the arm not run: they need mujoco ({install_hint('mujoco')})"]
+    return [f"{TITLE}: {count} setting(s) not run: they need {need} ({install_hint(need)})"
+            for need, count in sorted(missing.items())]
 
 
 def prepare(setting: int, seed: int) -> tuple[ExperimentSetup, int]:
