@@ -43,6 +43,11 @@ impl Expansions {
         }
     }
 
+    /// W0, the bracket's width at the start.
+    pub(crate) fn first_width(&self) -> f64 {
+        self.first_width
+    }
+
     /// The expansions of `(low, high)` so far.
     pub(crate) fn used(&self) -> (usize, usize) {
         (self.used[0], self.used[1])

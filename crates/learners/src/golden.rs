@@ -106,8 +106,6 @@ pub struct GoldenSection {
     /// A trial with eps > 0 (resp. eps <= 0) has set the lower (resp. upper) end.
     low_confirmed: bool,
     high_confirmed: bool,
-    /// W0, the bracket width at the start (after widening to contain q0).
-    first_width: f64,
     expansions: Expansions,
     noise: Option<f64>,
     max_repeats: usize,
@@ -146,7 +144,7 @@ impl GoldenSection {
             next: q0, // §6.2 item 8: the first trial is the pure generalization
             low_confirmed: false,
             high_confirmed: false,
-            first_width: qh - ql,
+            // W0 is the width after widening to contain q0.
             expansions: Expansions::new(qh - ql, cfg.max_expansions),
             noise: cfg.noise,
             max_repeats: cfg.max_repeats,
@@ -350,7 +348,9 @@ impl AskTell for GoldenSection {
         if stop.is_none() {
             stop = match self.mode {
                 GoldenMode::Robust => (width < self.q_tol).then(|| self.spent()),
-                GoldenMode::Paper => (width <= COLLAPSE * self.first_width).then(|| self.spent()),
+                GoldenMode::Paper => {
+                    (width <= COLLAPSE * self.expansions.first_width()).then(|| self.spent())
+                }
             };
         }
         if self.noise.is_some()
