@@ -440,7 +440,7 @@ impl Workspace {
 
 /// `xd[d * m + j] = x[j * n + d] / l_d`: sample-major inputs to dimension-major scaled ones, so
 /// that the distance loops run along contiguous memory.
-fn scale_dimension_major(x: &[f64], n: usize, length_scales: &[f64], xd: &mut [f64]) {
+pub(crate) fn scale_dimension_major(x: &[f64], n: usize, length_scales: &[f64], xd: &mut [f64]) {
     let m = x.len() / n;
     for (d, l) in length_scales.iter().enumerate() {
         let inv = 1.0 / l;
@@ -455,7 +455,13 @@ fn scale_dimension_major(x: &[f64], n: usize, length_scales: &[f64], xd: &mut [f
 /// and the scaled point `q` (`q(d)` is its coordinate `d`). One fused pass for the usual 1-3
 /// input dimensions, one pass per dimension otherwise; the same sums in the same order either way.
 #[inline(always)]
-fn half_sq_distances(xd: &[f64], m: usize, from: usize, q: impl Fn(usize) -> f64, out: &mut [f64]) {
+pub(crate) fn half_sq_distances(
+    xd: &[f64],
+    m: usize,
+    from: usize,
+    q: impl Fn(usize) -> f64,
+    out: &mut [f64],
+) {
     match xd.len() / m {
         1 => half_sq_distances_fused::<1>(xd, m, from, q, out),
         2 => half_sq_distances_fused::<2>(xd, m, from, q, out),
@@ -492,6 +498,24 @@ fn half_sq_distances_fused<const D: usize>(
         }
         *o = s * -0.5;
     }
+}
+
+/// `sum_i exp(-1/2 |(q - x_i) / l|^2) weights_i` over the points `xd` (dimension-major, divided by
+/// the length scales `l`, one weight each), block by block through a stack buffer so that the
+/// exponentials run as vectors with no heap allocation: a GP's posterior mean at one point.
+pub(crate) fn kernel_sum(xd: &[f64], l: &[f64], q: &[f64], weights: &[f64]) -> f64 {
+    let m = weights.len();
+    simd(|| {
+        let mut buf = [0.0f64; MEAN_BLOCK];
+        let mut s = 0.0;
+        for from in (0..m).step_by(MEAN_BLOCK) {
+            let k = &mut buf[..MEAN_BLOCK.min(m - from)];
+            half_sq_distances(xd, m, from, |d| q[d] / l[d], k);
+            exp_in_place(k);
+            s += dot(k, &weights[from..]);
+        }
+        s
+    })
 }
 
 /// `sum_i v_i` with four independent partial sums (vectorizes; fixed order, deterministic).
@@ -710,18 +734,7 @@ impl GaussianProcess {
     /// buffer in blocks, so that the exponentials run as vectors.
     pub fn predict_mean_at(&self, q: &[f64]) -> f64 {
         debug_assert_eq!(q.len(), self.n_dim);
-        let (m, l) = (self.m, &self.hyper.length_scales);
-        simd(|| {
-            let mut buf = [0.0f64; MEAN_BLOCK];
-            let mut s = 0.0;
-            for from in (0..m).step_by(MEAN_BLOCK) {
-                let k = &mut buf[..MEAN_BLOCK.min(m - from)];
-                half_sq_distances(&self.xd, m, from, |d| q[d] / l[d], k);
-                exp_in_place(k);
-                s += dot(k, &self.alpha_scaled[from..]);
-            }
-            self.y_mean + s
-        })
+        self.y_mean + kernel_sum(&self.xd, &self.hyper.length_scales, q, &self.alpha_scaled)
     }
 
     /// `y_mean + k . alpha` summed block by block as in [`Self::predict_mean_at`], so that both
