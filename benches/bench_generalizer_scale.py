@@ -1,12 +1,13 @@
 """Generalizers over the databases users have: N demonstrations of 7 DOF x 200 samples with a 2-D
 query. Times the build of ``Generalizer(db, method)`` and one ``predict(q)``, and the memory the
 build adds to the process (peak resident set, each case in a fresh process); and compares the
-local GPs of ``"lwr-gp"`` (``gp_neighbours=k``) with the exact ones where the exact ones are
-affordable.
+local (``gp_neighbours=k``) and sparse (``gp_sparse=True``) GPs of ``"lwr-gp"`` with the exact
+ones where the exact ones are affordable.
 
 Run:  python benches/bench_generalizer_scale.py [N ...]      (default 1000 10000)
-Floors at 10,000 demos: "linear" build <= 2 s, predict <= 1 ms; "lwr-gp" (local) build <= 10 s,
-predict <= 20 ms, memory <= 1 GB. No other library generalizes DMPs over a database, so there
+Floors at 10,000 demos: "linear" build <= 2 s, predict <= 1 ms; "lwr-gp" (local or sparse)
+build <= 10 s, predict <= 20 ms, memory <= 1 GB; against the exact GPs at 200 demos, the same
+predictions to 1e-6 of each parameter's range. No other library generalizes DMPs over a database, so there
 is no peer to compare with. Not part of the test suite.
 """
 
@@ -48,12 +49,16 @@ def maxrss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def case(n: int, method: str, neighbours: int | None) -> dict[str, float]:
+#: The ways of "lwr-gp" compared, by name: the generalizer's GP options.
+GPS = {"local": {"gp_neighbours": NEIGHBOURS}, "sparse": {"gp_sparse": True}}
+
+
+def case(n: int, method: str, gp: str | None) -> dict[str, float]:
     """Runs in a fresh process (the peak RSS is the process's high-water mark)."""
     db = database(n)
     before = maxrss_mb()
     t0 = time.perf_counter()
-    gen = dmprs.Generalizer(db, method, gp_neighbours=neighbours)
+    gen = dmprs.Generalizer(db, method, **GPS.get(gp or "", {}))
     build = time.perf_counter() - t0
     grown = maxrss_mb() - before
     probes = np.random.default_rng(1).uniform(0.1, 0.9, (50, 2))
@@ -66,10 +71,10 @@ def case(n: int, method: str, neighbours: int | None) -> dict[str, float]:
     return {"build_s": build, "predict_ms": 1e3 * statistics.median(times), "memory_mb": grown}
 
 
-def accuracy(n: int, ks: list[int]) -> list[dict[str, float]]:
-    """Largest error of the local GPs' tau, goal and start against the exact GPs over ``n``
-    demos, relative to each parameter's range over the demos (those that vary), at 100 queries
-    inside the square.
+def accuracy(n: int, variants: list[dict[str, object]]) -> list[dict[str, object]]:
+    """Largest error of the local or sparse GPs' tau, goal and start (each of ``variants``: the
+    generalizer's GP options) against the exact GPs over ``n`` demos, relative to each
+    parameter's range over the demos (those that vary), at 100 queries inside the square.
     """
     db = database(n)
     t0 = time.perf_counter()
@@ -82,19 +87,20 @@ def accuracy(n: int, ks: list[int]) -> list[dict[str, float]]:
     varies = spread > 0  # the demos' starts are all 0 here
     want, spread = want[:, varies], spread[varies]
     rows = []
-    for k in ks:
+    for options in variants:
         t0 = time.perf_counter()
-        local = dmprs.Generalizer(db, "lwr-gp", gp_neighbours=k)
+        approx = dmprs.Generalizer(db, "lwr-gp", **options)  # type: ignore[arg-type]
         build = time.perf_counter() - t0
-        got = np.array([local.parameters(q)[nw:] for q in probes])[:, varies]
-        rows.append({"n": n, "k": k, "max_rel": float(np.max(np.abs(got - want) / spread)),
+        got = np.array([approx.parameters(q)[nw:] for q in probes])[:, varies]
+        name = ", ".join(f"{k}={v}" for k, v in options.items())
+        rows.append({"n": n, "gps": name, "max_rel": float(np.max(np.abs(got - want) / spread)),
                      "median_rel": float(np.median(np.abs(got - want) / spread)),
-                     "exact_build_s": exact_build, "local_build_s": build})
+                     "exact_build_s": exact_build, "build_s": build})
     return rows
 
 
-def run_case(n: int, method: str, neighbours: int | None) -> dict[str, float]:
-    out = subprocess.run([sys.executable, __file__, "--case", json.dumps([n, method, neighbours])],
+def run_case(n: int, method: str, gp: str | None) -> dict[str, float]:
+    out = subprocess.run([sys.executable, __file__, "--case", json.dumps([n, method, gp])],
                          check=True, capture_output=True, text=True).stdout
     return json.loads(out.splitlines()[-1])
 
@@ -107,16 +113,16 @@ def main() -> None:
     print("| demos | method | build (s) | predict (ms) | memory added by the build (MB) |")
     print("|---:|---|---:|---:|---:|")
     for n in sizes:
-        for method, k in (("linear", None), ("lwr-gp", NEIGHBOURS)):
-            r = run_case(n, method, k)
-            name = method if k is None else f"{method}, gp_neighbours={k}"
+        for method, gp in (("linear", None), ("lwr-gp", "local"), ("lwr-gp", "sparse")):
+            r = run_case(n, method, gp)
+            name = method if gp is None else f"{method}, " + ", ".join(f"{k}={v}" for k, v in GPS[gp].items())
             print(f"| {n} | {name} | {r['build_s']:.2f} | {r['predict_ms']:.2f} | {r['memory_mb']:.0f} |", flush=True)
-    print("\n| demos | gp_neighbours | largest error (of the range) | median error | exact build (s) "
-          "| local build (s) |")
-    print("|---:|---:|---:|---:|---:|---:|")
-    for r in accuracy(200, [50, 100, 200]) + accuracy(1000, [NEIGHBOURS]):
-        print(f"| {r['n']} | {r['k']} | {r['max_rel']:.2e} | {r['median_rel']:.2e} | {r['exact_build_s']:.2f} "
-              f"| {r['local_build_s']:.2f} |", flush=True)
+    print("\n| demos | GPs | largest error (of the range) | median error | exact build (s) | build (s) |")
+    print("|---:|---|---:|---:|---:|---:|")
+    at_200 = [{"gp_neighbours": k} for k in (50, 100, 200)] + [GPS["sparse"]]
+    for r in accuracy(200, at_200) + accuracy(1000, [GPS["local"], GPS["sparse"]]):
+        print(f"| {r['n']} | {r['gps']} | {r['max_rel']:.2e} | {r['median_rel']:.2e} | {r['exact_build_s']:.2f} "
+              f"| {r['build_s']:.2f} |", flush=True)
 
 
 if __name__ == "__main__":

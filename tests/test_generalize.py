@@ -13,7 +13,8 @@ from dmprs.generalize import MAX_GP_DEMOS
 #: what dmprs.Generalizer hands the core, for the tests that call the core directly
 CONSTANTS = {"alpha_z": 48.0, "beta_z": 12.0, "alpha_x": 2.0, "width_factor": 2.0}
 OPTIONS = {"kernel": "tricube", "bandwidth": 1.5, "ridge": 1e-8, "interpolate": True, "gp_noise": 1e-3,
-           "gp_optimize": None, "gp_restarts": 0, "gp_neighbours": None, "trend": "constant"}
+           "gp_optimize": None, "gp_restarts": 0, "gp_neighbours": None, "gp_sparse": False,
+           "trend": "constant"}
 
 
 def min_jerk(s):
@@ -332,7 +333,8 @@ def test_lwr_gp_refuses_more_demos_than_its_exact_gps_can_take_and_local_gps_tak
     db = dmprs.Database(("a", "b"))
     for k in range(MAX_GP_DEMOS + 1):
         db.add([k % 40, k // 40], dmprs.Trajectory(t, np.outer(t, [1.0 + k % 7])))
-    refused = rf"exact Gaussian processes over {MAX_GP_DEMOS + 1} demonstrations is refused.*gp_neighbours.*'linear'"
+    refused = (rf"exact Gaussian processes over {MAX_GP_DEMOS + 1} demonstrations is refused.*gp_sparse=True"
+               r".*gp_neighbours.*'linear'")
     with pytest.raises(InvalidInputError, match=refused):
         dmprs.Generalizer(db, "lwr-gp")
     with pytest.raises(InvalidInputError, match=refused):
@@ -365,6 +367,65 @@ def test_local_gps_stay_close_to_the_exact_ones_between_the_demos():
         a, b = local.parameters(q), exact.parameters(q)
         assert np.array_equal(a[:nw], b[:nw])  # the weights are the LWR's, the same in both
         assert np.allclose(a[nw:], b[nw:], rtol=1e-3, atol=0), (q, a[nw:] - b[nw:])
+
+
+def smooth_database(n: int, seed: int) -> dmprs.Database:
+    """``n`` demos whose duration, goals and start vary smoothly (not affinely) with a 2-D query
+    drawn from the unit square.
+    """
+    rng = np.random.default_rng(seed)
+    db = dmprs.Database(("x", "y"))
+    for q in rng.uniform(0.0, 1.0, (n, 2)):
+        tau = 1.5 + 0.5 * q[0] + 0.2 * np.sin(3 * q[1])
+        s = np.linspace(0.0, 1.0, 30)
+        amp = np.array([0.5 + q[0] + 0.3 * np.cos(2 * q[1]), 1.0 - 0.4 * q[1] ** 2])
+        start = np.array([0.1 * np.sin(2 * q[0]), 0.0])
+        db.add(q, dmprs.Trajectory(tau * s, start + np.outer(10 * s**3 - 15 * s**4 + 6 * s**5, amp)))
+    return db
+
+
+def test_sparse_gps_give_the_exact_gps_mean_to_a_millionth_of_each_parameters_range():
+    # 200 demos: the sparse GPs fit the exact ones' hyperparameters on them, then condition on
+    # a low-rank factor that leaves out a thousandth of the noise
+    db = smooth_database(200, seed=3)
+    exact = dmprs.Generalizer(db, "lwr-gp", n_basis=8)
+    sparse = dmprs.Generalizer(db, "lwr-gp", n_basis=8, gp_sparse=True)
+    nw = 8 * 2
+    probes = np.random.default_rng(4).uniform(0.05, 0.95, (40, 2))
+    want = np.array([exact.parameters(q) for q in probes])
+    got = np.array([sparse.parameters(q) for q in probes])
+    assert np.array_equal(got[:, :nw], want[:, :nw])  # the weights are the LWR's in both
+    spread = np.ptp(np.array([exact.parameters(d.query)[nw:] for d in db]), axis=0)
+    varies = spread > 0
+    assert varies.sum() == 4  # tau, both goals, the first start
+    err = np.abs(got[:, nw:] - want[:, nw:])[:, varies] / spread[varies]
+    assert err.max() < 1e-6, err.max()
+
+
+def test_sparse_gps_take_more_demos_than_the_exact_ones_and_give_each_back():
+    db = smooth_database(MAX_GP_DEMOS + 200, seed=5)
+    sparse = dmprs.Generalizer(db, "lwr-gp", n_basis=6, gp_sparse=True)
+    for k in (0, 517, MAX_GP_DEMOS + 199):  # each demo back, to the GP noise
+        demo = db[k]
+        want = flat(dmprs.DMP.fit(demo.trajectory.t, demo.trajectory.y, 6))
+        assert np.allclose(flat(sparse.predict(demo.query)), want, rtol=1e-5, atol=1e-6)
+
+
+def test_sparse_gps_refuse_outputs_too_rough_for_their_factor_and_say_what_to_use():
+    # goals that jump from demo to demo: ML-II finds short length scales, and the factor would
+    # need every demo
+    t = np.linspace(0.0, 1.0, 10)
+    db = dmprs.Database(("a", "b"))
+    for k in range(1200):
+        db.add([k % 40, k // 40], dmprs.Trajectory(t, np.outer(t, [1.0 + k % 7])))
+    with pytest.raises(dmprs.NumericalError, match=r"more than 1000 demos.*gp_neighbours"):
+        dmprs.Generalizer(db, "lwr-gp", n_basis=5, gp_sparse=True)
+
+
+def test_gp_sparse_and_gp_neighbours_are_refused_together():
+    db = database([0.0, 1.0, 2.0, 3.0, 4.0])
+    with pytest.raises(InvalidInputError, match="gp_sparse=True and gp_neighbours=4"):
+        dmprs.Generalizer(db, "lwr-gp", gp_sparse=True, gp_neighbours=4)
 
 
 @pytest.mark.parametrize("value", [3, 0, -1, 2.5, True, "8"])

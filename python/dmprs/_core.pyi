@@ -103,6 +103,7 @@ class _GeneralizerOptions(TypedDict):
     gp_optimize: bool | None
     gp_restarts: int
     gp_neighbours: int | None
+    gp_sparse: bool
     trend: str
 
 @final

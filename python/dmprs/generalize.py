@@ -22,7 +22,8 @@ from dmprs.triangulation import PiecewiseLinear
 __all__ = ["Generalizer"]
 
 #: The most demonstrations the exact GPs of "lwr-gp" take: their build grows with the cube of
-#: their number (docs/growing.md measures it). Local GPs (``gp_neighbours``) take any number.
+#: their number (docs/growing.md measures it). Local (``gp_neighbours``) and sparse (``gp_sparse``)
+#: GPs take any number.
 MAX_GP_DEMOS = 1000
 _METHODS = ("linear", "lwr-gp")
 _KERNELS = ("tricube", "gaussian")
@@ -89,7 +90,14 @@ class Generalizer:
     ML-II on the ``k`` demos around the most central one, so build and prediction no longer
     grow with ``M`` (the LWR of the weights already is local). With ``k >= M`` it is
     the exact generalizer, bit for bit; below, close to it where the neighbourhood spans a few
-    GP length scales (docs/growing.md measures a choice of k). ``"linear"`` takes any number.
+    GP length scales (docs/growing.md measures a choice of k). ``gp_sparse=True`` keeps every
+    demo instead: hyperparameters by the same ML-II on at most 200 demos spread over the query
+    space (every demo when there are no more: the exact GPs' own), then each GP conditioned on
+    all demos through a pivoted Cholesky factor of its kernel matrix, which keeps the demos it
+    needs until what it leaves out is a thousandth of the GP's noise. Where tau, goal and start
+    vary smoothly with the query it keeps a few dozen demos and gives the exact GPs' mean
+    closely (docs/growing.md); where they do not, it would need more than 1000 and is refused
+    with the reason (use ``gp_neighbours`` then). ``"linear"`` takes any number.
 
     Pose demonstrations (:class:`~dmprs.CartesianTrajectory`) work the same way and give a
     :class:`~dmprs.CartesianDMP`: weights and tau as above, positions like goals and starts, and
@@ -120,6 +128,7 @@ class Generalizer:
         gp_optimize: bool | None = None,
         gp_restarts: int = 4,
         gp_neighbours: int | None = None,
+        gp_sparse: bool = False,
         triangulate: bool | None = None,
         trend: str = "constant",
     ) -> None:
@@ -138,13 +147,17 @@ class Generalizer:
                 f"method {method!r} needs at least 2 demonstrations, but the database has {len(db)}"
             )
         neighbours = None if gp_neighbours is None else as_count(gp_neighbours, "gp_neighbours", _core.MIN_GP_NEIGHBOURS)
-        if method == "lwr-gp" and min(len(db), neighbours or len(db)) > MAX_GP_DEMOS:
+        if gp_sparse and neighbours is not None:
+            raise InvalidInputError(
+                f"gp_sparse=True and gp_neighbours={neighbours} cannot be combined: the GPs are either "
+                "local (over the demos nearest to each query) or sparse (over every demo)")
+        if method == "lwr-gp" and not gp_sparse and min(len(db), neighbours or len(db)) > MAX_GP_DEMOS:
             raise InvalidInputError(
                 f"method 'lwr-gp' with exact Gaussian processes over {min(len(db), neighbours or len(db))} "
                 f"demonstrations is refused: they cost the cube of the number of demos per "
                 f"hyperparameter step, and beyond {MAX_GP_DEMOS} the build takes many minutes to days. "
-                "Use local GPs over the demos nearest to each query (gp_neighbours=100, say), or "
-                "method 'linear' (any number of demos)"
+                "Use sparse GPs (gp_sparse=True), local GPs over the demos nearest to each query "
+                "(gp_neighbours=100, say), or method 'linear' (any number of demos)"
             )
         if method == "lwr-gp" and len(np.unique(db.queries, axis=0)) < len(db):
             raise InvalidInputError(
@@ -175,6 +188,7 @@ class Generalizer:
             "gp_optimize": None if gp_optimize is None else bool(gp_optimize),
             "gp_restarts": as_count(gp_restarts, "gp_restarts", 0),
             "gp_neighbours": neighbours,
+            "gp_sparse": bool(gp_sparse),
             "trend": trend,
         }
         if db.is_cartesian:

@@ -53,6 +53,10 @@ pub struct LwrGpOptions {
     /// ([`crate::output_gp`]); their cost does not grow with the number of demos. `None` (the
     /// default): the exact GPs over every demo. With `k >= M` both are the same.
     pub gp_neighbours: Option<usize>,
+    /// Sparse GPs: hyperparameters fitted on at most 200 demos spread over the query space,
+    /// each GP conditioned on every demo through a low-rank factor of its kernel matrix
+    /// ([`crate::output_gp`]). Not with `gp_neighbours`.
+    pub gp_sparse: bool,
 }
 
 impl Default for LwrGpOptions {
@@ -64,6 +68,7 @@ impl Default for LwrGpOptions {
             gp_restarts: 4,
             gp_mean: GpMean::Constant,
             gp_neighbours: None,
+            gp_sparse: false,
         }
     }
 }
@@ -317,6 +322,7 @@ impl Generalizer {
             restarts: opts.gp_restarts,
             mean: opts.gp_mean,
             neighbours: opts.gp_neighbours,
+            sparse: opts.gp_sparse,
         };
         let gps = OutputGps::fit(&x, outputs, &settings, |q, k| lwr.nearest(q, k))?;
         Ok(LwrGp { lwr, gps })
@@ -620,8 +626,13 @@ mod tests {
     }
 
     fn lwr_gp(neighbours: Option<usize>) -> Method {
+        lwr_gp_with(neighbours, false)
+    }
+
+    fn lwr_gp_with(neighbours: Option<usize>, sparse: bool) -> Method {
         Method::LwrGp(LwrGpOptions {
             gp_neighbours: neighbours,
+            gp_sparse: sparse,
             ..LwrGpOptions::default()
         })
     }
@@ -663,6 +674,29 @@ mod tests {
             let err = (a.rows(nw, a.len() - nw) - b.rows(nw, b.len() - nw)).amax();
             assert!(err < 1e-4 * b.amax(), "q={q}: {err}");
         }
+    }
+
+    #[test]
+    fn sparse_gps_give_the_exact_gps_parameters() {
+        // Fewer demos than the sparse GPs fit on: the same hyperparameters, and a factor that
+        // leaves out less than the noise.
+        let qs: Vec<f64> = (0..40).map(|k| 0.05 * k as f64).collect();
+        let (exact, sparse) = (
+            build(&qs, lwr_gp(None)).unwrap(),
+            build(&qs, lwr_gp_with(None, true)).unwrap(),
+        );
+        let nw = exact.config().n_basis * exact.n_dof();
+        for q in [0.0, 0.025, 0.51, 1.333, 1.96] {
+            let (a, b) = (
+                sparse.parameters(&[q]).unwrap(),
+                exact.parameters(&[q]).unwrap(),
+            );
+            assert_eq!(a.rows(0, nw), b.rows(0, nw));
+            let err = (a.rows(nw, a.len() - nw) - b.rows(nw, b.len() - nw)).amax();
+            assert!(err < 1e-6 * b.amax(), "q={q}: {err}");
+        }
+        let err = build(&qs, lwr_gp_with(Some(10), true)).unwrap_err();
+        assert!(err.to_string().contains("gp_sparse"), "{err}");
     }
 
     #[test]

@@ -22,6 +22,7 @@ mod forcing;
 pub mod generalize;
 pub mod gp;
 pub mod linalg;
+pub mod low_rank_gp;
 pub mod lwr;
 pub mod optimize;
 pub mod output_gp;

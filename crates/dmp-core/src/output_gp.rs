@@ -1,6 +1,7 @@
 //! The Gaussian processes of the generalizer's scalar parameters, tau, goal and start (Ude et
 //! al. 2010; docs/method.md §3.2): one GP per parameter over the demos' queries, either over
-//! every demo (exact) or over the `k` demos nearest to each query (local).
+//! every demo (exact), over the `k` demos nearest to each query (local), or over every demo
+//! through a low-rank factor (sparse).
 //!
 //! The exact GPs cost `M^3` per step of the hyperparameter search and `M^2` of memory, which
 //! rules them out for databases of thousands of demos. The local ones fit their hyperparameters
@@ -10,14 +11,30 @@
 //! dominated by the training points within a few length scales of `q`, so for a neighbourhood
 //! wider than that the two agree closely (docs/growing.md measures how closely); with `k >= M`
 //! they are the same computation, bit for bit.
+//!
+//! The sparse ones fit their hyperparameters by the same ML-II on at most [`SPARSE_FIT_DEMOS`]
+//! demos spread over the query space (every demo when there are no more, so the exact GPs'
+//! hyperparameters, bit for bit), and condition on every demo through a pivoted Cholesky factor
+//! of the kernel matrix ([`crate::low_rank_gp`]). ML-II length scales are long against the
+//! demos' spread when tau, goal and start vary smoothly with the query, and then the factor
+//! needs few demos and the mean is the exact one to within the factor's tolerance.
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result, fmt_g};
 use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales};
+use crate::low_rank_gp::LowRankGp;
 
 /// The fewest neighbours a local GP takes: ML-II needs at least 4 points (docs/method.md §3.2).
 pub const MIN_NEIGHBOURS: usize = 4;
+
+/// The most demos the sparse GPs fit their hyperparameters on: ML-II over them takes about a
+/// second for the 15 parameters of a 7-DOF DMP.
+pub const SPARSE_FIT_DEMOS: usize = 200;
+
+/// The most demos a sparse GP's factor may keep: its memory is `M` times this, and its cost `M`
+/// times its square.
+pub const SPARSE_MAX_RANK: usize = 1000;
 
 /// The prior mean of the GPs of tau, goal and start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -34,6 +51,7 @@ pub(crate) struct GpSettings {
     pub restarts: usize,
     pub mean: GpMean,
     pub neighbours: Option<usize>,
+    pub sparse: bool,
 }
 
 /// A GP over what an optional affine trend `c_0 + sum_d c_d q_d` leaves of the outputs.
@@ -52,10 +70,18 @@ pub(crate) struct LocalOutput {
     hyper: Hyperparameters,
 }
 
+/// One parameter of the sparse GPs: its trend and the GP of what the trend leaves.
+#[derive(Debug, Clone)]
+pub(crate) struct SparseOutput {
+    trend: Option<Vec<f64>>,
+    gp: LowRankGp,
+}
+
 /// The GPs of every scalar parameter.
 #[derive(Debug, Clone)]
 pub(crate) enum OutputGps {
     Exact(Vec<TrendGp>),
+    Sparse(Vec<SparseOutput>),
     Local {
         k: usize,
         /// Every demo's query, `n x M`.
@@ -140,6 +166,73 @@ fn fit_gp(x: &DMatrix<f64>, y: &[f64], s: &GpSettings) -> Result<GaussianProcess
     GaussianProcess::fit(&x.as_view(), y, Some(initial), &gp_opts)
 }
 
+/// How far, in noise standard deviations, a sparse GP may miss a demo's value: the GP's own
+/// noise model puts nearly every demo within a few.
+const MAX_MISFIT: f64 = 10.0;
+
+/// Fails if the sparse GP `gp` misses a demo's value `r` (at `x`) by more than [`MAX_MISFIT`]
+/// noise standard deviations: its hyperparameters, fitted on a sample of the demos, are then too
+/// smooth for the demos between the sample's, and its predictions would be off where the exact
+/// GPs' are not.
+fn check_fit(x: &DMatrix<f64>, r: &[f64], gp: &LowRankGp, noise_var: f64) -> Result<()> {
+    let sd = noise_var.sqrt();
+    let (i, miss) = r
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (i, (gp.mean_at(x.column(i).as_slice()) - v).abs()))
+        .fold((0, 0.0), |b, c| if c.1 > b.1 { c } else { b });
+    if miss.is_finite() && miss <= MAX_MISFIT * sd {
+        return Ok(());
+    }
+    Err(Error::Numerical {
+        context: "sparse Gaussian process",
+        detail: format!(
+            "it misses demo {i} by {} noise standard deviations (at most {MAX_MISFIT}): its hyperparameters, \
+             fitted on {SPARSE_FIT_DEMOS} demos spread over the query space, are too smooth for the demos \
+             between those; use local GPs (gp_neighbours) instead",
+            fmt_g(miss / sd)
+        ),
+    })
+}
+
+/// The indices, ascending, of `k` demos spread over the query space (`x`, `n x M`): from the one
+/// nearest to the queries' mean, each next the one farthest from those taken (in range-scaled
+/// distance; the first of equals). Every demo when `M <= k`.
+fn spread_sample(x: &DMatrix<f64>, k: usize) -> Vec<usize> {
+    let m = x.ncols();
+    if m <= k {
+        return (0..m).collect();
+    }
+    let (ranges, _) = data_scales(&x.as_view(), &[0.0]);
+    let dist = |a: &[f64], j: usize| -> f64 {
+        (0..x.nrows())
+            .map(|d| ((x[(d, j)] - a[d]) / ranges[d]).powi(2))
+            .sum()
+    };
+    let first = |v: &[f64]| {
+        v.iter()
+            .enumerate()
+            .fold(
+                (0, f64::NEG_INFINITY),
+                |b, (i, &d)| if d > b.1 { (i, d) } else { b },
+            )
+            .0
+    };
+    let centre: Vec<f64> = x.column_mean().iter().copied().collect();
+    let to_centre: Vec<f64> = (0..m).map(|j| -dist(&centre, j)).collect();
+    let mut taken = vec![first(&to_centre)];
+    let mut gap: Vec<f64> = vec![f64::INFINITY; m];
+    while taken.len() < k {
+        let last: Vec<f64> = x.column(*taken.last().unwrap()).iter().copied().collect();
+        gap.iter_mut()
+            .enumerate()
+            .for_each(|(j, g)| *g = g.min(dist(&last, j)));
+        taken.push(first(&gap));
+    }
+    taken.sort_unstable();
+    taken
+}
+
 impl OutputGps {
     /// The GPs of each of `outputs` (one value per demo) over the demo queries `x` (`n x M`);
     /// `nearest(q, k)` gives the indices of the `k` demos nearest to `q` (for local GPs).
@@ -150,6 +243,16 @@ impl OutputGps {
         nearest: impl Fn(&[f64], usize) -> Vec<usize>,
     ) -> Result<Self> {
         let m = x.ncols();
+        if s.sparse {
+            if let Some(k) = s.neighbours {
+                return Err(Error::InvalidParameter {
+                    name: "gp_neighbours",
+                    value: k.to_string(),
+                    requirement: "cannot be combined with gp_sparse (local or sparse GPs, not both)",
+                });
+            }
+            return Self::fit_sparse(x, outputs, s);
+        }
         match s.neighbours {
             Some(k) if k < MIN_NEIGHBOURS => Err(Error::InvalidParameter {
                 name: "gp_neighbours",
@@ -196,10 +299,29 @@ impl OutputGps {
         }
     }
 
+    /// The sparse GPs: hyperparameters by ML-II on a spread sample of the demos, then each GP
+    /// conditioned on every demo through its low-rank factor.
+    fn fit_sparse(x: &DMatrix<f64>, outputs: Vec<Vec<f64>>, s: &GpSettings) -> Result<Self> {
+        let sample = spread_sample(x, SPARSE_FIT_DEMOS);
+        let xs = x.select_columns(&sample);
+        outputs
+            .into_iter()
+            .map(|y| {
+                let (trend, r) = detrend(x, y, s.mean);
+                let rs: Vec<f64> = sample.iter().map(|&i| r[i]).collect();
+                let hyper = fit_gp(&xs, &rs, s)?.hyperparameters().clone();
+                let gp = LowRankGp::condition(x, &r, &hyper, SPARSE_MAX_RANK)?;
+                check_fit(x, &r, &gp, hyper.noise_var)?;
+                Ok(SparseOutput { trend, gp })
+            })
+            .collect::<Result<_>>()
+            .map(Self::Sparse)
+    }
+
     /// How many neighbours a prediction needs ([`Self::means_at`]); None: every demo.
     pub(crate) fn neighbours(&self) -> Option<usize> {
         match self {
-            Self::Exact(_) => None,
+            Self::Exact(_) | Self::Sparse(_) => None,
             Self::Local { k, .. } => Some(*k),
         }
     }
@@ -211,6 +333,10 @@ impl OutputGps {
             Self::Exact(gps) => Ok(gps
                 .iter()
                 .map(|g| with_trend(&g.trend, q, g.gp.predict_mean_at(q)))
+                .collect()),
+            Self::Sparse(gps) => Ok(gps
+                .iter()
+                .map(|g| with_trend(&g.trend, q, g.gp.mean_at(q)))
                 .collect()),
             Self::Local { x, outputs, .. } => {
                 let xn = x.select_columns(nearest);
@@ -245,5 +371,47 @@ mod tests {
         assert!(
             (c[0] - 1.0).abs() < 1e-12 && (c[1] - 2.0).abs() < 1e-12 && (c[2] + 1.0).abs() < 1e-12
         );
+    }
+
+    #[test]
+    fn a_sparse_gp_too_smooth_for_its_demos_is_refused() {
+        // Values that alternate from demo to demo, and a length scale ten times their span.
+        let x = DMatrix::from_fn(1, 40, |_, j| j as f64);
+        let r: Vec<f64> = (0..40)
+            .map(|j| if j % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let h = Hyperparameters {
+            length_scales: vec![400.0],
+            signal_var: 1.0,
+            noise_var: 1e-8,
+        };
+        let gp = LowRankGp::condition(&x, &r, &h, SPARSE_MAX_RANK).unwrap();
+        let err = check_fit(&x, &r, &gp, h.noise_var).unwrap_err().to_string();
+        assert!(
+            err.contains("misses demo") && err.contains("gp_neighbours"),
+            "{err}"
+        );
+        // the same values with a length scale that suits them
+        let h = Hyperparameters {
+            length_scales: vec![0.3],
+            ..h
+        };
+        let gp = LowRankGp::condition(&x, &r, &h, SPARSE_MAX_RANK).unwrap();
+        assert!(check_fit(&x, &r, &gp, h.noise_var).is_ok());
+    }
+
+    #[test]
+    fn the_spread_sample_is_every_demo_or_reaches_the_corners() {
+        let x = DMatrix::from_fn(2, 100, |d, j| {
+            if d == 0 {
+                (j % 10) as f64
+            } else {
+                (j / 10) as f64
+            }
+        });
+        assert_eq!(spread_sample(&x, 100), (0..100).collect::<Vec<_>>());
+        let s = spread_sample(&x, 5);
+        // the most central demo (the first of the four at the centre), then the four corners
+        assert_eq!(s, vec![0, 9, 44, 90, 99]);
     }
 }

@@ -33,6 +33,7 @@ pub(crate) struct GeneralizerOptions {
     gp_optimize: Option<bool>,
     gp_restarts: usize,
     gp_neighbours: Option<usize>,
+    gp_sparse: bool,
     trend: String,
 }
 
@@ -72,6 +73,7 @@ pub(crate) fn parse_method(method: &str, options: &GeneralizerOptions) -> PyResu
             gp_restarts: options.gp_restarts,
             gp_mean,
             gp_neighbours: options.gp_neighbours,
+            gp_sparse: options.gp_sparse,
         }),
         other => {
             return Err(invalid_input(format!(
