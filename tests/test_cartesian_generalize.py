@@ -112,6 +112,16 @@ def test_local_gps_serve_pose_demos_too() -> None:
         assert angle(got.goal[3:], dmp.goal[3:]) < 1e-4 and np.allclose(got.goal[:3], dmp.goal[:3], atol=1e-4)
 
 
+def test_sparse_gps_serve_pose_demos_too() -> None:
+    qs = list(np.linspace(0.0, 1.4, 12))
+    db = database(qs)
+    exact = dmprs.Generalizer(db, "lwr-gp", n_basis=10)
+    sparse = dmprs.Generalizer(db, "lwr-gp", n_basis=10, gp_sparse=True)
+    for q in (0.05, 0.33, 1.21):
+        a, b = sparse.parameters(q), exact.parameters(q)
+        assert np.allclose(a, b, rtol=0, atol=1e-6 * np.abs(b).max()), q
+
+
 def test_the_numerical_jacobian_works_for_poses() -> None:
     gen = dmprs.Generalizer(database([0.0, 2.0]), "linear", n_basis=15)
     jac = gen.jacobian(0.7, rel_step=1e-3)
