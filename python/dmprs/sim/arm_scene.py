@@ -31,6 +31,7 @@ from dmprs.errors import NumericalError
 from dmprs.sim import arm_model as am
 from dmprs.sim import granular
 from dmprs.sim.arm_ik import ArmKinematics
+from dmprs.sim.pour_record import PourRecord
 
 #: the mouth's start pose (x, y, z, qw, qx, qy, qz): upright, beside the glass and above its rim
 HOME_POSE = (0.75, 0.0, 0.34, 1.0, 0.0, 0.0, 0.0)
@@ -69,29 +70,16 @@ class SettledLiquid:
     solver: tuple[str, int, int]
 
 
-@dataclass(frozen=True)
-class ArmPourResult:
-    """What one pour did. ``times``/``q``/``q_ref``: executed and reference joint positions at
-    every physics step (from 0). ``sample_times``/``glass_counts``: spheres in the glass over
-    time. ``region``: the final region of every sphere (:data:`granular.IN_BOTTLE`, ...);
-    ``positions``: the final sphere centres (n, 3; m).
-    ``n_bottle + n_glass + n_spilled = n_particles`` (spilled is counted from ``region``, not by
-    subtraction, so this is a real check). ``cpu_servo``: seconds spent in the servo loop
-    outside ``mj_step``.
+@dataclass(frozen=True, kw_only=True)
+class ArmPourResult(PourRecord):
+    """What one pour did (:class:`~dmprs.sim.pour_record.PourRecord`, in m, with spheres for
+    particles), and ``q``/``q_ref``: executed and reference joint positions at every physics
+    step. ``region`` holds :data:`granular.IN_BOTTLE`, ...; spilled is counted from ``region``,
+    not by subtraction, so the counts adding up is a real check.
     """
 
-    times: NDArray[np.float64]
     q: NDArray[np.float64]
     q_ref: NDArray[np.float64]
-    sample_times: NDArray[np.float64]
-    glass_counts: NDArray[np.int64]
-    region: NDArray[np.int8]
-    positions: NDArray[np.float64]
-    n_particles: int
-    n_bottle: int
-    n_glass: int
-    n_spilled: int
-    interrupted: bool = False
 
 
 def _bottle_frame(model: Any, data: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError, NumericalError
+from dmprs.sim.pour_record import PourRecord
 
 # --- simulation constants (docs/method.md §9.3) -------------------------------------------------
 DT = 1.0 / 600.0  #: physics step (s)
@@ -98,30 +99,17 @@ class Liquid:
         return int(self.radii.shape[0])
 
 
-@dataclass(frozen=True)
-class PourResult:
-    """What one simulated pour did.
-
-    ``times``/``tilt``: the bottle's executed tilt (rad, positive toward the glass) at every
-    physics step from 0. ``sample_times``/``glass_counts``: discs in the glass over time.
-    ``region``: the final region of every disc (:data:`IN_BOTTLE`, :data:`IN_GLASS`,
-    :data:`ON_FLOOR`, :data:`ELSEWHERE`); ``n_bottle``/``n_glass``/``n_spilled`` are the counts the
-    outcome reports, with ``n_spilled = n - n_bottle - n_glass`` by construction (so the three
-    always add up; tests check them against ``region`` independently). ``interrupted`` is true
-    when ``should_stop`` ended the pour early (then the counts are of that moment).
+@dataclass(frozen=True, kw_only=True)
+class PourResult(PourRecord):
+    """What one simulated pour did (:class:`~dmprs.sim.pour_record.PourRecord`, in mm, with
+    discs for particles), and ``tilt``: the bottle's executed tilt (rad, positive toward the
+    glass) at every physics step. ``region`` holds :data:`IN_BOTTLE`, :data:`IN_GLASS`,
+    :data:`ON_FLOOR` or :data:`ELSEWHERE`; ``n_spilled = n - n_bottle - n_glass`` by
+    construction (so the three always add up; tests check them against ``region``
+    independently).
     """
 
-    times: NDArray[np.float64]
     tilt: NDArray[np.float64]
-    sample_times: NDArray[np.float64]
-    glass_counts: NDArray[np.int64]
-    region: NDArray[np.int8]
-    positions: NDArray[np.float64]
-    n_particles: int
-    n_bottle: int
-    n_glass: int
-    n_spilled: int
-    interrupted: bool = False
 
 
 # --- geometry -----------------------------------------------------------------------------------
