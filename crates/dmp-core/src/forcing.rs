@@ -17,14 +17,20 @@ use crate::linalg::exp_in_place;
 
 /// Activations below `exp(-CUTOFF)` of the largest are zero, as in [`Basis`].
 const CUTOFF: f64 = 37.0;
+/// f64 lanes of an AVX2 vector.
+const LANES: usize = 4;
 
 #[derive(Debug, Clone)]
 pub(crate) struct Forcing {
     centers: Vec<f64>,
     widths: Vec<f64>,
-    /// `weights[k * n + d]`: kernel k's weight for coordinate d.
+    /// `weights[k * stride + d]`: kernel k's weight for coordinate d (0 for `d >= n`).
     weights: Vec<f64>,
     n: usize,
+    /// `n` rounded up to whole `LANES`, so that the sums over the kernels run in whole vectors.
+    stride: usize,
+    /// The sums of all `stride` lanes.
+    acc: Vec<f64>,
     /// The kernel `k0` with `c_k0 >= x >= c_{k0+1}` at the last phase.
     hint: usize,
     psi: Vec<f64>,
@@ -34,14 +40,17 @@ impl Forcing {
     /// `weights` is `N x n` (column d = coordinate d), as a [`crate::Dmp`] holds them.
     pub fn new(basis: &Basis, weights: &DMatrix<f64>) -> Self {
         let (nb, n) = weights.shape();
+        let stride = n.next_multiple_of(LANES);
         Self {
             centers: basis.centers().to_vec(),
             widths: basis.widths().to_vec(),
             weights: (0..nb)
-                .flat_map(|k| (0..n).map(move |d| (k, d)))
-                .map(|(k, d)| weights[(k, d)])
+                .flat_map(|k| (0..stride).map(move |d| (k, d)))
+                .map(|(k, d)| if d < n { weights[(k, d)] } else { 0.0 })
                 .collect(),
             n,
+            stride,
+            acc: vec![0.0; stride],
             hint: 0,
             psi: vec![0.0; nb],
         }
@@ -102,16 +111,18 @@ impl Forcing {
             sums[i & 3] += p;
         }
         let scale = x / ((sums[0] + sums[1]) + (sums[2] + sums[3]));
-        let out = &mut out[..self.n];
-        out.fill(0.0);
-        for (k, p) in (lo..hi).zip(psi.iter()) {
-            let w = &self.weights[k * self.n..(k + 1) * self.n];
-            for (o, w) in out.iter_mut().zip(w) {
-                *o += w * p;
+        let acc = &mut self.acc;
+        acc.fill(0.0);
+        let weights = self.weights[lo * self.stride..hi * self.stride].chunks_exact(self.stride);
+        for (w, p) in weights.zip(psi.iter()) {
+            for (a, w) in acc.chunks_exact_mut(LANES).zip(w.chunks_exact(LANES)) {
+                for l in 0..LANES {
+                    a[l] += w[l] * p;
+                }
             }
         }
-        for o in out.iter_mut() {
-            *o *= scale;
+        for (o, a) in out[..self.n].iter_mut().zip(acc.iter()) {
+            *o = a * scale;
         }
     }
 

@@ -329,6 +329,82 @@ impl Clock {
     }
 }
 
+/// `tau dz/dt` of eq. 1 without coupling terms, `alpha_z (beta_z (g - y) - z) + f`, into `out`.
+// The per-coordinate loops of a step are free functions over slices: the slices of distinct
+// arguments do not alias, so the loops vectorize instead of reloading each `Vec` per element.
+#[inline(always)]
+fn spring(cfg: &DmpConfig, out: &mut [f64], g: &[f64], y: &[f64], z: &[f64], f: &[f64]) {
+    let n = out.len();
+    let (g, y, z, f) = (&g[..n], &y[..n], &z[..n], &f[..n]);
+    for d in 0..n {
+        out[d] = cfg.alpha_z * (cfg.beta_z * (g[d] - y[d]) - z[d]) + f[d];
+    }
+}
+
+/// The command of this period from the state before it is advanced: `y`, `yd = z / tau`, and `z`
+/// kept for the acceleration.
+#[inline(always)]
+fn record(
+    out_y: &mut [f64],
+    out_yd: &mut [f64],
+    z_k: &mut [f64],
+    y: &[f64],
+    z: &[f64],
+    inv_tau: f64,
+) {
+    let n = out_y.len();
+    let (out_yd, z_k, y, z) = (&mut out_yd[..n], &mut z_k[..n], &y[..n], &z[..n]);
+    for d in 0..n {
+        out_y[d] = y[d];
+        out_yd[d] = z[d] * inv_tau;
+        z_k[d] = z[d];
+    }
+}
+
+/// One Euler sub-step of `hs` seconds of every coordinate: explicit (the rollout's) outside the
+/// limits' bands, linearly implicit ([`implicit_step`]) inside them.
+#[inline(always)]
+fn euler_substep(
+    cfg: &DmpConfig,
+    y: &mut [f64],
+    z: &mut [f64],
+    h: &[f64],
+    stiffness: &[f64],
+    inv_tau: f64,
+    hs: f64,
+) {
+    let n = y.len();
+    let (z, h, stiffness) = (&mut z[..n], &h[..n], &stiffness[..n]);
+    let a = hs * inv_tau;
+    for d in 0..n {
+        if stiffness[d] == 0.0 {
+            let dz = h[d] * inv_tau;
+            y[d] += z[d] * inv_tau * hs;
+            z[d] += dz * hs;
+        } else {
+            let (dy, dz) = implicit_step(cfg, stiffness[d], a, z[d], h[d]);
+            y[d] += dy;
+            z[d] += dz;
+        }
+    }
+}
+
+/// `ydd = (tau dz/dt - taud z) / tau^2` of the command, with `h = tau dz/dt` and `z` of the
+/// state it was recorded from; the rollout's `dz / tau` with `dz = h / tau` when the clock is
+/// steady (`taud == 0`).
+#[inline(always)]
+fn acceleration(out: &mut [f64], h: &[f64], z: &[f64], taud: f64, inv_tau: f64) {
+    let n = out.len();
+    let (h, z) = (&h[..n], &z[..n]);
+    for d in 0..n {
+        out[d] = if taud == 0.0 {
+            h[d] * inv_tau * inv_tau
+        } else {
+            (h[d] - taud * z[d]) * inv_tau * inv_tau
+        };
+    }
+}
+
 /// Executes a [`Dmp`] one control period at a time (module docs).
 #[derive(Debug, Clone)]
 pub struct Stepper {
@@ -526,11 +602,14 @@ impl Stepper {
         self.at_rest = self.rest();
         self.out_x = self.x;
         self.out_tau = tau;
-        self.out_y.copy_from_slice(&self.y);
-        for d in 0..self.n {
-            self.out_yd[d] = self.z[d] * inv_tau;
-        }
-        self.z_k.copy_from_slice(&self.z);
+        record(
+            &mut self.out_y,
+            &mut self.out_yd,
+            &mut self.z_k,
+            &self.y,
+            &self.z,
+            inv_tau,
+        );
         self.integrate(inv_tau, coupled);
         let taud = if self.clock.coupling.is_some() {
             let mut h_next = std::mem::take(&mut self.h_next);
@@ -553,14 +632,7 @@ impl Stepper {
         } else {
             self.clock.backward_rate(tau)
         };
-        for d in 0..self.n {
-            // The rollout's `dz * inv_tau` with `dz = h * inv_tau` when the clock is steady.
-            self.out_ydd[d] = if taud == 0.0 {
-                self.h[d] * inv_tau * inv_tau
-            } else {
-                (self.h[d] - taud * self.z_k[d]) * inv_tau * inv_tau
-            };
-        }
+        acceleration(&mut self.out_ydd, &self.h, &self.z_k, taud, inv_tau);
         self.clock.previous = tau;
         self.steps += 1;
         self.check_finite()?;
@@ -584,17 +656,15 @@ impl Stepper {
                 self.derivative_into(&mut h_sub, coupled);
             }
             let h = if sub == 0 { &self.h } else { &h_sub };
-            for d in 0..self.n {
-                if self.stiffness[d] == 0.0 {
-                    let dz = h[d] * inv_tau;
-                    self.y[d] += self.z[d] * inv_tau * hs;
-                    self.z[d] += dz * hs;
-                } else {
-                    let (dy, dz) = implicit_step(&cfg, self.stiffness[d], a, self.z[d], h[d]);
-                    self.y[d] += dy;
-                    self.z[d] += dz;
-                }
-            }
+            euler_substep(
+                &cfg,
+                &mut self.y,
+                &mut self.z,
+                h,
+                &self.stiffness,
+                inv_tau,
+                hs,
+            );
             self.x -= cfg.alpha_x * self.x * inv_tau * hs;
             if self.goal_moving {
                 self.filter_goal(a);
@@ -641,10 +711,7 @@ impl Stepper {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn derivative_into(&mut self, out: &mut [f64], coupled: bool) {
-        let cfg = self.dmp.config();
-        for d in 0..self.n {
-            out[d] = cfg.alpha_z * (cfg.beta_z * (self.g[d] - self.y[d]) - self.z[d]) + self.f[d];
-        }
+        spring(self.dmp.config(), out, &self.g, &self.y, &self.z, &self.f);
         if let Some(lim) = &self.limits {
             for d in 0..self.n {
                 self.stiffness[d] = match lim.repulsion(d, self.y[d]) {
