@@ -242,16 +242,20 @@ fn check_data(x: &DMatrixView<'_, f64>, y: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// The scales of the data that data-relative hyperparameters and bounds are multiples of: the
-/// range of each input dimension and the variance of the outputs (each 1 where it is 0).
-pub(crate) fn data_scales(x: &DMatrixView<'_, f64>, y: &[f64]) -> (Vec<f64>, f64) {
-    let ranges = x
-        .row_iter()
+/// The range of each input dimension (row) of `x`, 1 where it is 0.
+pub(crate) fn query_ranges(x: &DMatrixView<'_, f64>) -> Vec<f64> {
+    x.row_iter()
         .map(|r| {
             let span = r.max() - r.min();
             if span > 0.0 { span } else { 1.0 }
         })
-        .collect();
+        .collect()
+}
+
+/// The scales of the data that data-relative hyperparameters and bounds are multiples of: the
+/// range of each input dimension and the variance of the outputs (each 1 where it is 0).
+pub(crate) fn data_scales(x: &DMatrixView<'_, f64>, y: &[f64]) -> (Vec<f64>, f64) {
+    let ranges = query_ranges(x);
     let m = y.len() as f64;
     let mean = y.iter().sum::<f64>() / m;
     let var = y.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / m;

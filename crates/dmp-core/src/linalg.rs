@@ -35,6 +35,16 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
+/// The index and value of the largest of `v`, the first of equals so that ties break the same
+/// way every time; NaNs are never chosen, and an empty `v` gives `(0, -inf)`.
+pub(crate) fn argmax_first(v: &[f64]) -> (usize, f64) {
+    v.iter()
+        .enumerate()
+        .fold((0, f64::NEG_INFINITY), |best, (i, &value)| {
+            if value > best.1 { (i, value) } else { best }
+        })
+}
+
 /// Whether this CPU runs the AVX2 + FMA code paths (std caches the answer after the first call).
 #[inline]
 pub fn has_avx2_fma() -> bool {
@@ -262,6 +272,17 @@ pub fn solve_upper_t_in_place(l: &[f64], m: usize, b: &mut [f64]) {
 mod tests {
     use super::*;
     use nalgebra::DMatrix;
+
+    #[test]
+    fn argmax_first_takes_the_first_of_equals_and_never_a_nan() {
+        assert_eq!(argmax_first(&[1.0, 3.0, 2.0, 3.0]), (1, 3.0));
+        assert_eq!(argmax_first(&[f64::NAN, -1.0, f64::NAN, -0.5]), (3, -0.5));
+        assert_eq!(
+            argmax_first(&[f64::INFINITY, f64::INFINITY]),
+            (0, f64::INFINITY)
+        );
+        assert_eq!(argmax_first(&[]), (0, f64::NEG_INFINITY));
+    }
 
     fn spd(m: usize) -> DMatrix<f64> {
         let b = DMatrix::from_fn(m, m, |i, j| ((i * 7 + j * 3) % 11) as f64 / 11.0 - 0.4);

@@ -23,7 +23,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
 use crate::gp::{Hyperparameters, half_sq_distances, kernel_sum, scale_dimension_major};
-use crate::linalg::{exp_in_place, simd, solve_upper_t_in_place};
+use crate::linalg::{argmax_first, exp_in_place, simd, solve_upper_t_in_place};
 
 /// The factorization stops once every point's unexplained prior variance is at most this
 /// fraction of the noise variance.
@@ -117,14 +117,7 @@ fn pivoted_cholesky(
     let mut col = vec![0.0; m];
     simd(|| {
         loop {
-            // The first largest, so that ties break the same way every time.
-            let (i, &worst) = left
-                .iter()
-                .enumerate()
-                .fold(
-                    (0, &f64::NEG_INFINITY),
-                    |b, c| if c.1 > b.1 { c } else { b },
-                );
+            let (i, worst) = argmax_first(&left);
             if worst <= stop || pivots.len() == m {
                 return Ok(());
             }

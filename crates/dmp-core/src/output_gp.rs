@@ -22,7 +22,10 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result, fmt_g};
-use crate::gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales};
+use crate::gp::{
+    GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales, query_ranges,
+};
+use crate::linalg::argmax_first;
 use crate::low_rank_gp::LowRankGp;
 
 /// The fewest neighbours a local GP takes: ML-II needs at least 4 points (docs/method.md §3.2).
@@ -176,11 +179,12 @@ const MAX_MISFIT: f64 = 10.0;
 /// GPs' are not.
 fn check_fit(x: &DMatrix<f64>, r: &[f64], gp: &LowRankGp, noise_var: f64) -> Result<()> {
     let sd = noise_var.sqrt();
-    let (i, miss) = r
+    let misses: Vec<f64> = r
         .iter()
         .enumerate()
-        .map(|(i, v)| (i, (gp.mean_at(x.column(i).as_slice()) - v).abs()))
-        .fold((0, 0.0), |b, c| if c.1 > b.1 { c } else { b });
+        .map(|(i, v)| (gp.mean_at(x.column(i).as_slice()) - v).abs())
+        .collect();
+    let (i, miss) = argmax_first(&misses);
     if miss.is_finite() && miss <= MAX_MISFIT * sd {
         return Ok(());
     }
@@ -203,31 +207,22 @@ fn spread_sample(x: &DMatrix<f64>, k: usize) -> Vec<usize> {
     if m <= k {
         return (0..m).collect();
     }
-    let (ranges, _) = data_scales(&x.as_view(), &[0.0]);
+    let ranges = query_ranges(&x.as_view());
     let dist = |a: &[f64], j: usize| -> f64 {
         (0..x.nrows())
             .map(|d| ((x[(d, j)] - a[d]) / ranges[d]).powi(2))
             .sum()
     };
-    let first = |v: &[f64]| {
-        v.iter()
-            .enumerate()
-            .fold(
-                (0, f64::NEG_INFINITY),
-                |b, (i, &d)| if d > b.1 { (i, d) } else { b },
-            )
-            .0
-    };
     let centre: Vec<f64> = x.column_mean().iter().copied().collect();
     let to_centre: Vec<f64> = (0..m).map(|j| -dist(&centre, j)).collect();
-    let mut taken = vec![first(&to_centre)];
+    let mut taken = vec![argmax_first(&to_centre).0];
     let mut gap: Vec<f64> = vec![f64::INFINITY; m];
     while taken.len() < k {
         let last: Vec<f64> = x.column(*taken.last().unwrap()).iter().copied().collect();
         gap.iter_mut()
             .enumerate()
             .for_each(|(j, g)| *g = g.min(dist(&last, j)));
-        taken.push(first(&gap));
+        taken.push(argmax_first(&gap).0);
     }
     taken.sort_unstable();
     taken
