@@ -418,7 +418,9 @@ def test_sparse_gps_refuse_outputs_too_rough_for_their_factor_and_say_what_to_us
     db = dmprs.Database(("a", "b"))
     for k in range(1200):
         db.add([k % 40, k // 40], dmprs.Trajectory(t, np.outer(t, [1.0 + k % 7])))
-    with pytest.raises(dmprs.NumericalError, match=r"more than 1000 demos.*gp_neighbours"):
+    # the method does not suit the data (nothing failed): a ValueError naming the output
+    with pytest.raises(InvalidInputError,
+                       match=r"^the GP of goal\[0\]: .*more than 1000 demos.*gp_neighbours"):
         dmprs.Generalizer(db, "lwr-gp", n_basis=5, gp_sparse=True)
 
 

@@ -98,6 +98,17 @@ pub enum Error {
         norm: f64,
         requirement: &'static str,
     },
+    /// Demonstrations a method cannot represent to its accuracy (e.g. outputs too rough for
+    /// sparse GPs); `detail` says why and what to use instead.
+    #[error("{method} cannot represent these demonstrations: {detail}")]
+    Unsuited {
+        method: &'static str,
+        detail: String,
+    },
+    /// An error in the model of one of a generalizer's outputs (its tau, or one coordinate of
+    /// its goal or start).
+    #[error("the GP of {output}: {source}")]
+    InOutput { output: String, source: Box<Error> },
     /// The input was valid but the computation failed (e.g. a matrix that is not positive definite).
     #[error("numerical failure in {context}: {detail}")]
     Numerical {
@@ -111,7 +122,9 @@ impl Error {
     pub fn is_input_error(&self) -> bool {
         match self {
             Error::Numerical { .. } | Error::Cancelled { .. } => false,
-            Error::InDemo { source, .. } => source.is_input_error(),
+            Error::InDemo { source, .. } | Error::InOutput { source, .. } => {
+                source.is_input_error()
+            }
             _ => true,
         }
     }

@@ -313,9 +313,19 @@ impl Generalizer {
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
         let n_dof = dmps[0].n_dof();
-        let mut outputs = vec![dmps.iter().map(|d| d.tau()).collect::<Vec<f64>>()];
-        outputs.extend((0..n_dof).map(|i| dmps.iter().map(|d| d.goal()[i]).collect()));
-        outputs.extend((0..n_dof).map(|i| dmps.iter().map(|d| d.y0()[i]).collect()));
+        let mut outputs = vec![("tau".to_string(), dmps.iter().map(|d| d.tau()).collect())];
+        outputs.extend((0..n_dof).map(|i| {
+            (
+                format!("goal[{i}]"),
+                dmps.iter().map(|d| d.goal()[i]).collect(),
+            )
+        }));
+        outputs.extend((0..n_dof).map(|i| {
+            (
+                format!("start[{i}]"),
+                dmps.iter().map(|d| d.y0()[i]).collect(),
+            )
+        }));
         let settings = GpSettings {
             noise: opts.gp_noise,
             optimize: opts.gp_optimize,

@@ -21,13 +21,18 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::{Error, Result};
-use crate::gp::{Hyperparameters, half_sq_distances, kernel_sum, scale_dimension_major};
+use crate::error::{Error, Result, fmt_g};
+use crate::gp::{
+    Hyperparameters, half_sq_distances, kernel_sum, query_ranges, scale_dimension_major,
+};
 use crate::linalg::{argmax_first, exp_in_place, simd, solve_upper_t_in_place};
 
 /// The factorization stops once every point's unexplained prior variance is at most this
 /// fraction of the noise variance.
 pub const TOLERANCE: f64 = 1e-3;
+
+/// How the refusals name the method, with the argument that chose it.
+pub(crate) const SPARSE_GPS: &str = "sparse GPs (gp_sparse=True)";
 
 /// A GP's posterior mean over a pivoted low-rank factor of its kernel matrix.
 #[derive(Debug, Clone)]
@@ -54,7 +59,23 @@ impl LowRankGp {
         let l_s = &hyper.length_scales;
         let mut xd = vec![0.0; n * m];
         scale_dimension_major(x.as_slice(), n, l_s, &mut xd);
-        let (l, pivots) = pivoted_cholesky(&xd, m, hyper, max_rank)?;
+        let Some((l, pivots)) = pivoted_cholesky(&xd, m, hyper, max_rank) else {
+            let relative: Vec<String> = l_s
+                .iter()
+                .zip(query_ranges(&x.as_view()))
+                .map(|(l, range)| fmt_g(l / range))
+                .collect();
+            return Err(Error::Unsuited {
+                method: SPARSE_GPS,
+                detail: format!(
+                    "more than {max_rank} demos are needed to represent this output to within \
+                     {TOLERANCE} x its noise variance (its length scales are [{}] x the queries' \
+                     ranges: short against the demos' spread); use local GPs (gp_neighbours) \
+                     instead",
+                    relative.join(", ")
+                ),
+            });
+        };
         let r = pivots.len();
         let mean = y.iter().sum::<f64>() / m as f64;
         let w = regularized_least_squares(&l, m, r, y, mean, hyper.noise_var)?;
@@ -101,13 +122,14 @@ impl LowRankGp {
 }
 
 /// The first columns of the Cholesky factor of `K_f` with diagonal pivoting (column-major,
-/// `m` rows each) and the pivots, in order, over the `m` points `xd` (dimension-major, scaled).
+/// `m` rows each) and the pivots, in order, over the `m` points `xd` (dimension-major, scaled);
+/// `None` if more than `max_rank` pivots are needed.
 fn pivoted_cholesky(
     xd: &[f64],
     m: usize,
     hyper: &Hyperparameters,
     max_rank: usize,
-) -> Result<(Vec<f64>, Vec<usize>)> {
+) -> Option<(Vec<f64>, Vec<usize>)> {
     let sv = hyper.signal_var;
     let stop = TOLERANCE * hyper.noise_var;
     // The prior variance each point's chosen pivots leave unexplained.
@@ -119,18 +141,10 @@ fn pivoted_cholesky(
         loop {
             let (i, worst) = argmax_first(&left);
             if worst <= stop || pivots.len() == m {
-                return Ok(());
+                return Some(());
             }
             if pivots.len() == max_rank {
-                return Err(Error::Numerical {
-                    context: "sparse Gaussian process",
-                    detail: format!(
-                        "more than {max_rank} demos are needed to represent it to within {TOLERANCE} x its noise \
-                         variance (its length scales {:?} are short against the demos' spread); use local GPs \
-                         (gp_neighbours) instead",
-                        hyper.length_scales
-                    ),
-                });
+                return None;
             }
             half_sq_distances(xd, m, 0, |d| xd[d * m + i], &mut col);
             exp_in_place(&mut col);
@@ -153,7 +167,7 @@ fn pivoted_cholesky(
             l.extend_from_slice(&col);
         }
     })?;
-    Ok((l, pivots))
+    Some((l, pivots))
 }
 
 /// `argmin |L w - (y - mean)|^2 + noise_var |w|^2` for `L` (`m x r`, column-major), by a QR
@@ -278,11 +292,16 @@ mod tests {
             signal_var: 1.0,
             noise_var: 1e-6,
         };
-        let err = LowRankGp::condition(&x, &y, &h, 40)
-            .unwrap_err()
-            .to_string();
+        let err = LowRankGp::condition(&x, &y, &h, 40).unwrap_err();
+        assert!(matches!(err, Error::Unsuited { .. }) && err.is_input_error());
+        let err = err.to_string();
+        // The length scales relative to the queries' ranges.
+        let ranges = query_ranges(&x.as_view());
+        let relative = format!("[{}, {}]", fmt_g(0.01 / ranges[0]), fmt_g(0.01 / ranges[1]));
         assert!(
-            err.contains("more than 40 demos") && err.contains("gp_neighbours"),
+            err.contains("more than 40 demos")
+                && err.contains(&relative)
+                && err.contains("gp_neighbours"),
             "{err}"
         );
     }

@@ -26,7 +26,7 @@ use crate::gp::{
     GaussianProcess, GpOptions, HyperBounds, Hyperparameters, data_scales, query_ranges,
 };
 use crate::linalg::argmax_first;
-use crate::low_rank_gp::LowRankGp;
+use crate::low_rank_gp::{LowRankGp, SPARSE_GPS};
 
 /// The fewest neighbours a local GP takes: ML-II needs at least 4 points (docs/method.md §3.2).
 pub const MIN_NEIGHBOURS: usize = 4;
@@ -169,6 +169,34 @@ fn fit_gp(x: &DMatrix<f64>, y: &[f64], s: &GpSettings) -> Result<GaussianProcess
     GaussianProcess::fit(&x.as_view(), y, Some(initial), &gp_opts)
 }
 
+/// `result`, its error said to be in the GP of output `name`.
+fn in_output<T>(name: &str, result: Result<T>) -> Result<T> {
+    result.map_err(|e| Error::InOutput {
+        output: name.to_string(),
+        source: Box::new(e),
+    })
+}
+
+/// The sparse GP of the residuals `r` over the demos `x`: hyperparameters by ML-II on the demos
+/// `sample` (at `xs`), then conditioned on every demo, and checked against them if the sample
+/// left some out (with every demo in it, the hyperparameters are the exact GP's own, and so is
+/// the fit).
+fn sparse_gp(
+    x: &DMatrix<f64>,
+    xs: &DMatrix<f64>,
+    sample: &[usize],
+    r: &[f64],
+    s: &GpSettings,
+) -> Result<LowRankGp> {
+    let rs: Vec<f64> = sample.iter().map(|&i| r[i]).collect();
+    let hyper = fit_gp(xs, &rs, s)?.hyperparameters().clone();
+    let gp = LowRankGp::condition(x, r, &hyper, SPARSE_MAX_RANK)?;
+    if sample.len() < x.ncols() {
+        check_fit(x, r, &gp, hyper.noise_var)?;
+    }
+    Ok(gp)
+}
+
 /// How far, in noise standard deviations, a sparse GP may miss a demo's value: the GP's own
 /// noise model puts nearly every demo within a few.
 const MAX_MISFIT: f64 = 10.0;
@@ -188,12 +216,12 @@ fn check_fit(x: &DMatrix<f64>, r: &[f64], gp: &LowRankGp, noise_var: f64) -> Res
     if miss.is_finite() && miss <= MAX_MISFIT * sd {
         return Ok(());
     }
-    Err(Error::Numerical {
-        context: "sparse Gaussian process",
+    Err(Error::Unsuited {
+        method: SPARSE_GPS,
         detail: format!(
-            "it misses demo {i} by {} noise standard deviations (at most {MAX_MISFIT}): its hyperparameters, \
-             fitted on {SPARSE_FIT_DEMOS} demos spread over the query space, are too smooth for the demos \
-             between those; use local GPs (gp_neighbours) instead",
+            "the GP misses demo {i} by {} noise standard deviations (at most {MAX_MISFIT}): \
+             its hyperparameters, fitted on {SPARSE_FIT_DEMOS} demos spread over the query space, \
+             are too smooth for the demos between those; use local GPs (gp_neighbours) instead",
             fmt_g(miss / sd)
         ),
     })
@@ -229,11 +257,12 @@ fn spread_sample(x: &DMatrix<f64>, k: usize) -> Vec<usize> {
 }
 
 impl OutputGps {
-    /// The GPs of each of `outputs` (one value per demo) over the demo queries `x` (`n x M`);
-    /// `nearest(q, k)` gives the indices of the `k` demos nearest to `q` (for local GPs).
+    /// The GPs of each of `outputs` (a name for errors, and one value per demo) over the demo
+    /// queries `x` (`n x M`); `nearest(q, k)` gives the indices of the `k` demos nearest to `q`
+    /// (for local GPs).
     pub(crate) fn fit(
         x: &DMatrix<f64>,
-        outputs: Vec<Vec<f64>>,
+        outputs: Vec<(String, Vec<f64>)>,
         s: &GpSettings,
         nearest: impl Fn(&[f64], usize) -> Vec<usize>,
     ) -> Result<Self> {
@@ -263,10 +292,12 @@ impl OutputGps {
                 let xs = x.select_columns(&sample);
                 let outputs = outputs
                     .into_iter()
-                    .map(|y| {
+                    .map(|(name, y)| {
                         let (trend, residuals) = detrend(x, y, s.mean);
                         let rs: Vec<f64> = sample.iter().map(|&i| residuals[i]).collect();
-                        let hyper = fit_gp(&xs, &rs, s)?.hyperparameters().clone();
+                        let hyper = in_output(&name, fit_gp(&xs, &rs, s))?
+                            .hyperparameters()
+                            .clone();
                         Ok(LocalOutput {
                             trend,
                             residuals,
@@ -282,11 +313,11 @@ impl OutputGps {
             }
             _ => outputs
                 .into_iter()
-                .map(|y| {
+                .map(|(name, y)| {
                     let (trend, r) = detrend(x, y, s.mean);
                     Ok(TrendGp {
                         trend,
-                        gp: fit_gp(x, &r, s)?,
+                        gp: in_output(&name, fit_gp(x, &r, s))?,
                     })
                 })
                 .collect::<Result<_>>()
@@ -296,17 +327,18 @@ impl OutputGps {
 
     /// The sparse GPs: hyperparameters by ML-II on a spread sample of the demos, then each GP
     /// conditioned on every demo through its low-rank factor.
-    fn fit_sparse(x: &DMatrix<f64>, outputs: Vec<Vec<f64>>, s: &GpSettings) -> Result<Self> {
+    fn fit_sparse(
+        x: &DMatrix<f64>,
+        outputs: Vec<(String, Vec<f64>)>,
+        s: &GpSettings,
+    ) -> Result<Self> {
         let sample = spread_sample(x, SPARSE_FIT_DEMOS);
         let xs = x.select_columns(&sample);
         outputs
             .into_iter()
-            .map(|y| {
+            .map(|(name, y)| {
                 let (trend, r) = detrend(x, y, s.mean);
-                let rs: Vec<f64> = sample.iter().map(|&i| r[i]).collect();
-                let hyper = fit_gp(&xs, &rs, s)?.hyperparameters().clone();
-                let gp = LowRankGp::condition(x, &r, &hyper, SPARSE_MAX_RANK)?;
-                check_fit(x, &r, &gp, hyper.noise_var)?;
+                let gp = in_output(&name, sparse_gp(x, &xs, &sample, &r, s))?;
                 Ok(SparseOutput { trend, gp })
             })
             .collect::<Result<_>>()
@@ -369,6 +401,40 @@ mod tests {
     }
 
     #[test]
+    fn an_outputs_error_names_the_output_and_keeps_its_class() {
+        let x = DMatrix::from_fn(1, 6, |_, j| j as f64);
+        // A spread so large that the noise variance, a fraction of its variance, is not a f64.
+        let wild: Vec<f64> = (0..6)
+            .map(|j| if j % 2 == 0 { 1e300 } else { -1e300 })
+            .collect();
+        let outputs = vec![
+            ("tau".to_string(), vec![1.0, 1.1, 1.2, 1.1, 1.0, 0.9]),
+            ("goal[2]".to_string(), wild),
+        ];
+        for sparse in [false, true] {
+            let s = GpSettings {
+                noise: 1e-2,
+                optimize: Some(false),
+                restarts: 0,
+                mean: GpMean::Constant,
+                neighbours: None,
+                sparse,
+            };
+            let err = OutputGps::fit(&x, outputs.clone(), &s, |_, _| vec![]).unwrap_err();
+            assert!(
+                matches!(&err, Error::InOutput { output, source }
+                    if output == "goal[2]" && matches!(**source, Error::InvalidParameter { name: "gp_noise", .. })),
+                "{err:?}"
+            );
+            assert!(err.is_input_error());
+            assert!(
+                err.to_string().starts_with("the GP of goal[2]: gp_noise"),
+                "{err}"
+            );
+        }
+    }
+
+    #[test]
     fn a_sparse_gp_too_smooth_for_its_demos_is_refused() {
         // Values that alternate from demo to demo, and a length scale ten times their span.
         let x = DMatrix::from_fn(1, 40, |_, j| j as f64);
@@ -381,7 +447,9 @@ mod tests {
             noise_var: 1e-8,
         };
         let gp = LowRankGp::condition(&x, &r, &h, SPARSE_MAX_RANK).unwrap();
-        let err = check_fit(&x, &r, &gp, h.noise_var).unwrap_err().to_string();
+        let err = check_fit(&x, &r, &gp, h.noise_var).unwrap_err();
+        assert!(matches!(err, Error::Unsuited { .. }) && err.is_input_error());
+        let err = err.to_string();
         assert!(
             err.contains("misses demo") && err.contains("gp_neighbours"),
             "{err}"

@@ -66,6 +66,7 @@ fn dmp_core_class(err: &dmp_core::Error) -> PyErrorClass {
         // A cancelled computation is normally replaced by the KeyboardInterrupt that cancelled it
         // (gp.rs, `interruptible`); reaching Python on its own it is a failed computation.
         E::Numerical { .. } | E::Cancelled { .. } => PyErrorClass::Numerical,
+        E::InOutput { source, .. } => dmp_core_class(source),
         E::InDemo { source, .. } => match dmp_core_class(source) {
             // A demonstration's data cannot be "too far from the demonstrations".
             PyErrorClass::Extrapolation => PyErrorClass::InvalidInput,
@@ -80,6 +81,7 @@ fn dmp_core_class(err: &dmp_core::Error) -> PyErrorClass {
         | E::DuplicateQuery { .. }
         | E::DofMismatch { .. }
         | E::DegenerateQueries { .. }
+        | E::Unsuited { .. }
         | E::Quaternion { .. } => PyErrorClass::InvalidInput,
     }
 }
