@@ -24,12 +24,12 @@ const LANES: usize = 4;
 pub(crate) struct Forcing {
     centers: Vec<f64>,
     widths: Vec<f64>,
-    /// `weights[k * stride + d]`: kernel k's weight for coordinate d (0 for `d >= n`).
+    /// `weights[k * stride + d]`: kernel k's weight for coordinate d (0 for `d >= n`), `stride`
+    /// the length of `acc`.
     weights: Vec<f64>,
     n: usize,
-    /// `n` rounded up to whole `LANES`, so that the sums over the kernels run in whole vectors.
-    stride: usize,
-    /// The sums of all `stride` lanes.
+    /// The sums over the kernels of every coordinate, `n` rounded up to whole `LANES` (its length
+    /// is the weights' stride), so that they run in whole vectors.
     acc: Vec<f64>,
     /// The kernel `k0` with `c_k0 >= x >= c_{k0+1}` at the last phase.
     hint: usize,
@@ -49,7 +49,6 @@ impl Forcing {
                 .map(|(k, d)| if d < n { weights[(k, d)] } else { 0.0 })
                 .collect(),
             n,
-            stride,
             acc: vec![0.0; stride],
             hint: 0,
             psi: vec![0.0; nb],
@@ -112,8 +111,9 @@ impl Forcing {
         }
         let scale = x / ((sums[0] + sums[1]) + (sums[2] + sums[3]));
         let acc = &mut self.acc;
+        let stride = acc.len();
         acc.fill(0.0);
-        let weights = self.weights[lo * self.stride..hi * self.stride].chunks_exact(self.stride);
+        let weights = self.weights[lo * stride..hi * stride].chunks_exact(stride);
         for (w, p) in weights.zip(psi.iter()) {
             for (a, w) in acc.chunks_exact_mut(LANES).zip(w.chunks_exact(LANES)) {
                 for l in 0..LANES {
