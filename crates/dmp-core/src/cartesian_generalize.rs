@@ -130,15 +130,14 @@ impl CartesianGeneralizer {
     /// [`Self::tau_bounds`]. With `"linear"`, a demo's own query returns that demo's DMP exactly.
     pub fn predict(&self, q: &[f64]) -> Result<CartesianDmp> {
         let d = self.inner.predict(q)?;
-        if self.inner.method() == "linear" {
-            if let Some(k) = self
+        if self.inner.method() == "linear"
+            && let Some(k) = self
                 .inner
                 .queries()
                 .iter()
                 .position(|qk| qk.as_slice() == q)
-            {
-                return Ok(self.demo_dmps[k].clone());
-            }
+        {
+            return Ok(self.demo_dmps[k].clone());
         }
         let (goal, y0) = (d.goal(), d.y0());
         let g = at_tangent(&[goal[3], goal[4], goal[5]], &self.goal_ref);

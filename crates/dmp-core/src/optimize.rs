@@ -194,11 +194,12 @@ pub fn minimize_box(
             project(&mut xn, lo, hi);
             let decrease: f64 = (0..n).map(|i| gx[i] * (xn[i] - x[i])).sum();
             evaluations += 1;
-            if let Some(fnew) = f.value(&xn) {
-                if fnew.is_finite() && fnew <= fx + 1e-4 * decrease {
-                    accepted = Some((xn, fnew, f.gradient()));
-                    break;
-                }
+            if let Some(fnew) = f.value(&xn)
+                && fnew.is_finite()
+                && fnew <= fx + 1e-4 * decrease
+            {
+                accepted = Some((xn, fnew, f.gradient()));
+                break;
             }
             step *= 0.5;
         }
@@ -242,7 +243,7 @@ fn primes(count: usize) -> Vec<u64> {
     let mut out = Vec::with_capacity(count);
     let mut c = 2u64;
     while out.len() < count {
-        if out.iter().all(|p| c % p != 0) {
+        if out.iter().all(|p| !c.is_multiple_of(*p)) {
             out.push(c);
         }
         c += 1;

@@ -118,7 +118,7 @@ impl Pi2 {
         if cfg.n_dof == 0 {
             return Err(invalid("n_dof", 0, "must be at least 1"));
         }
-        if dim == 0 || dim % cfg.n_dof != 0 || dim / cfg.n_dof < 2 {
+        if dim == 0 || !dim.is_multiple_of(cfg.n_dof) || dim / cfg.n_dof < 2 {
             return Err(LearnerError::Dimension {
                 name: "theta0",
                 expected: format!(

@@ -61,11 +61,11 @@ fn interruptible<T: Send>(
                 }
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
             }
-            if pending.is_none() {
-                if let Err(e) = py.check_signals() {
-                    cancel.store(true, Ordering::Relaxed);
-                    pending = Some(e);
-                }
+            if pending.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                cancel.store(true, Ordering::Relaxed);
+                pending = Some(e);
             }
         }
     })
