@@ -13,7 +13,7 @@
 use nalgebra::DMatrix;
 
 use crate::basis::Basis;
-use crate::linalg::exp_in_place;
+use crate::linalg::{exp_in_place_generic, has_avx2_fma};
 
 /// Activations below `exp(-CUTOFF)` of the largest are zero, as in [`Basis`].
 const CUTOFF: f64 = 37.0;
@@ -24,15 +24,14 @@ const LANES: usize = 4;
 pub(crate) struct Forcing {
     centers: Vec<f64>,
     widths: Vec<f64>,
-    /// `weights[k * stride + d]`: kernel k's weight for coordinate d (0 for `d >= n`), `stride`
-    /// the length of `acc`.
+    /// `weights[k * stride + d]`: kernel k's weight for coordinate d (0 for `d >= n`), the
+    /// coordinates padded to whole `LANES`, so that they are summed in whole vectors.
     weights: Vec<f64>,
+    stride: usize,
     n: usize,
-    /// The sums over the kernels of every coordinate, `n` rounded up to whole `LANES` (its length
-    /// is the weights' stride), so that they run in whole vectors.
-    acc: Vec<f64>,
     /// The kernel `k0` with `c_k0 >= x >= c_{k0+1}` at the last phase.
     hint: usize,
+    /// The kernels' activations, with room for the active ones to be padded to whole `LANES`.
     psi: Vec<f64>,
 }
 
@@ -48,10 +47,10 @@ impl Forcing {
                 .flat_map(|k| (0..stride).map(move |d| (k, d)))
                 .map(|(k, d)| if d < n { weights[(k, d)] } else { 0.0 })
                 .collect(),
+            stride,
             n,
-            acc: vec![0.0; stride],
             hint: 0,
-            psi: vec![0.0; nb],
+            psi: vec![0.0; nb + LANES - 1],
         }
     }
 
@@ -101,28 +100,39 @@ impl Forcing {
             lo = k0;
             hi = k0 + 1;
         }
-        let psi = &mut self.psi[lo..hi];
-        exp_in_place(psi);
+        // Padded with exp(-inf) = 0 to whole vectors, which change no sum.
+        let padded = lo + (hi - lo).next_multiple_of(LANES);
+        self.psi[hi..padded].fill(f64::NEG_INFINITY);
+        let psi = &mut self.psi[lo..padded];
+        // `exp_in_place`'s choice, inlined: the steppers' AVX2 copies inline this with FMA.
+        if has_avx2_fma() {
+            exp_in_place_generic::<true>(psi);
+        } else {
+            exp_in_place_generic::<false>(psi);
+        }
         // Four partial sums: one chain of ten dependent additions would take longer than the
         // exponentials.
-        let mut sums = [0.0; 4];
-        for (i, p) in psi.iter().enumerate() {
-            sums[i & 3] += p;
-        }
-        let scale = x / ((sums[0] + sums[1]) + (sums[2] + sums[3]));
-        let acc = &mut self.acc;
-        let stride = acc.len();
-        acc.fill(0.0);
-        let weights = self.weights[lo * stride..hi * stride].chunks_exact(stride);
-        for (w, p) in weights.zip(psi.iter()) {
-            for (a, w) in acc.chunks_exact_mut(LANES).zip(w.chunks_exact(LANES)) {
-                for l in 0..LANES {
-                    a[l] += w[l] * p;
-                }
+        let mut sums = [0.0; LANES];
+        for p in psi.as_chunks::<LANES>().0 {
+            for l in 0..LANES {
+                sums[l] += p[l];
             }
         }
-        for (o, a) in out[..self.n].iter_mut().zip(acc.iter()) {
-            *o = a * scale;
+        let scale = x / ((sums[0] + sums[1]) + (sums[2] + sums[3]));
+        // Four coordinates at a time, each summed over the active kernels in their order.
+        let blocks = self.stride / LANES;
+        let weights = self.weights.as_chunks::<LANES>().0;
+        for (block, out) in out[..self.n].chunks_mut(LANES).enumerate() {
+            let mut acc = [0.0; LANES];
+            for (k, p) in (lo..hi).zip(psi.iter()) {
+                let w = &weights[k * blocks + block];
+                for l in 0..LANES {
+                    acc[l] += w[l] * p;
+                }
+            }
+            for (o, a) in out.iter_mut().zip(acc) {
+                *o = a * scale;
+            }
         }
     }
 

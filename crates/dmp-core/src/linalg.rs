@@ -89,7 +89,8 @@ pub fn simd<R>(f: impl FnOnce() -> R) -> R {
 /// exponent bits. Arguments below -708 give 0 (the true value is below 1e-307); NaN stays NaN.
 ///
 /// On x86-64 with AVX2 and FMA (checked at run time, so the same machine always takes the same
-/// path) the loop is compiled for 4-wide vectors with fused multiply-adds.
+/// path) the loop is compiled for 4-wide vectors with fused multiply-adds. A slice of whole
+/// vectors (a multiple of 4 long) has no scalar tail.
 pub fn exp_in_place(v: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     {
@@ -108,8 +109,11 @@ unsafe fn exp_in_place_avx2(v: &mut [f64]) {
     exp_in_place_generic::<true>(v);
 }
 
+/// [`exp_in_place`] with fused multiply-adds (`FMA`, which the caller must be compiled for) or
+/// without, inlined into the caller: for a hot loop already compiled for AVX2 + FMA, where the
+/// call and the dispatch would take as long as a few exponentials.
 #[inline(always)]
-fn exp_in_place_generic<const FMA: bool>(v: &mut [f64]) {
+pub(crate) fn exp_in_place_generic<const FMA: bool>(v: &mut [f64]) {
     // a * b + c, fused only where the hardware has it (a software fma would be very slow).
     let madd = |a: f64, b: f64, c: f64| if FMA { a.mul_add(b, c) } else { a * b + c };
     const LOG2E: f64 = std::f64::consts::LOG2_E;
@@ -133,8 +137,7 @@ fn exp_in_place_generic<const FMA: bool>(v: &mut [f64]) {
         1.0 / 39_916_800.0,
         1.0 / 479_001_600.0,
     ];
-    for x in v.iter_mut() {
-        let x0 = *x;
+    let exp = |x0: f64| {
         let xc = x0.clamp(-708.0, 709.0);
         let t = madd(xc, LOG2E, SHIFT);
         let k = t - SHIFT;
@@ -158,7 +161,17 @@ fn exp_in_place_generic<const FMA: bool>(v: &mut [f64]) {
         // NaN needs no test of its own: it passes through the clamp and every step to `p`, and
         // fails `x0 < -708`. (An explicit `if x0.is_nan()` became a masked store, which AMD
         // cores microcode: it made the whole loop about twice as slow.)
-        *x = if x0 < -708.0 { 0.0 } else { p * scale };
+        if x0 < -708.0 { 0.0 } else { p * scale }
+    };
+    // Whole 4-lane vectors, then the rest one at a time.
+    let (vectors, tail) = v.as_chunks_mut::<4>();
+    for vector in vectors {
+        for x in vector {
+            *x = exp(*x);
+        }
+    }
+    for x in tail {
+        *x = exp(*x);
     }
 }
 
