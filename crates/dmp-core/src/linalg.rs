@@ -80,17 +80,19 @@ pub fn simd<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
 
-/// `v_i <- exp(v_i)` for `v_i <= 709`, as a branch-free loop the compiler vectorizes (the
-/// kernel matrix needs `m^2 / 2` exponentials per likelihood evaluation, as many as the O(m^3)
-/// work at small m, and a prediction one per training point). Cody-Waite reduction
-/// `x = k ln 2 + r`, `|r| <= ln 2 / 2`, and the degree-12 Taylor polynomial (truncation error
-/// below 2e-16 relative) in Estrin's form, whose dependency chain is 5 multiply-adds deep
-/// instead of Horner's 12, so that consecutive vectors overlap in the pipeline; `2^k` from the
-/// exponent bits. Arguments below -708 give 0 (the true value is below 1e-307); NaN stays NaN.
+/// `v_i <- exp(v_i)` for `v_i <= 709`, branch-free (the kernel matrix needs `m^2 / 2`
+/// exponentials per likelihood evaluation, as many as the O(m^3) work at small m, a prediction
+/// one per training point, and a stepper's forcing term about ten per control period).
+/// Cody-Waite reduction `x = k ln 2 + r`, `|r| <= ln 2 / 2`, and the degree-12 Taylor polynomial
+/// (truncation error below 2e-16 relative) in Estrin's form, whose dependency chain is 5
+/// multiply-adds deep instead of Horner's 12, so that consecutive vectors overlap in the
+/// pipeline; `2^k` from the exponent bits. Arguments below -708 give 0 (the true value is below
+/// 1e-307); NaN stays NaN.
 ///
 /// On x86-64 with AVX2 and FMA (checked at run time, so the same machine always takes the same
-/// path) the loop is compiled for 4-wide vectors with fused multiply-adds. A slice of whole
-/// vectors (a multiple of 4 long) has no scalar tail.
+/// path) whole 4-lane vectors run with fused multiply-adds; a slice a multiple of 4 long has no
+/// scalar tail. Inlined, so that a caller compiled for AVX2 inlines the vector code too.
+#[inline(always)]
 pub fn exp_in_place(v: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     {
@@ -100,79 +102,123 @@ pub fn exp_in_place(v: &mut [f64]) {
             return;
         }
     }
-    exp_in_place_generic::<false>(v);
+    for x in v {
+        *x = exp_lane::<false>(*x);
+    }
 }
 
+const LOG2E: f64 = std::f64::consts::LOG2_E;
+/// ln 2 = LN2_HI + LN2_LO, LN2_HI with its low 21 bits zero (so k * LN2_HI is exact).
+const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
+/// 1.5 * 2^52: adding it rounds to an integer in the low bits.
+const SHIFT: f64 = 6_755_399_441_055_744.0;
+/// The range in which the reduction is computed; below it the result is 0.
+const EXP_MIN: f64 = -708.0;
+const EXP_MAX: f64 = 709.0;
+/// 1/j! for j = 0..=12.
+const F: [f64; 13] = [
+    1.0,
+    1.0,
+    0.5,
+    1.0 / 6.0,
+    1.0 / 24.0,
+    1.0 / 120.0,
+    1.0 / 720.0,
+    1.0 / 5_040.0,
+    1.0 / 40_320.0,
+    1.0 / 362_880.0,
+    1.0 / 3_628_800.0,
+    1.0 / 39_916_800.0,
+    1.0 / 479_001_600.0,
+];
+
+/// One exponential of [`exp_in_place`], with fused multiply-adds (`FMA`, for a caller compiled
+/// with them: a software fma would be very slow) or without.
+#[inline(always)]
+fn exp_lane<const FMA: bool>(x0: f64) -> f64 {
+    let madd = |a: f64, b: f64, c: f64| if FMA { a.mul_add(b, c) } else { a * b + c };
+    let xc = x0.clamp(EXP_MIN, EXP_MAX);
+    let t = madd(xc, LOG2E, SHIFT);
+    let k = t - SHIFT;
+    let r = madd(-k, LN2_LO, madd(-k, LN2_HI, xc));
+    // Estrin: pairs, then pairs of pairs with r^2, r^4, r^8.
+    let (r2, r4) = (r * r, r * r * (r * r));
+    let r8 = r4 * r4;
+    let p01 = madd(F[1], r, F[0]);
+    let p23 = madd(F[3], r, F[2]);
+    let p45 = madd(F[5], r, F[4]);
+    let p67 = madd(F[7], r, F[6]);
+    let p89 = madd(F[9], r, F[8]);
+    let p1011 = madd(F[11], r, F[10]);
+    let p0_3 = madd(p23, r2, p01);
+    let p4_7 = madd(p67, r2, p45);
+    let p8_11 = madd(p1011, r2, p89);
+    let p0_7 = madd(p4_7, r4, p0_3);
+    let p8_12 = madd(F[12], r4, p8_11);
+    let p = madd(p8_12, r8, p0_7);
+    let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
+    // NaN needs no test of its own: it passes through the clamp and every step to `p`, and
+    // fails `x0 < EXP_MIN`.
+    if x0 < EXP_MIN { 0.0 } else { p * scale }
+}
+
+/// [`exp_in_place`] on a CPU with AVX2 and FMA: whole vectors by [`exp4`], the tail by
+/// [`exp_lane`]; the same operations lane by lane, so the same bits.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
+#[inline]
 unsafe fn exp_in_place_avx2(v: &mut [f64]) {
-    exp_in_place_generic::<true>(v);
-}
-
-/// [`exp_in_place`] with fused multiply-adds (`FMA`, which the caller must be compiled for) or
-/// without, inlined into the caller: for a hot loop already compiled for AVX2 + FMA, where the
-/// call and the dispatch would take as long as a few exponentials.
-#[inline(always)]
-pub(crate) fn exp_in_place_generic<const FMA: bool>(v: &mut [f64]) {
-    // a * b + c, fused only where the hardware has it (a software fma would be very slow).
-    let madd = |a: f64, b: f64, c: f64| if FMA { a.mul_add(b, c) } else { a * b + c };
-    const LOG2E: f64 = std::f64::consts::LOG2_E;
-    // ln 2 = LN2_HI + LN2_LO, LN2_HI with its low 21 bits zero (so k * LN2_HI is exact).
-    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
-    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
-    const SHIFT: f64 = 6_755_399_441_055_744.0; // 1.5 * 2^52: rounds to an integer in the low bits
-    // 1/j! for j = 0..=12.
-    const F: [f64; 13] = [
-        1.0,
-        1.0,
-        0.5,
-        1.0 / 6.0,
-        1.0 / 24.0,
-        1.0 / 120.0,
-        1.0 / 720.0,
-        1.0 / 5_040.0,
-        1.0 / 40_320.0,
-        1.0 / 362_880.0,
-        1.0 / 3_628_800.0,
-        1.0 / 39_916_800.0,
-        1.0 / 479_001_600.0,
-    ];
-    let exp = |x0: f64| {
-        let xc = x0.clamp(-708.0, 709.0);
-        let t = madd(xc, LOG2E, SHIFT);
-        let k = t - SHIFT;
-        let r = madd(-k, LN2_LO, madd(-k, LN2_HI, xc));
-        // Estrin: pairs, then pairs of pairs with r^2, r^4, r^8.
-        let (r2, r4) = (r * r, r * r * (r * r));
-        let r8 = r4 * r4;
-        let p01 = madd(F[1], r, F[0]);
-        let p23 = madd(F[3], r, F[2]);
-        let p45 = madd(F[5], r, F[4]);
-        let p67 = madd(F[7], r, F[6]);
-        let p89 = madd(F[9], r, F[8]);
-        let p1011 = madd(F[11], r, F[10]);
-        let p0_3 = madd(p23, r2, p01);
-        let p4_7 = madd(p67, r2, p45);
-        let p8_11 = madd(p1011, r2, p89);
-        let p0_7 = madd(p4_7, r4, p0_3);
-        let p8_12 = madd(F[12], r4, p8_11);
-        let p = madd(p8_12, r8, p0_7);
-        let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
-        // NaN needs no test of its own: it passes through the clamp and every step to `p`, and
-        // fails `x0 < -708`. (An explicit `if x0.is_nan()` became a masked store, which AMD
-        // cores microcode: it made the whole loop about twice as slow.)
-        if x0 < -708.0 { 0.0 } else { p * scale }
-    };
-    // Whole 4-lane vectors, then the rest one at a time.
+    use std::arch::x86_64::{_mm256_loadu_pd, _mm256_storeu_pd};
     let (vectors, tail) = v.as_chunks_mut::<4>();
-    for vector in vectors {
-        for x in vector {
-            *x = exp(*x);
-        }
+    for x in vectors {
+        let p = x.as_mut_ptr();
+        // SAFETY: `p` points to 4 f64s of this slice.
+        unsafe { _mm256_storeu_pd(p, exp4(_mm256_loadu_pd(p))) };
     }
     for x in tail {
-        *x = exp(*x);
+        *x = exp_lane::<true>(*x);
     }
+}
+
+/// [`exp_lane`]`::<true>` of four lanes, written out in intrinsics: the compiler's own
+/// vectorization of the lane code vectorizes across several vectors at once and leaves a slice
+/// of ten to its scalar remainder.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+pub(crate) fn exp4(x0: std::arch::x86_64::__m256d) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    let c = |v: f64| _mm256_set1_pd(v);
+    let madd = |a, b, c| _mm256_fmadd_pd(a, b, c);
+    // clamp: max(lo, x) and min(hi, x) return x when it is NaN, as `f64::clamp` does.
+    let xc = _mm256_min_pd(c(EXP_MAX), _mm256_max_pd(c(EXP_MIN), x0));
+    let t = madd(xc, c(LOG2E), c(SHIFT));
+    let k = _mm256_sub_pd(t, c(SHIFT));
+    let neg_k = _mm256_xor_pd(k, c(-0.0));
+    let r = madd(neg_k, c(LN2_LO), madd(neg_k, c(LN2_HI), xc));
+    let r2 = _mm256_mul_pd(r, r);
+    let r4 = _mm256_mul_pd(r2, r2);
+    let r8 = _mm256_mul_pd(r4, r4);
+    let p01 = madd(c(F[1]), r, c(F[0]));
+    let p23 = madd(c(F[3]), r, c(F[2]));
+    let p45 = madd(c(F[5]), r, c(F[4]));
+    let p67 = madd(c(F[7]), r, c(F[6]));
+    let p89 = madd(c(F[9]), r, c(F[8]));
+    let p1011 = madd(c(F[11]), r, c(F[10]));
+    let p0_3 = madd(p23, r2, p01);
+    let p4_7 = madd(p67, r2, p45);
+    let p8_11 = madd(p1011, r2, p89);
+    let p0_7 = madd(p4_7, r4, p0_3);
+    let p8_12 = madd(c(F[12]), r4, p8_11);
+    let p = madd(p8_12, r8, p0_7);
+    let bits = _mm256_slli_epi64::<52>(_mm256_add_epi64(
+        _mm256_castpd_si256(t),
+        _mm256_set1_epi64x(1023),
+    ));
+    let e = _mm256_mul_pd(p, _mm256_castsi256_pd(bits));
+    // 0 where x0 < EXP_MIN (false for NaN, which stays NaN).
+    _mm256_andnot_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(x0, c(EXP_MIN)), e)
 }
 
 /// Views a column-major `m x m` slice as a faer matrix.
@@ -369,6 +415,33 @@ mod tests {
         let mut nan = [f64::NAN];
         exp_in_place(&mut nan);
         assert!(nan[0].is_nan());
+    }
+
+    #[test]
+    fn exp_vectors_and_lanes_give_the_same_bits() {
+        // Every slice length from 0 to 13 (whole vectors and tails), over arguments that cover
+        // the reduction's range, its edges, infinities and NaN.
+        let xs: Vec<f64> = (0..4001)
+            .map(|i| -745.0 + i as f64 * 0.3637)
+            .chain([0.0, -0.0, 1e-300, -708.0, -708.0001, 709.0, 710.0, 1e308])
+            .chain([f64::NEG_INFINITY, f64::INFINITY, f64::NAN, -f64::NAN])
+            .collect();
+        let fma = has_avx2_fma();
+        for len in 0..=13 {
+            for window in xs.chunks(len.max(1)).take(400) {
+                let window = &window[..len.min(window.len())];
+                let mut ys = window.to_vec();
+                exp_in_place(&mut ys);
+                for (&x, &y) in window.iter().zip(&ys) {
+                    let lane = if fma {
+                        exp_lane::<true>(x)
+                    } else {
+                        exp_lane::<false>(x)
+                    };
+                    assert_eq!(y.to_bits(), lane.to_bits(), "exp({x}), slice of {len}");
+                }
+            }
+        }
     }
 
     #[test]
