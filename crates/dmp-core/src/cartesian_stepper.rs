@@ -525,13 +525,8 @@ impl CartesianStepper {
 
     #[inline(always)]
     fn check_finite(&self) -> Result<()> {
-        let state = self
-            .p
-            .iter()
-            .chain(&self.q)
-            .chain(&self.z)
-            .chain(&self.out_acceleration);
-        check_state("Cartesian DMP stepper", self.x, state, self.steps)
+        let state = [&self.p[..], &self.q, &self.z, &self.out_acceleration];
+        check_state("Cartesian DMP stepper", self.x, &state, self.steps)
     }
 
     /// The phase `x` of the last command (1 before the first step).

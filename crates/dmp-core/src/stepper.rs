@@ -90,17 +90,20 @@ impl StepperOptions {
     }
 }
 
-/// Whether a stepper's phase `x` and `state` are finite after `steps` steps; the error says how
-/// to go on.
+/// Whether a stepper's phase `x` and the slices of its `state` are finite after `steps` steps;
+/// the error says how to go on.
 #[inline(always)]
-pub(crate) fn check_state<'a>(
+pub(crate) fn check_state(
     context: &'static str,
     x: f64,
-    state: impl Iterator<Item = &'a f64>,
+    state: &[&[f64]],
     steps: u64,
 ) -> Result<()> {
-    // Without short-circuiting, so that the loop vectorizes.
-    if !state.fold(!x.is_finite(), |bad, v| bad | !v.is_finite()) {
+    // Without short-circuiting, one slice at a time, so that the loops vectorize.
+    let bad = state.iter().fold(!x.is_finite(), |bad, v| {
+        v.iter().fold(bad, |bad, v| bad | !v.is_finite())
+    });
+    if !bad {
         return Ok(());
     }
     Err(Error::Numerical {
@@ -752,8 +755,8 @@ impl Stepper {
 
     #[inline(always)]
     fn check_finite(&self) -> Result<()> {
-        let state = self.y.iter().chain(&self.z).chain(&self.out_ydd);
-        check_state("DMP stepper", self.x, state, self.steps)
+        let state = [&self.y[..], &self.z, &self.out_ydd];
+        check_state("DMP stepper", self.x, &state, self.steps)
     }
 
     /// The phase `x` of the last command (1 before the first step).
