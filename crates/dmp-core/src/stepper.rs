@@ -340,8 +340,39 @@ fn spring(cfg: &DmpConfig, out: &mut [f64], g: &[f64], y: &[f64], z: &[f64], f: 
     let n = out.len();
     let (g, y, z, f) = (&g[..n], &y[..n], &z[..n], &f[..n]);
     for d in 0..n {
-        out[d] = cfg.alpha_z * (cfg.beta_z * (g[d] - y[d]) - z[d]) + f[d];
+        out[d] = spring_at(cfg, g[d], y[d], z[d], f[d]);
     }
+}
+
+/// One coordinate of [`spring`].
+#[inline(always)]
+fn spring_at(cfg: &DmpConfig, g: f64, y: f64, z: f64, f: f64) -> f64 {
+    cfg.alpha_z * (cfg.beta_z * (g - y) - z) + f
+}
+
+/// One explicit Euler sub-step of `hs` seconds of a coordinate (the rollout's).
+#[inline(always)]
+fn explicit_step(y: &mut f64, z: &mut f64, h: f64, inv_tau: f64, hs: f64) {
+    let dz = h * inv_tau;
+    *y += *z * inv_tau * hs;
+    *z += dz * hs;
+}
+
+/// One coordinate of [`acceleration`].
+#[inline(always)]
+fn acceleration_at(h: f64, z: f64, taud: f64, inv_tau: f64) -> f64 {
+    if taud == 0.0 {
+        h * inv_tau * inv_tau
+    } else {
+        (h - taud * z) * inv_tau * inv_tau
+    }
+}
+
+/// Whether a coordinate is at rest at `goal` (the rollout's `until_rest`, without the forcing
+/// term's bound).
+#[inline(always)]
+fn rests_at(goal: f64, y: f64, z: f64, tol: f64) -> bool {
+    (goal - y).abs() <= tol && z.abs() <= tol
 }
 
 /// The command of this period from the state before it is advanced: `y`, `yd = z / tau`, and `z`
@@ -381,9 +412,7 @@ fn euler_substep(
     let a = hs * inv_tau;
     for d in 0..n {
         if stiffness[d] == 0.0 {
-            let dz = h[d] * inv_tau;
-            y[d] += z[d] * inv_tau * hs;
-            z[d] += dz * hs;
+            explicit_step(&mut y[d], &mut z[d], h[d], inv_tau, hs);
         } else {
             let (dy, dz) = implicit_step(cfg, stiffness[d], a, z[d], h[d]);
             y[d] += dy;
@@ -400,12 +429,47 @@ fn acceleration(out: &mut [f64], h: &[f64], z: &[f64], taud: f64, inv_tau: f64) 
     let n = out.len();
     let (h, z) = (&h[..n], &z[..n]);
     for d in 0..n {
-        out[d] = if taud == 0.0 {
-            h[d] * inv_tau * inv_tau
-        } else {
-            (h[d] - taud * z[d]) * inv_tau * inv_tau
-        };
+        out[d] = acceleration_at(h[d], z[d], taud, inv_tau);
     }
+}
+
+/// The scalars of one control period.
+#[derive(Clone, Copy)]
+struct Period {
+    inv_tau: f64,
+    hs: f64,
+    taud: f64,
+    tol: f64,
+}
+
+/// Every coordinate's share of [`Stepper::plain_period`] in one pass: the derivative, the rest
+/// test, the command and the explicit Euler step, from `[g, g_target, f]` and `[y, z, h]` into
+/// `[out_y, out_yd, out_ydd]`. Returns whether every coordinate rests and whether every value is
+/// finite.
+#[inline(always)]
+fn plain_coordinates(
+    cfg: &DmpConfig,
+    p: Period,
+    [g, g_target, f]: [&[f64]; 3],
+    [y, z, h]: [&mut [f64]; 3],
+    [out_y, out_yd, out_ydd]: [&mut [f64]; 3],
+) -> (bool, bool) {
+    let n = y.len();
+    let (g, g_target, f, z, h) = (&g[..n], &g_target[..n], &f[..n], &mut z[..n], &mut h[..n]);
+    let (out_y, out_yd, out_ydd) = (&mut out_y[..n], &mut out_yd[..n], &mut out_ydd[..n]);
+    let mut rests = true;
+    let mut finite = true;
+    for d in 0..n {
+        let (y0, z0) = (y[d], z[d]);
+        h[d] = spring_at(cfg, g[d], y0, z0, f[d]);
+        rests &= rests_at(g_target[d], y0, z0, p.tol);
+        out_y[d] = y0;
+        out_yd[d] = z0 * p.inv_tau;
+        explicit_step(&mut y[d], &mut z[d], h[d], p.inv_tau, p.hs);
+        out_ydd[d] = acceleration_at(h[d], z0, p.taud, p.inv_tau);
+        finite &= y[d].is_finite() & z[d].is_finite() & out_ydd[d].is_finite();
+    }
+    (rests, finite)
 }
 
 /// Executes a [`Dmp`] one control period at a time (module docs).
@@ -601,6 +665,15 @@ impl Stepper {
         };
         let tau = self.clock.period_tau(target);
         let inv_tau = 1.0 / tau;
+        if !coupled
+            && self.limits.is_none()
+            && self.clock.coupling.is_none()
+            && self.clock.substeps == 1
+            && !self.goal_moving
+        {
+            self.plain_period(tau, inv_tau)?;
+            return Ok((&self.out_y, &self.out_yd, &self.out_ydd));
+        }
         self.derivative(coupled);
         self.at_rest = self.rest();
         self.out_x = self.x;
@@ -640,6 +713,44 @@ impl Stepper {
         self.steps += 1;
         self.check_finite()?;
         Ok((&self.out_y, &self.out_yd, &self.out_ydd))
+    }
+
+    /// The period of [`Stepper::step_inner`] without coupling terms, limits, sub-steps or a
+    /// moving goal, the common case: the same operations on every coordinate, in one pass over
+    /// the coordinates instead of one per stage.
+    #[inline(always)]
+    fn plain_period(&mut self, tau: f64, inv_tau: f64) -> Result<()> {
+        let cfg = *self.dmp.config();
+        let hs = self.clock.dt;
+        let taud = self.clock.backward_rate(tau);
+        let n = self.n;
+        let (rests, finite) = plain_coordinates(
+            &cfg,
+            Period {
+                inv_tau,
+                hs,
+                taud,
+                tol: self.rest_tol,
+            },
+            [&self.g[..n], &self.g_target[..n], &self.f[..n]],
+            [&mut self.y[..n], &mut self.z[..n], &mut self.h[..n]],
+            [
+                &mut self.out_y[..n],
+                &mut self.out_yd[..n],
+                &mut self.out_ydd[..n],
+            ],
+        );
+        self.at_rest = rests && self.forcing_spent();
+        self.out_x = self.x;
+        self.out_tau = tau;
+        self.x -= cfg.alpha_x * self.x * inv_tau * hs;
+        self.update_forcing();
+        self.clock.previous = tau;
+        self.steps += 1;
+        if finite && self.x.is_finite() {
+            return Ok(());
+        }
+        self.check_finite()
     }
 
     /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
@@ -745,12 +856,17 @@ impl Stepper {
     /// The rollout's `until_rest` criterion at the current state, with the filtered goal settled.
     #[inline(always)]
     fn rest(&self) -> bool {
-        let cfg = self.dmp.config();
         let tol = self.rest_tol;
-        !self.goal_moving
-            && self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) <= tol
-            && (0..self.n)
-                .all(|d| (self.g_target[d] - self.y[d]).abs() <= tol && self.z[d].abs() <= tol)
+        self.forcing_spent()
+            && (0..self.n).all(|d| rests_at(self.g_target[d], self.y[d], self.z[d], tol))
+    }
+
+    /// Whether the forcing term can no longer move the state by more than `rest_tol`, the goal
+    /// filter settled (the part of [`Stepper::rest`] that is not per coordinate).
+    #[inline(always)]
+    fn forcing_spent(&self) -> bool {
+        let cfg = self.dmp.config();
+        !self.goal_moving && self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) <= self.rest_tol
     }
 
     #[inline(always)]

@@ -202,6 +202,54 @@ fn steps_match_the_rollout_to_rounding_and_an_idle_goal_filter_is_inert() {
     }
 }
 
+/// The common period (no coupling term, limits, sub-steps or moving goal) runs in one pass over
+/// the coordinates; it must give the bits of the staged period, which a coupling term of zeros
+/// or position limits that are never approached select, open loop and phase-stopped, across an
+/// unfiltered goal jump and the rest at the end.
+#[test]
+fn the_one_pass_period_gives_the_staged_periods_bits() {
+    let w: Vec<f64> = (0..7 * 30)
+        .map(|i| 60.0 * ((i as f64) * 0.53).sin())
+        .collect();
+    let start = [0.0, 0.5, 1.0, -0.3, 0.2, 0.0, 2.0];
+    let dmp = joint_dmp(&w, 30, &[0.4, -1.0, 2.0, 0.1, 0.9, 0.0, 1.5], &start, 0.8);
+    let base = StepperOptions {
+        goal_filter: None,
+        ..StepperOptions::new(2e-3)
+    };
+    let far = StepperOptions {
+        position_min: Some(vec![-1e9; 7]),
+        position_max: Some(vec![1e9; 7]),
+        ..base.clone()
+    };
+    let zeros = [0.0; 7];
+    let staged_by: [(StepperOptions, Option<&[f64]>); 2] =
+        [(base.clone(), Some(&zeros)), (far, None)];
+    for (opts, coupling) in staged_by {
+        let mut one_pass = Stepper::new(&dmp, &base).unwrap();
+        let mut staged = Stepper::new(&dmp, &opts).unwrap();
+        for k in 0..3000 {
+            if k == 300 {
+                for s in [&mut one_pass, &mut staged] {
+                    s.set_goal(&[1.0, 0.0, 1.0, 0.5, 0.5, 0.5, 0.0]).unwrap();
+                }
+            }
+            // A robot that lags behind the command for a while: phase stopping.
+            let lag = if (500..700).contains(&k) { 0.02 } else { 0.0 };
+            let measured: Vec<f64> = one_pass.output().0.iter().map(|y| y - lag).collect();
+            let m = (k % 2 == 0).then_some(measured.as_slice());
+            let a = one_pass.step(m).unwrap();
+            let a = (a.0.to_vec(), a.1.to_vec(), a.2.to_vec());
+            let b = staged.step_coupled(m, coupling).unwrap();
+            assert_eq!(a, (b.0.to_vec(), b.1.to_vec(), b.2.to_vec()), "step {k}");
+            assert_eq!(one_pass.phase().to_bits(), staged.phase().to_bits());
+            assert_eq!(one_pass.tau().to_bits(), staged.tau().to_bits());
+            assert_eq!(one_pass.done(), staged.done(), "step {k}");
+        }
+        assert!(one_pass.done());
+    }
+}
+
 /// A 1-DOF reach from 0 to 1 in 1 s with a bump (weights from a fit).
 fn reach(n_dof: usize) -> Dmp {
     let t: Vec<f64> = (0..500).map(|j| j as f64 / 499.0).collect();
