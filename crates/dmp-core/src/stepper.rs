@@ -433,45 +433,6 @@ fn acceleration(out: &mut [f64], h: &[f64], z: &[f64], taud: f64, inv_tau: f64) 
     }
 }
 
-/// The scalars of one control period.
-#[derive(Clone, Copy)]
-struct Period {
-    inv_tau: f64,
-    hs: f64,
-    taud: f64,
-    tol: f64,
-}
-
-/// Every coordinate's share of [`Stepper::plain_period`] in one pass: the derivative, the rest
-/// test, the command and the explicit Euler step, from `[g, g_target, f]` and `[y, z, h]` into
-/// `[out_y, out_yd, out_ydd]`. Returns whether every coordinate rests and whether every value is
-/// finite.
-#[inline(always)]
-fn plain_coordinates(
-    cfg: &DmpConfig,
-    p: Period,
-    [g, g_target, f]: [&[f64]; 3],
-    [y, z, h]: [&mut [f64]; 3],
-    [out_y, out_yd, out_ydd]: [&mut [f64]; 3],
-) -> (bool, bool) {
-    let n = y.len();
-    let (g, g_target, f, z, h) = (&g[..n], &g_target[..n], &f[..n], &mut z[..n], &mut h[..n]);
-    let (out_y, out_yd, out_ydd) = (&mut out_y[..n], &mut out_yd[..n], &mut out_ydd[..n]);
-    let mut rests = true;
-    let mut finite = true;
-    for d in 0..n {
-        let (y0, z0) = (y[d], z[d]);
-        h[d] = spring_at(cfg, g[d], y0, z0, f[d]);
-        rests &= rests_at(g_target[d], y0, z0, p.tol);
-        out_y[d] = y0;
-        out_yd[d] = z0 * p.inv_tau;
-        explicit_step(&mut y[d], &mut z[d], h[d], p.inv_tau, p.hs);
-        out_ydd[d] = acceleration_at(h[d], z0, p.taud, p.inv_tau);
-        finite &= y[d].is_finite() & z[d].is_finite() & out_ydd[d].is_finite();
-    }
-    (rests, finite)
-}
-
 /// Executes a [`Dmp`] one control period at a time (module docs).
 #[derive(Debug, Clone)]
 pub struct Stepper {
@@ -723,23 +684,27 @@ impl Stepper {
         let cfg = *self.dmp.config();
         let hs = self.clock.dt;
         let taud = self.clock.backward_rate(tau);
+        let tol = self.rest_tol;
         let n = self.n;
-        let (rests, finite) = plain_coordinates(
-            &cfg,
-            Period {
-                inv_tau,
-                hs,
-                taud,
-                tol: self.rest_tol,
-            },
-            [&self.g[..n], &self.g_target[..n], &self.f[..n]],
-            [&mut self.y[..n], &mut self.z[..n], &mut self.h[..n]],
-            [
-                &mut self.out_y[..n],
-                &mut self.out_yd[..n],
-                &mut self.out_ydd[..n],
-            ],
+        let (g, g_target, f) = (&self.g[..n], &self.g_target[..n], &self.f[..n]);
+        let (y, z, h) = (&mut self.y[..n], &mut self.z[..n], &mut self.h[..n]);
+        let (out_y, out_yd, out_ydd) = (
+            &mut self.out_y[..n],
+            &mut self.out_yd[..n],
+            &mut self.out_ydd[..n],
         );
+        let mut rests = true;
+        let mut finite = true;
+        for d in 0..n {
+            let (y0, z0) = (y[d], z[d]);
+            h[d] = spring_at(&cfg, g[d], y0, z0, f[d]);
+            rests &= rests_at(g_target[d], y0, z0, tol);
+            out_y[d] = y0;
+            out_yd[d] = z0 * inv_tau;
+            explicit_step(&mut y[d], &mut z[d], h[d], inv_tau, hs);
+            out_ydd[d] = acceleration_at(h[d], z0, taud, inv_tau);
+            finite &= y[d].is_finite() & z[d].is_finite() & out_ydd[d].is_finite();
+        }
         self.at_rest = rests && self.forcing_spent();
         self.out_x = self.x;
         self.out_tau = tau;
