@@ -21,7 +21,7 @@ use crate::cartesian::{CartesianDmp, POSE_WIDTH, UNIT_TOLERANCE};
 use crate::coupling::{ObstacleGains, PositionLimits, SphereObstacle};
 use crate::dmp::DmpConfig;
 use crate::error::{Error, Result, fmt_g};
-use crate::forcing::Forcing;
+use crate::forcing::{Forcing, padded};
 use crate::quaternion::{self, Quaternion};
 use crate::rollout::MAX_SUBSTEPS;
 use crate::stepper::{
@@ -103,7 +103,8 @@ pub struct CartesianStepper {
     target_p: [f64; 3],
     target_q: Quaternion,
     goal_moving: bool,
-    f: [f64; N],
+    /// `f(x)`, padded as the forcing term writes it.
+    f: [f64; padded(N)],
     h: [f64; N],
     stiffness: [f64; 3],
     user: [f64; N],
@@ -147,7 +148,7 @@ impl CartesianStepper {
             target_p: [goal[0], goal[1], goal[2]],
             target_q: dmp.goal_quaternion(),
             goal_moving: false,
-            f: [0.0; N],
+            f: [0.0; padded(N)],
             h: [0.0; N],
             stiffness: [0.0; 3],
             user: [0.0; N],

@@ -22,9 +22,22 @@ const CUTOFF: f64 = 37.0;
 /// f64 lanes of an AVX2 vector.
 const LANES: usize = 4;
 
+/// The length of the arrays [`Forcing::eval`] writes `n` coordinates into: whole vectors, so
+/// that they are stored and read back whole (a load that spans several stores, or a part of one,
+/// waits for them to reach the cache).
+pub(crate) const fn padded(n: usize) -> usize {
+    n.next_multiple_of(LANES)
+}
+
 /// `v` and `LANES - 1` zeros.
 fn pad(v: &[f64]) -> Vec<f64> {
     v.iter().copied().chain([0.0; LANES - 1]).collect()
+}
+
+/// `x / sum_k Psi_k` from the activations' four partial sums (eq. 4's normalization).
+#[inline(always)]
+fn scale(x: f64, sums: [f64; LANES]) -> f64 {
+    x / ((sums[0] + sums[1]) + (sums[2] + sums[3]))
 }
 
 #[derive(Debug, Clone)]
@@ -35,7 +48,6 @@ pub(crate) struct Forcing {
     /// coordinates padded to whole `LANES`, so that they are summed in whole vectors.
     weights: Vec<f64>,
     stride: usize,
-    n: usize,
     /// The kernel `k0` with `c_k0 >= x >= c_{k0+1}` at the last phase.
     hint: usize,
     /// The kernels' activations, with room for the active ones to be padded to whole `LANES`.
@@ -46,7 +58,7 @@ impl Forcing {
     /// `weights` is `N x n` (column d = coordinate d), as a [`crate::Dmp`] holds them.
     pub fn new(basis: &Basis, weights: &DMatrix<f64>) -> Self {
         let (nb, n) = weights.shape();
-        let stride = n.next_multiple_of(LANES);
+        let stride = padded(n);
         Self {
             // Padded (with kernels that are never active) to whole vectors from any kernel.
             centers: pad(basis.centers()),
@@ -56,30 +68,54 @@ impl Forcing {
                 .map(|(k, d)| if d < n { weights[(k, d)] } else { 0.0 })
                 .collect(),
             stride,
-            n,
             hint: 0,
             psi: vec![0.0; nb + LANES - 1],
         }
     }
 
-    /// Writes `f(x)` into `out` (one value per coordinate).
+    /// Writes `f(x)` into `out`: one value per coordinate, then zeros to [`padded`]`(n)`.
     #[inline(always)]
     pub fn eval(&mut self, x: f64, out: &mut [f64]) {
-        let (lo, hi, min_arg) = self.active(x);
         #[cfg(target_arch = "x86_64")]
-        let sums = if has_avx2_fma() {
+        if has_avx2_fma() {
             // SAFETY: the CPU supports the enabled features (checked just above).
-            unsafe { self.activations_avx2(x, lo, hi, min_arg) }
-        } else {
-            self.activations(x, lo, hi, min_arg)
-        };
-        #[cfg(not(target_arch = "x86_64"))]
+            return unsafe { self.eval_avx2(x, out) };
+        }
+        assert_eq!(
+            out.len(),
+            self.stride,
+            "the forcing term's output is padded"
+        );
+        let (lo, hi, min_arg) = self.active(x);
         let sums = self.activations(x, lo, hi, min_arg);
-        let scale = x / ((sums[0] + sums[1]) + (sums[2] + sums[3]));
-        // Four coordinates at a time, each summed over the active kernels in their order.
+        self.weighted_sums(lo, hi, scale(x, sums), out);
+    }
+
+    /// [`Forcing::eval`] in AVX2 registers, for callers compiled for AVX2 (no run-time check).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    pub unsafe fn eval_avx2(&mut self, x: f64, out: &mut [f64]) {
+        assert_eq!(
+            out.len(),
+            self.stride,
+            "the forcing term's output is padded"
+        );
+        let (lo, hi, min_arg) = self.active(x);
+        // SAFETY: this function's callers run where the CPU has AVX2 and FMA.
+        unsafe {
+            let sums = self.activations_avx2(x, lo, hi, min_arg);
+            self.weighted_sums_avx2(lo, hi, scale(x, sums), out);
+        }
+    }
+
+    /// `out[d] = scale sum_k w_kd psi_k`, summed over the active kernels `lo..hi` in their order.
+    #[inline(always)]
+    fn weighted_sums(&self, lo: usize, hi: usize, scale: f64, out: &mut [f64]) {
+        // Four coordinates at a time.
         let blocks = self.stride / LANES;
         let weights = self.weights.as_chunks::<LANES>().0;
-        for (block, out) in out[..self.n].chunks_mut(LANES).enumerate() {
+        for (block, out) in out.as_chunks_mut::<LANES>().0.iter_mut().enumerate() {
             let mut acc = [0.0; LANES];
             for (k, p) in (lo..hi).zip(&self.psi[lo..hi]) {
                 let w = &weights[k * blocks + block];
@@ -87,9 +123,47 @@ impl Forcing {
                     acc[l] += w[l] * p;
                 }
             }
-            for (o, a) in out.iter_mut().zip(acc) {
-                *o = a * scale;
+            *out = acc.map(|a| a * scale);
+        }
+    }
+
+    /// [`Forcing::weighted_sums`] in AVX2 registers, the same operations lane by lane, eight
+    /// coordinates at a time where there are eight (two independent chains of additions).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    unsafe fn weighted_sums_avx2(&self, lo: usize, hi: usize, scale: f64, out: &mut [f64]) {
+        use std::arch::x86_64::*;
+        let stride = self.stride;
+        assert!(hi <= self.psi.len() && hi * stride <= self.weights.len() && out.len() == stride);
+        let (weights, psi, out) = (self.weights.as_ptr(), self.psi.as_ptr(), out.as_mut_ptr());
+        let scale = _mm256_set1_pd(scale);
+        let mut d = 0;
+        // SAFETY (all pointers below): `k < hi` and `d + 8 <= stride` (or `d + 4`), asserted
+        // above to be within `psi`, `weights` and `out`.
+        while d + 2 * LANES <= stride {
+            let (mut acc0, mut acc1) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+            for k in lo..hi {
+                let p = _mm256_set1_pd(unsafe { *psi.add(k) });
+                let w = unsafe { weights.add(k * stride + d) };
+                let (w0, w1) = unsafe { (_mm256_loadu_pd(w), _mm256_loadu_pd(w.add(LANES))) };
+                acc0 = _mm256_add_pd(acc0, _mm256_mul_pd(w0, p));
+                acc1 = _mm256_add_pd(acc1, _mm256_mul_pd(w1, p));
             }
+            unsafe {
+                _mm256_storeu_pd(out.add(d), _mm256_mul_pd(acc0, scale));
+                _mm256_storeu_pd(out.add(d + LANES), _mm256_mul_pd(acc1, scale));
+            }
+            d += 2 * LANES;
+        }
+        if d < stride {
+            let mut acc = _mm256_setzero_pd();
+            for k in lo..hi {
+                let p = _mm256_set1_pd(unsafe { *psi.add(k) });
+                let w = unsafe { _mm256_loadu_pd(weights.add(k * stride + d)) };
+                acc = _mm256_add_pd(acc, _mm256_mul_pd(w, p));
+            }
+            unsafe { _mm256_storeu_pd(out.add(d), _mm256_mul_pd(acc, scale)) };
         }
     }
 
@@ -236,13 +310,46 @@ mod tests {
     }
 
     #[test]
+    fn the_vector_weighted_sums_give_the_scalar_ones_bits() {
+        if !has_avx2_fma() {
+            return; // only the scalar code runs on this CPU
+        }
+        let bits = |v: &[f64]| v.iter().map(|p| p.to_bits()).collect::<Vec<_>>();
+        // One, two and three vectors of coordinates: pairs of vectors and a single one.
+        for (nb, n) in [
+            (5, 1),
+            (25, 3),
+            (50, 4),
+            (50, 6),
+            (50, 7),
+            (30, 9),
+            (40, 12),
+        ] {
+            let basis = Basis::new(nb, 2.0, 2.0).unwrap();
+            let w = DMatrix::from_fn(nb, n, |k, d| 90.0 * ((k * 3 + d * 7) as f64 * 0.53).cos());
+            let mut forcing = Forcing::new(&basis, &w);
+            let (mut scalar, mut vector) = (vec![0.0; padded(n)], vec![f64::NAN; padded(n)]);
+            for i in 0..700 {
+                let x = (-(i as f64) / 120.0).exp();
+                let (lo, hi, min_arg) = forcing.active(x);
+                let scale = scale(x, forcing.activations(x, lo, hi, min_arg));
+                forcing.weighted_sums(lo, hi, scale, &mut scalar);
+                // SAFETY: the CPU supports the enabled features (checked above).
+                unsafe { forcing.weighted_sums_avx2(lo, hi, scale, &mut vector) };
+                assert_eq!(bits(&scalar), bits(&vector), "nb={nb} n={n} x={x}");
+                assert!(scalar[n..].iter().all(|&f| f == 0.0), "padding is zero");
+            }
+        }
+    }
+
+    #[test]
     fn matches_the_basis_to_rounding_along_a_movement_and_back() {
         for (nb, n) in [(2, 1), (25, 7), (50, 6), (120, 3)] {
             let basis = Basis::new(nb, 2.0, 2.0).unwrap();
             let w = DMatrix::from_fn(nb, n, |k, d| 100.0 * ((k * 5 + d) as f64 * 0.71).sin());
             let mut forcing = Forcing::new(&basis, &w);
             let mut psi = vec![0.0; nb];
-            let mut out = vec![0.0; n];
+            let mut out = vec![0.0; padded(n)];
             // Down the phase, then a jump back up (a reset), then down again.
             let xs = (0..600)
                 .map(|i| (-(i as f64) / 100.0).exp())

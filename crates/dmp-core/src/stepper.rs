@@ -24,7 +24,7 @@
 use crate::coupling::PositionLimits;
 use crate::dmp::{Dmp, DmpConfig};
 use crate::error::{Error, Result, check_scalar, fmt_g};
-use crate::forcing::Forcing;
+use crate::forcing::{Forcing, padded};
 use crate::rollout::{MAX_SUBSTEPS, stable_step};
 use crate::temporal_coupling::{TemporalCoupling, TemporalCouplingGains};
 
@@ -395,6 +395,13 @@ fn record(
     }
 }
 
+/// `v`, then zeros up to [`padded`]`(v.len())` values.
+fn padded_copy(v: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; padded(v.len())];
+    out[..v.len()].copy_from_slice(v);
+    out
+}
+
 /// One Euler sub-step of `hs` seconds of every coordinate: explicit (the rollout's) outside the
 /// limits' bands, linearly implicit ([`implicit_step`]) inside them.
 #[inline(always)]
@@ -443,7 +450,9 @@ pub struct Stepper {
     rest_tol: f64,
     /// `max |w|`, for the rest criterion's bound on the forcing term.
     max_w: f64,
-    // The state that the next call outputs.
+    // The state that the next call outputs. `y`, `z`, `g`, `g_target`, `f`, `h` and `out_*` hold
+    // `padded(n)` values, zeros after the `n` coordinates, so that the plain period and the
+    // forcing term store and load them in whole vectors.
     x: f64,
     y: Vec<f64>,
     z: Vec<f64>,
@@ -488,22 +497,22 @@ impl Stepper {
             rest_tol: opts.rest_tol,
             max_w: w.iter().fold(0.0f64, |m, w| m.max(w.abs())),
             x: 1.0,
-            y: dmp.y0().as_slice().to_vec(),
-            z: vec![0.0; n],
-            g: dmp.goal().as_slice().to_vec(),
-            g_target: dmp.goal().as_slice().to_vec(),
+            y: padded_copy(dmp.y0().as_slice()),
+            z: vec![0.0; padded(n)],
+            g: padded_copy(dmp.goal().as_slice()),
+            g_target: padded_copy(dmp.goal().as_slice()),
             goal_moving: false,
-            f: vec![0.0; n],
+            f: vec![0.0; padded(n)],
             forcing: Forcing::new(dmp.basis(), dmp.weights()),
-            h: vec![0.0; n],
+            h: vec![0.0; padded(n)],
             h_sub: vec![0.0; n],
             stiffness: vec![0.0; n],
             z_k: vec![0.0; n],
             h_next: vec![0.0; n],
             user: vec![0.0; n],
-            out_y: vec![0.0; n],
-            out_yd: vec![0.0; n],
-            out_ydd: vec![0.0; n],
+            out_y: vec![0.0; padded(n)],
+            out_yd: vec![0.0; padded(n)],
+            out_ydd: vec![0.0; padded(n)],
             out_x: 1.0,
             out_tau: dmp.tau(),
             at_rest: false,
@@ -527,7 +536,7 @@ impl Stepper {
                 requirement: "must be strictly inside position_min and position_max",
             });
         }
-        self.y.copy_from_slice(start);
+        self.y[..self.n].copy_from_slice(start);
         self.z.fill(0.0);
         self.x = 1.0;
         self.g.copy_from_slice(&self.g_target);
@@ -540,7 +549,7 @@ impl Stepper {
         if self.clock.coupling.is_some() {
             self.derivative(false);
             let tc = self.clock.coupling.as_mut().expect("checked");
-            self.clock.tau = tc.tau_at_rest(nominal, &self.h);
+            self.clock.tau = tc.tau_at_rest(nominal, &self.h[..self.n]);
         }
         self.out_y.copy_from_slice(&self.y);
         self.out_yd.fill(0.0);
@@ -555,9 +564,9 @@ impl Stepper {
     /// A new goal: filtered (`tau dg/dt = alpha_g (g_new - g)`) or at once (module docs).
     pub fn set_goal(&mut self, goal: &[f64]) -> Result<()> {
         check_coordinates("goal", goal, self.n)?;
-        self.g_target.copy_from_slice(goal);
+        self.g_target[..self.n].copy_from_slice(goal);
         if self.clock.goal_filter.is_none() {
-            self.g.copy_from_slice(goal);
+            self.g[..self.n].copy_from_slice(goal);
         }
         self.goal_moving = self.g != self.g_target;
         Ok(())
@@ -585,7 +594,7 @@ impl Stepper {
             // SAFETY: the CPU supports the enabled features (checked just above).
             return unsafe { self.step_avx2(measured, coupling) };
         }
-        self.step_inner(measured, coupling)
+        self.step_inner::<false>(measured, coupling)
     }
 
     /// [`Stepper::step_inner`] compiled for AVX2 (the per-coordinate loops run 4 wide); Rust
@@ -597,11 +606,12 @@ impl Stepper {
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64], &[f64], &[f64])> {
-        self.step_inner(measured, coupling)
+        self.step_inner::<true>(measured, coupling)
     }
 
+    /// One period; `AVX2`: compiled into [`Stepper::step_avx2`], on a CPU with AVX2 and FMA.
     #[inline(always)]
-    fn step_inner(
+    fn step_inner<const AVX2: bool>(
         &mut self,
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
@@ -632,16 +642,17 @@ impl Stepper {
             && self.clock.substeps == 1
             && !self.goal_moving
         {
-            self.plain_period(tau, inv_tau)?;
-            return Ok((&self.out_y, &self.out_yd, &self.out_ydd));
+            self.plain_period::<AVX2>(tau, inv_tau)?;
+            return Ok(self.output());
         }
         self.derivative(coupled);
         self.at_rest = self.rest();
         self.out_x = self.x;
         self.out_tau = tau;
+        let n = self.n;
         record(
-            &mut self.out_y,
-            &mut self.out_yd,
+            &mut self.out_y[..n],
+            &mut self.out_yd[..n],
             &mut self.z_k,
             &self.y,
             &self.z,
@@ -658,8 +669,8 @@ impl Stepper {
                 tau,
                 target,
                 &self.z_k,
-                &self.h,
-                &self.z,
+                &self.h[..n],
+                &self.z[..n],
                 &h_next,
                 self.clock.dt,
             );
@@ -669,25 +680,66 @@ impl Stepper {
         } else {
             self.clock.backward_rate(tau)
         };
-        acceleration(&mut self.out_ydd, &self.h, &self.z_k, taud, inv_tau);
+        acceleration(&mut self.out_ydd[..n], &self.h, &self.z_k, taud, inv_tau);
         self.clock.previous = tau;
         self.steps += 1;
         self.check_finite()?;
-        Ok((&self.out_y, &self.out_yd, &self.out_ydd))
+        Ok(self.output())
     }
 
     /// The period of [`Stepper::step_inner`] without coupling terms, limits, sub-steps or a
     /// moving goal, the common case: the same operations on every coordinate, in one pass over
     /// the coordinates instead of one per stage.
     #[inline(always)]
-    fn plain_period(&mut self, tau: f64, inv_tau: f64) -> Result<()> {
+    fn plain_period<const AVX2: bool>(&mut self, tau: f64, inv_tau: f64) -> Result<()> {
         let cfg = *self.dmp.config();
         let hs = self.clock.dt;
         let taud = self.clock.backward_rate(tau);
         let tol = self.rest_tol;
+        #[cfg(target_arch = "x86_64")]
+        let (rests, finite) = if AVX2 {
+            // SAFETY: with `AVX2` the CPU has AVX2 and FMA (`step_inner`).
+            unsafe { self.plain_pass_avx2(&cfg, inv_tau, hs, taud, tol) }
+        } else {
+            self.plain_pass(&cfg, inv_tau, hs, taud, tol)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let (rests, finite) = self.plain_pass(&cfg, inv_tau, hs, taud, tol);
+        self.at_rest = rests && self.forcing_spent();
+        self.out_x = self.x;
+        self.out_tau = tau;
+        self.x -= cfg.alpha_x * self.x * inv_tau * hs;
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: as above.
+            unsafe { self.forcing.eval_avx2(self.x, &mut self.f) };
+        } else {
+            self.update_forcing();
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        self.update_forcing();
+        self.clock.previous = tau;
+        self.steps += 1;
+        if finite && self.x.is_finite() {
+            return Ok(());
+        }
+        self.check_finite()
+    }
+
+    /// The plain period's pass over the coordinates: the command from the state, the explicit
+    /// Euler step; returns whether every coordinate rests and whether the new state is finite.
+    #[inline(always)]
+    fn plain_pass(
+        &mut self,
+        cfg: &DmpConfig,
+        inv_tau: f64,
+        hs: f64,
+        taud: f64,
+        tol: f64,
+    ) -> (bool, bool) {
         let n = self.n;
         let (g, g_target, f) = (&self.g[..n], &self.g_target[..n], &self.f[..n]);
-        let (y, z, h) = (&mut self.y[..n], &mut self.z[..n], &mut self.h[..n]);
+        let (y, z) = (&mut self.y[..n], &mut self.z[..n]);
         let (out_y, out_yd, out_ydd) = (
             &mut self.out_y[..n],
             &mut self.out_yd[..n],
@@ -697,25 +749,104 @@ impl Stepper {
         let mut finite = true;
         for d in 0..n {
             let (y0, z0) = (y[d], z[d]);
-            h[d] = spring_at(&cfg, g[d], y0, z0, f[d]);
+            let h = spring_at(cfg, g[d], y0, z0, f[d]);
             rests &= rests_at(g_target[d], y0, z0, tol);
             out_y[d] = y0;
             out_yd[d] = z0 * inv_tau;
-            explicit_step(&mut y[d], &mut z[d], h[d], inv_tau, hs);
-            out_ydd[d] = acceleration_at(h[d], z0, taud, inv_tau);
+            explicit_step(&mut y[d], &mut z[d], h, inv_tau, hs);
+            out_ydd[d] = acceleration_at(h, z0, taud, inv_tau);
             finite &= y[d].is_finite() & z[d].is_finite() & out_ydd[d].is_finite();
         }
-        self.at_rest = rests && self.forcing_spent();
-        self.out_x = self.x;
-        self.out_tau = tau;
-        self.x -= cfg.alpha_x * self.x * inv_tau * hs;
-        self.update_forcing();
-        self.clock.previous = tau;
-        self.steps += 1;
-        if finite && self.x.is_finite() {
-            return Ok(());
+        (rests, finite)
+    }
+
+    /// [`Stepper::plain_pass`] four coordinates at a time in AVX2 registers, the same operations
+    /// lane by lane, over the padded arrays (their zeros stay zeros).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    unsafe fn plain_pass_avx2(
+        &mut self,
+        cfg: &DmpConfig,
+        inv_tau: f64,
+        hs: f64,
+        taud: f64,
+        tol: f64,
+    ) -> (bool, bool) {
+        use std::arch::x86_64::*;
+        let c = |v: f64| _mm256_set1_pd(v);
+        let (alpha_z, beta_z, inv_tau_v, hs_v, taud_v, tol_v) = (
+            c(cfg.alpha_z),
+            c(cfg.beta_z),
+            c(inv_tau),
+            c(hs),
+            c(taud),
+            c(tol),
+        );
+        let (sign, inf) = (c(-0.0), c(f64::INFINITY));
+        let mut rests = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        let mut finite = rests;
+        // The arrays' addresses once (stores through them could otherwise change `self`'s).
+        let len = self.y.len();
+        let padded = |v: &Vec<f64>| {
+            assert_eq!(v.len(), len, "the state is padded");
+            v.as_ptr()
+        };
+        let [g, g_target, f] = [&self.g, &self.g_target, &self.f].map(padded);
+        let [y, z, out_y, out_yd, out_ydd] = [
+            &mut self.y,
+            &mut self.z,
+            &mut self.out_y,
+            &mut self.out_yd,
+            &mut self.out_ydd,
+        ]
+        .map(|v| {
+            assert_eq!(v.len(), len, "the state is padded");
+            v.as_mut_ptr()
+        });
+        let mut d = 0;
+        while d < len {
+            // SAFETY: `d + 4 <= len`, the length of every array (asserted above).
+            let load = |v: *const f64| unsafe { _mm256_loadu_pd(v.add(d)) };
+            let (y0, z0) = (load(y), load(z));
+            let (g, g_target, f) = (load(g), load(g_target), load(f));
+            // spring_at
+            let spring = _mm256_sub_pd(_mm256_mul_pd(beta_z, _mm256_sub_pd(g, y0)), z0);
+            let h = _mm256_add_pd(_mm256_mul_pd(alpha_z, spring), f);
+            // rests_at
+            let gap = _mm256_andnot_pd(sign, _mm256_sub_pd(g_target, y0));
+            let near = _mm256_cmp_pd::<_CMP_LE_OQ>(gap, tol_v);
+            let slow = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_andnot_pd(sign, z0), tol_v);
+            rests = _mm256_and_pd(rests, _mm256_and_pd(near, slow));
+            // explicit_step
+            let yd = _mm256_mul_pd(z0, inv_tau_v);
+            let dz = _mm256_mul_pd(h, inv_tau_v);
+            let y1 = _mm256_add_pd(y0, _mm256_mul_pd(yd, hs_v));
+            let z1 = _mm256_add_pd(z0, _mm256_mul_pd(dz, hs_v));
+            // acceleration_at
+            let rate = if taud == 0.0 {
+                h
+            } else {
+                _mm256_sub_pd(h, _mm256_mul_pd(taud_v, z0))
+            };
+            let ydd = _mm256_mul_pd(_mm256_mul_pd(rate, inv_tau_v), inv_tau_v);
+            let is_finite = |v| _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_andnot_pd(sign, v), inf);
+            finite = _mm256_and_pd(finite, _mm256_and_pd(is_finite(y1), is_finite(z1)));
+            finite = _mm256_and_pd(finite, is_finite(ydd));
+            // SAFETY: as for the loads.
+            let store = |v: *mut f64, x| unsafe { _mm256_storeu_pd(v.add(d), x) };
+            store(out_y, y0);
+            store(out_yd, yd);
+            store(out_ydd, ydd);
+            store(y, y1);
+            store(z, z1);
+            d += 4;
         }
-        self.check_finite()
+        // The zeros after the coordinates compare as 0 <= tol and 0 < inf: true.
+        (
+            _mm256_movemask_pd(rests) == 0b1111,
+            _mm256_movemask_pd(finite) == 0b1111,
+        )
     }
 
     /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
@@ -737,7 +868,7 @@ impl Stepper {
             let h = if sub == 0 { &self.h } else { &h_sub };
             euler_substep(
                 &cfg,
-                &mut self.y,
+                &mut self.y[..self.n],
                 &mut self.z,
                 h,
                 &self.stiffness,
@@ -865,10 +996,10 @@ impl Stepper {
     }
     /// The goal the spring currently pulls towards (moving while filtered).
     pub fn goal(&self) -> &[f64] {
-        &self.g
+        &self.g[..self.n]
     }
     pub fn goal_target(&self) -> &[f64] {
-        &self.g_target
+        &self.g_target[..self.n]
     }
     pub fn dt(&self) -> f64 {
         self.clock.dt
@@ -890,6 +1021,59 @@ impl Stepper {
     }
     /// The last command, `(y, yd, ydd)`.
     pub fn output(&self) -> (&[f64], &[f64], &[f64]) {
-        (&self.out_y, &self.out_yd, &self.out_ydd)
+        let n = self.n;
+        (&self.out_y[..n], &self.out_yd[..n], &self.out_ydd[..n])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{DMatrix, DVector};
+
+    use super::*;
+
+    #[test]
+    fn the_vector_period_gives_the_scalar_ones_bits() {
+        if !crate::linalg::has_avx2_fma() {
+            return; // only the scalar code runs on this CPU
+        }
+        // One vector of coordinates, part of one, and more than one.
+        for n in [1, 3, 4, 7, 9] {
+            let w = DMatrix::from_fn(30, n, |k, d| 60.0 * ((k * n + d) as f64 * 0.53).sin());
+            let start = DVector::from_fn(n, |d, _| 0.3 * d as f64 - 0.5);
+            let goal = DVector::from_fn(n, |d, _| 1.0 - 0.2 * d as f64);
+            let cfg = DmpConfig {
+                n_basis: 30,
+                ..DmpConfig::default()
+            };
+            let dmp = Dmp::new(cfg, w, goal, start, 0.8).unwrap();
+            let opts = StepperOptions {
+                goal_filter: None,
+                ..StepperOptions::new(2e-3)
+            };
+            let mut scalar = Stepper::new(&dmp, &opts).unwrap();
+            let mut vector = scalar.clone();
+            for k in 0..2500 {
+                if k == 300 {
+                    let goal: Vec<f64> = (0..n).map(|d| 0.5 - 0.1 * d as f64).collect();
+                    for s in [&mut scalar, &mut vector] {
+                        s.set_goal(&goal).unwrap();
+                    }
+                }
+                // A robot that lags behind the command for a while: phase stopping.
+                let lag = if (500..700).contains(&k) { 0.02 } else { 0.0 };
+                let measured: Vec<f64> = scalar.output().0.iter().map(|y| y - lag).collect();
+                let m = (k % 2 == 0).then_some(measured.as_slice());
+                let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                let a = scalar.step_inner::<false>(m, None).unwrap();
+                let a = (bits(a.0), bits(a.1), bits(a.2));
+                // SAFETY: the CPU supports the enabled features (checked above).
+                let b = unsafe { vector.step_avx2(m, None) }.unwrap();
+                assert_eq!(a, (bits(b.0), bits(b.1), bits(b.2)), "n={n} step {k}");
+                assert_eq!(scalar.phase().to_bits(), vector.phase().to_bits());
+                assert_eq!(scalar.done(), vector.done(), "n={n} step {k}");
+            }
+            assert!(vector.done(), "n={n}");
+        }
     }
 }
