@@ -90,6 +90,8 @@ pub struct CartesianStepper {
     obstacles: Vec<SphereObstacle>,
     obstacle_gains: ObstacleGains,
     rest_tol: f64,
+    /// Whether the CPU runs [`CartesianStepper::step_avx2`]: detected once, not at every step.
+    avx2: bool,
     max_w: f64,
     forcing: Forcing,
     // The state that the next call outputs.
@@ -137,6 +139,7 @@ impl CartesianStepper {
             obstacles: opts.obstacles.clone(),
             obstacle_gains: opts.obstacle_gains,
             rest_tol: opts.base.rest_tol,
+            avx2: crate::linalg::has_avx2_fma(),
             max_w: w.iter().fold(0.0f64, |m, w| m.max(w.abs())),
             forcing: Forcing::new(dmp.basis(), w),
             x: 1.0,
@@ -258,8 +261,8 @@ impl CartesianStepper {
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
         #[cfg(target_arch = "x86_64")]
-        if crate::linalg::has_avx2_fma() {
-            // SAFETY: the CPU supports the enabled features (checked just above).
+        if self.avx2 {
+            // SAFETY: the CPU supports the enabled features (detected in `new`).
             return unsafe { self.step_avx2(measured, coupling) };
         }
         self.step_inner(measured, coupling)

@@ -448,6 +448,8 @@ pub struct Stepper {
     clock: Clock,
     limits: Option<PositionLimits>,
     rest_tol: f64,
+    /// Whether the CPU runs [`Stepper::step_avx2`]: detected once, not at every step.
+    avx2: bool,
     /// `max |w|`, for the rest criterion's bound on the forcing term.
     max_w: f64,
     // The state that the next call outputs. `y`, `z`, `g`, `g_target`, `f`, `h` and `out_*` hold
@@ -495,6 +497,7 @@ impl Stepper {
             clock,
             limits,
             rest_tol: opts.rest_tol,
+            avx2: crate::linalg::has_avx2_fma(),
             max_w: w.iter().fold(0.0f64, |m, w| m.max(w.abs())),
             x: 1.0,
             y: padded_copy(dmp.y0().as_slice()),
@@ -590,8 +593,8 @@ impl Stepper {
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64], &[f64], &[f64])> {
         #[cfg(target_arch = "x86_64")]
-        if crate::linalg::has_avx2_fma() {
-            // SAFETY: the CPU supports the enabled features (checked just above).
+        if self.avx2 {
+            // SAFETY: the CPU supports the enabled features (detected in `new`).
             return unsafe { self.step_avx2(measured, coupling) };
         }
         self.step_inner::<false>(measured, coupling)
