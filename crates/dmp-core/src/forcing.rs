@@ -7,8 +7,10 @@
 //! moves a little per period) instead of a logarithm, and the ~10 exponentials are
 //! [`crate::linalg::exp_in_place`]'s (within 2e-16 relative of libm's), computed four at a
 //! time in AVX2 registers where the CPU has them, instead of ten libm calls. The weights are
-//! kept kernel-major and padded to whole vectors of coordinates. A stepper therefore matches
-//! the rollout to rounding (about 1e-15), not bit for bit.
+//! kept kernel-major and padded to whole vectors of coordinates, and so is the output, so that
+//! the weighted sums run a vector of coordinates at a time (each coordinate still summed over
+//! the kernels in their order). A stepper therefore matches the rollout to rounding (about
+//! 1e-15), not bit for bit.
 
 use nalgebra::DMatrix;
 
