@@ -19,8 +19,8 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::linalg::{
-    Scratch, cholesky_in_place_with, dot, exp_in_place, simd, solve_lower_in_place,
-    solve_lower_many_in_place, solve_upper_t_in_place, spd_inverse_lower,
+    cholesky_in_place, dot, exp_in_place, simd, solve_lower_in_place, solve_lower_many_in_place,
+    solve_upper_t_in_place, spd_inverse_lower,
 };
 use crate::optimize::{MinimizeOptions, Objective, halton, minimize_box};
 
@@ -344,8 +344,6 @@ struct Workspace {
     alpha: Vec<f64>,
     /// One column of scratch.
     col: Vec<f64>,
-    /// The faer kernels' temporary memory.
-    scratch: Scratch,
 }
 
 impl Workspace {
@@ -359,7 +357,6 @@ impl Workspace {
             kinv: Vec::new(),
             alpha: vec![0.0; m],
             col: vec![0.0; m],
-            scratch: Scratch::new(m),
         }
     }
 
@@ -384,7 +381,7 @@ impl Workspace {
         for i in 0..m {
             self.l[i * m + i] += h.noise_var;
         }
-        if !cholesky_in_place_with(&mut self.l, m, &mut self.scratch) {
+        if !cholesky_in_place(&mut self.l, m) {
             return None;
         }
         self.alpha.copy_from_slice(r);
@@ -405,7 +402,7 @@ impl Workspace {
         if self.kinv.len() != m * m {
             self.kinv = vec![0.0; m * m];
         }
-        spd_inverse_lower(&self.l, m, &mut self.kinv, &mut self.scratch);
+        spd_inverse_lower(&self.l, m, &mut self.kinv);
         let mut g_len = vec![0.0; n];
         let (mut g_sig, mut g_noise) = (0.0, 0.0);
         let (kinv, alpha, kf, xd, col) =

@@ -2,15 +2,11 @@
 //! triangular solves and the inverse from the factor. Matrices are square, column-major
 //! `Vec<f64>`s with leading dimension `m`; only the lower triangle of a factor is used.
 //!
-//! The O(m^3) kernels (factor, inverse, solves with many right-hand sides) are faer's blocked,
-//! SIMD-dispatched ones, always run sequentially (`Par::Seq`); the O(m^2) single-vector solves
-//! are written out. Everything is sequential: results are bit-identical run to run.
-
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt;
-use faer::linalg::cholesky::llt::factor::LltParams;
-use faer::linalg::triangular_solve;
-use faer::{MatMut, MatRef, Par, Spec};
+//! Every kernel is written out here, sequential, with each sum in an order that the code fixes:
+//! the results are bit-identical run to run and on every x86-64 machine with AVX2 and FMA,
+//! whatever its vector width. A linear-algebra library's kernels are chosen by the CPU at run time
+//! (AVX-512 where there is one, with other blockings and fused multiply-adds), which would make
+//! the generalizers' outputs, and every learner that branches on them, differ between machines.
 
 /// `sum_i a_i b_i` with eight independent partial sums. A plain `.sum()` of products is one
 /// dependency chain the compiler may not reorder (floating-point addition is not associative), so
@@ -221,99 +217,95 @@ pub(crate) fn exp4(x0: std::arch::x86_64::__m256d) -> std::arch::x86_64::__m256d
     _mm256_andnot_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(x0, c(EXP_MIN)), e)
 }
 
-/// Views a column-major `m x m` slice as a faer matrix.
-fn view(a: &[f64], m: usize) -> MatRef<'_, f64> {
-    MatRef::from_column_major_slice(a, m, m)
-}
-
 /// Overwrites the lower triangle of `a` (`m x m`) with its Cholesky factor `L` (`A = L L^T`).
 /// Returns false if `A` is not numerically positive definite (a pivot that is not > 0, NaN
 /// included). The strict upper triangle is never read.
 ///
-/// faer's blocked left-looking factor, run sequentially (`Par::Seq`): the same blocking and
-/// SIMD kernels every time on a given machine, so results are bit-identical run to run and do not
-/// depend on the number of threads.
+/// Left-looking, one column at a time: column `j` of `L` is column `j` of `A` less
+/// `L[j, k] L[:, k]` for `k = 0, 1, ..., j - 1` in that order, then scaled by its pivot's root.
+/// Every entry's sum runs in the same order whatever the vector width, so the factor has the same
+/// bits on every x86-64 machine (a library kernel chosen by the CPU, AVX-512 or not, would not).
 pub fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
-    cholesky_in_place_with(a, m, &mut Scratch::new(m))
-}
-
-/// Reusable scratch memory of the faer kernels for `m x m` matrices, so that an optimization
-/// loop does not allocate (and page-fault) a temporary matrix per call.
-pub struct Scratch {
-    m: usize,
-    buf: MemBuffer,
-}
-
-/// faer's Cholesky blocking, tuned for the GP's matrices (m <= a few hundred). Its defaults
-/// (recursion below 64, blocks of 128) suit large matrices; smaller blocks reach the SIMD
-/// kernels sooner and factor m = 30-200 about 25 % faster on this project's AVX2 machine (measured
-/// with faer 0.24: 11 instead of 15 us at m = 100, 54 instead of 65 us at m = 200).
-fn llt_params() -> Spec<LltParams, f64> {
-    let mut params: Spec<LltParams, f64> = Default::default();
-    params.config.recursion_threshold = 16;
-    params.config.block_size = 32;
-    params
-}
-
-impl Scratch {
-    pub fn new(m: usize) -> Self {
-        let params = llt_params();
-        let req = llt::factor::cholesky_in_place_scratch::<f64>(m, Par::Seq, params)
-            .or(llt::inverse::inverse_scratch::<f64>(m, Par::Seq));
-        Self {
-            m,
-            buf: MemBuffer::new(req),
-        }
-    }
-
-    fn stack(&mut self, m: usize) -> &mut MemStack {
-        assert_eq!(m, self.m, "scratch sized for another dimension");
-        MemStack::new(&mut self.buf)
-    }
-}
-
-/// [`cholesky_in_place`] with caller-held scratch memory.
-pub fn cholesky_in_place_with(a: &mut [f64], m: usize, scratch: &mut Scratch) -> bool {
     debug_assert_eq!(a.len(), m * m);
-    let params = llt_params();
-    let stack = scratch.stack(m);
-    let mat = MatMut::from_column_major_slice_mut(a, m, m);
-    llt::factor::cholesky_in_place(mat, Default::default(), Par::Seq, stack, params).is_ok()
+    simd(|| {
+        for j in 0..m {
+            let (done, rest) = a.split_at_mut(j * m);
+            let col = &mut rest[j..m];
+            for k in 0..j {
+                let ljk = done[k * m + j];
+                if ljk != 0.0 {
+                    for (v, l) in col.iter_mut().zip(&done[k * m + j..(k + 1) * m]) {
+                        *v -= ljk * l;
+                    }
+                }
+            }
+            let pivot = col[0];
+            // `!(pivot > 0)` also refuses NaN.
+            if !(pivot > 0.0) {
+                return false;
+            }
+            let d = pivot.sqrt();
+            col[0] = d;
+            for v in &mut col[1..] {
+                *v /= d;
+            }
+        }
+        true
+    })
 }
 
 /// Writes the lower triangle of `A^{-1} = L^{-T} L^{-1}` into `out` (`m x m`, column-major) from
-/// the Cholesky factor `L` (lower triangle of `l`): a blocked triangular inverse and a
-/// triangular product that forms only the lower triangle (LAPACK's `potri`, about `2 m^3 / 3`
-/// flops). The strict upper triangle of `out` is unspecified.
-pub fn spd_inverse_lower(l: &[f64], m: usize, out: &mut [f64], scratch: &mut Scratch) {
+/// the Cholesky factor `L` (lower triangle of `l`), as LAPACK's `potri` does: first `W = L^{-1}`
+/// (lower triangular, column by column by forward substitution), then
+/// `A^{-1}[i, j] = W[i.., i] . W[i.., j]` for `i >= j`, each a [`dot`] in a fixed order. The strict
+/// upper triangle of `out` is unspecified.
+pub fn spd_inverse_lower(l: &[f64], m: usize, out: &mut [f64]) {
     debug_assert!(l.len() == m * m && out.len() == m * m);
-    let stack = scratch.stack(m);
-    let dst = MatMut::from_column_major_slice_mut(out, m, m);
-    llt::inverse::inverse(dst, view(l, m), Par::Seq, stack);
+    let mut w = vec![0.0; m * m];
+    simd(|| {
+        for c in 0..m {
+            let col = &mut w[c * m..(c + 1) * m];
+            col[c] = 1.0;
+            solve_lower_from(l, m, col, c);
+        }
+        for j in 0..m {
+            for i in j..m {
+                out[j * m + i] = dot(&w[i * m + i..(i + 1) * m], &w[j * m + i..(j + 1) * m]);
+            }
+        }
+    });
 }
 
-/// Solves `L X = B` in place for the `k` columns of `b` (`m x k`, column-major): one blocked
-/// triangular solve (TRSM) for all right-hand sides.
+/// Solves `L X = B` in place for the `k` columns of `b` (`m x k`, column-major), one column at a
+/// time by [`solve_lower_in_place`].
 pub fn solve_lower_many_in_place(l: &[f64], m: usize, b: &mut [f64], k: usize) {
     debug_assert!(l.len() == m * m && b.len() == m * k);
-    let rhs = MatMut::from_column_major_slice_mut(b, m, k);
-    triangular_solve::solve_lower_triangular_in_place(view(l, m), rhs, Par::Seq);
+    simd(|| {
+        for col in b.chunks_exact_mut(m.max(1)).take(k) {
+            solve_lower_from(l, m, col, 0);
+        }
+    });
+}
+
+/// Forward substitution of `L x = b` for a `b` whose first `first` entries are zero (so are
+/// those of `x`), column-oriented.
+#[inline(always)]
+fn solve_lower_from(l: &[f64], m: usize, b: &mut [f64], first: usize) {
+    for k in first..m {
+        let col = &l[k * m..(k + 1) * m];
+        let xk = b[k] / col[k];
+        b[k] = xk;
+        if xk != 0.0 {
+            for (v, c) in b[k + 1..].iter_mut().zip(&col[k + 1..]) {
+                *v -= xk * c;
+            }
+        }
+    }
 }
 
 /// Solves `L x = b` in place (forward substitution, column-oriented).
 pub fn solve_lower_in_place(l: &[f64], m: usize, b: &mut [f64]) {
-    simd(|| {
-        for k in 0..m {
-            let col = &l[k * m..(k + 1) * m];
-            let xk = b[k] / col[k];
-            b[k] = xk;
-            if xk != 0.0 {
-                for (v, c) in b[k + 1..].iter_mut().zip(&col[k + 1..]) {
-                    *v -= xk * c;
-                }
-            }
-        }
-    })
+    simd(|| solve_lower_from(l, m, b, 0))
 }
 
 /// Solves `L^T x = b` in place (backward substitution; row i of `L^T` is column i of `L`).
@@ -369,7 +361,7 @@ mod tests {
                 assert!((ax[i] - b[i]).abs() < 1e-10);
             }
             let mut kinv = vec![0.0; m * m];
-            spd_inverse_lower(&l, m, &mut kinv, &mut Scratch::new(m));
+            spd_inverse_lower(&l, m, &mut kinv);
             let inv = a.clone().try_inverse().unwrap();
             for bcol in 0..m {
                 for arow in bcol..m {
