@@ -34,9 +34,11 @@ def pours() -> tuple[oa.PourRun, oa.PourRun, float, float]:
 
 def test_held_pour_is_held_by_the_constraint(pours) -> None:
     stopped, running, travel, _ = pours
-    # the command would move a joint by ~1 rad in the window; the held arm moves a few hundredths
-    assert stopped.hold_drift < 0.1 * travel
-    assert running.hold_drift < 0.1 * travel
+    # the command would move a joint by ~0.9 rad in the window; the held arm moves a tenth of that
+    # or less, as the sloshing liquid shakes the light wrist: 0.04-0.14 rad over liquids 0-4,
+    # with phase stopping or without (a chaotic draw, so the bound is on the spread's top)
+    assert stopped.hold_drift < 0.2 * travel
+    assert running.hold_drift < 0.2 * travel
 
 
 def test_phase_stopping_waits_for_the_held_arm(pours) -> None:
@@ -75,7 +77,8 @@ def test_moved_basket_is_hit_through_set_goal(basket) -> None:
     old, new = basket.goals
     assert abs(new[0] - old[0]) > 0.05
     assert basket.updated.run.command[-1, 0] == pytest.approx(new[0], abs=1e-3)
-    assert basket.tau[0] == basket.tau[1]  # all demonstrations last as long: tau never changes
+    # all demonstrations last as long: the generalized tau does not change (to its GP's rounding)
+    assert basket.tau[0] == pytest.approx(basket.tau[1], rel=1e-12)
 
 
 @pytest.fixture(scope="module")
@@ -115,6 +118,7 @@ def test_reproduction_part_reports_every_scenario(tmp_path, pours) -> None:
     # the same pour a second time (the liquid's seed 0) gives the same numbers
     assert results[0]["poured_ml"] == 1000 * pours[0].poured_volume
     assert results[0]["tracking_error"] == pours[0].run.tracking_error
+    assert [r["liquid_seed"] for r in results[:2]] == [0, 0]
     rows = PART.summarize(results)
     assert [r["scenario"] for r in rows] == ["held-pour", "held-pour", "moving-basket", "velocity-limit"]
     # the truths: phase stopping's pour within the tolerance, the moved basket hit, the limit kept

@@ -2,8 +2,10 @@
 
 The arm's reported numbers (the README's and docs/arm.md's tables) rest on MuJoCo and numpy at the
 versions the ``robot`` extra pins. Granular flow is chaotic, so a float-level change anywhere (a new
-MuJoCo, numpy's linear algebra, the model, the IK) changes which spheres reach the glass; this test
-makes such a change a failing test that says what moved instead of silently different tables.
+MuJoCo, the model, the IK) changes which spheres reach the glass; this test makes such a change a
+failing test that says what moved instead of silently different tables. What the CPU chooses (the
+BLAS kernel, numpy's SIMD level) must change nothing (dmprs.portable;
+tests/test_machine_independence.py), so the reference holds on every machine of the project's kind.
 
 After a deliberate change, re-measure the reproduction, then rewrite the reference with
 ``python -m tests.test_physics_drift``.

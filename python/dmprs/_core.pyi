@@ -29,9 +29,13 @@ __all__ = [
     "Ros2JointStateListener",
     "Stepper",
     "__version__",
+    "dls_step",
     "matchbox_check",
     "matchbox_simulate",
     "matchbox_simulate_batch",
+    "portable_binary",
+    "portable_norm",
+    "portable_unary",
     "rollout_batch",
     "rollout_batch_cartesian",
 ]
@@ -450,6 +454,12 @@ def matchbox_simulate_batch(
     paths: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]],
     config: MatchboxConfig,
 ) -> list[dict[str, object]]: ...
+def portable_unary(name: str, x: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def portable_binary(name: str, x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.float64]: ...
+def portable_norm(x: NDArray[np.float64]) -> float: ...
+def dls_step(
+    jac: NDArray[np.float64], e: NDArray[np.float64], z: NDArray[np.float64], damping: float
+) -> NDArray[np.float64]: ...
 @final
 class GaussianProcess:
     @staticmethod

@@ -17,6 +17,7 @@ a query-space trial (the weight vector is the trial's query) and the run can be 
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -95,7 +96,7 @@ def _cma(spec: BaselineSpec, dmp0: DMP, sigma: NDArray[np.float64]) -> AskTell:
 METHODS = {
     "power": _Method(
         "PoWER", _power,
-        feedback=lambda eps, scale: WORST_RETURN if eps is None else max(np.exp(-(eps / scale) ** 2), WORST_RETURN),
+        feedback=lambda eps, scale: WORST_RETURN if eps is None else max(math.exp(-(eps / scale) ** 2), WORST_RETURN),
         theta0_first=True, evaluation=lambda learner, theta: True),
     "pi2": _Method(
         "PI²", _pi2,

@@ -30,6 +30,7 @@ from dmprs._arrays import as_count, as_float_array
 from dmprs._extras import require
 from dmprs.candidates import CandidateLearner
 from dmprs.errors import InvalidInputError
+from dmprs.portable import norm
 
 __all__ = ["BayesOpt"]
 
@@ -92,7 +93,7 @@ class BayesOpt(CandidateLearner):
             raise InvalidInputError(f"eps {eps.tolist()} is not finite")
         if eps.shape != qq.shape:
             raise InvalidInputError(f"eps has shape {eps.shape}; the query has {qq.shape}")
-        score = float(np.linalg.norm(eps))
+        score = norm(eps)
         self._opt.register(dict(zip(self._keys, qq.tolist(), strict=True)), -score)
         self._record(qq, eps, score, eps=eps)
 

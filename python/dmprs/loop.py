@@ -27,6 +27,7 @@ from dmprs.cartesian import CartesianDMP
 from dmprs.database import DUPLICATE_POLICIES
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError, RunLogError
+from dmprs.portable import norm
 from dmprs.runlog import RunLog, TrialRecord
 from dmprs.tasks.base import Task
 from dmprs.trial import run_trial
@@ -162,7 +163,7 @@ def learn(
         if converged:
             learned = next(t.query for t in reversed(ok) if t.success)
         elif ok:
-            learned = min(ok, key=lambda t: float(np.linalg.norm(np.asarray(t.eps)))).query
+            learned = min(ok, key=lambda t: norm(np.asarray(t.eps))).query
         return LearningResult(trials, converged, learned, reason, None if log is None else log.directory, cut)
 
     if trials and trials[-1].success:

@@ -17,6 +17,10 @@ def min_jerk(s: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], ND
     s = 0, and m = 1, m' = m'' = 0 at s = 1: the movement starts and ends at rest.
     """
     u: NDArray[np.float64] = np.clip(np.asarray(s, dtype=np.float64), 0.0, 1.0)
-    return (10 * u**3 - 15 * u**4 + 6 * u**5,
-            30 * u**2 - 60 * u**3 + 30 * u**4,
-            60 * u - 180 * u**2 + 120 * u**3)
+    # Powers as products: numpy's `**` is a CPU-chosen pow kernel (dmprs.portable).
+    u2 = u * u
+    u3 = u2 * u
+    u4 = u2 * u2
+    return (10 * u3 - 15 * u4 + 6 * (u4 * u),
+            30 * u2 - 60 * u3 + 30 * u4,
+            60 * u - 180 * u2 + 120 * u3)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs import portable
 from dmprs._core import UNIT_TOLERANCE
 from dmprs.errors import InvalidInputError
 
@@ -50,7 +51,7 @@ def log(q: NDArray[np.float64]) -> NDArray[np.float64]:
     q = np.where(q[..., :1] < 0, -q, q)
     v = q[..., 1:]
     norm = np.linalg.norm(v, axis=-1)
-    angle_ = 2 * np.arctan2(norm, q[..., 0])
+    angle_ = 2 * portable.arctan2(norm, q[..., 0])
     scale = np.where(norm > 1e-12, angle_ / np.maximum(norm, 1e-300), 2.0)
     return v * scale[..., None]
 
@@ -61,13 +62,13 @@ def exp(r: NDArray[np.float64]) -> NDArray[np.float64]:
     product with it can be normalized once).
     """
     theta = np.linalg.norm(r, axis=-1)
-    scale = np.where(theta > 1e-12, np.sin(theta / 2) / np.maximum(theta, 1e-300), 0.5)
-    return np.concatenate([np.cos(theta / 2)[..., None], r * scale[..., None]], axis=-1)
+    scale = np.where(theta > 1e-12, portable.sin(theta / 2) / np.maximum(theta, 1e-300), 0.5)
+    return np.concatenate([portable.cos(theta / 2)[..., None], r * scale[..., None]], axis=-1)
 
 
 def angle(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """The angle (rad) of the rotation between unit quaternions ``a`` and ``b``, either sign."""
-    theta: NDArray[np.float64] = 2.0 * np.arccos(np.minimum(1.0, np.abs(np.sum(a * b, axis=-1))))
+    theta: NDArray[np.float64] = 2.0 * portable.arccos(np.minimum(1.0, np.abs(np.sum(a * b, axis=-1))))
     return theta
 
 
@@ -78,11 +79,11 @@ def slerp(q0: NDArray[np.float64], q1: NDArray[np.float64], s: NDArray[np.float6
     dot = np.sum(q0 * q1, axis=-1)
     q1 = np.where(dot[:, None] < 0, -q1, q1)
     dot = np.abs(dot).clip(-1.0, 1.0)
-    theta = np.arccos(dot)
+    theta = portable.arccos(dot)
     small = theta < 1e-9
-    sin = np.where(small, 1.0, np.sin(theta))
-    w0 = np.where(small, 1.0 - s, np.sin((1.0 - s) * theta) / sin)
-    w1 = np.where(small, s, np.sin(s * theta) / sin)
+    sin = np.where(small, 1.0, portable.sin(theta))
+    w0 = np.where(small, 1.0 - s, portable.sin((1.0 - s) * theta) / sin)
+    w1 = np.where(small, s, portable.sin(s * theta) / sin)
     out = w0[:, None] * q0 + w1[:, None] * q1
     unit: NDArray[np.float64] = out / np.linalg.norm(out, axis=1, keepdims=True)
     return unit
@@ -94,7 +95,7 @@ def continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
     """
     out = q.copy()
     for j in range(1, len(out)):
-        if np.dot(out[j], out[j - 1]) < 0:
+        if np.sum(out[j] * out[j - 1]) < 0:
             out[j] = -out[j]
     return out
 

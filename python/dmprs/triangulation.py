@@ -30,7 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from dmprs import _core
+from dmprs import _core, portable
 from dmprs._arrays import as_query
 from dmprs.dmp import DMP
 from dmprs.errors import ExtrapolationError, InvalidInputError
@@ -102,7 +102,12 @@ class PiecewiseLinear:
         except QhullError as exc:
             raise InvalidInputError(f"the demonstration queries cannot be triangulated: {exc}") from None
         self._simplices = tri.simplices
-        self._transform = tri.transform
+        # The barycentric transforms (scipy's layout: T^-1 of the edge vectors, then the last
+        # vertex) computed here in a fixed order, not by LAPACK's CPU-chosen kernels.
+        corners = nodes[tri.simplices]
+        last = corners[:, n, :]
+        edges = np.swapaxes(corners[:, :n, :] - last[:, None, :], 1, 2)
+        self._transform = np.concatenate([portable.inverses(edges), last[:, None, :]], axis=1)
         self._tri = tri
         # The simplices around each node (its star), grouped by node: star[ptr[v]:ptr[v + 1]].
         incidence = tri.simplices.ravel()
@@ -134,7 +139,10 @@ class PiecewiseLinear:
         n = nodes.shape[1]
         candidates = self._around(q)
         t = self._transform if candidates is None else self._transform[candidates]
-        b = np.einsum("sij,sj->si", t[:, :n, :], q - t[:, n, :])
+        d = q - t[:, n, :]
+        b = t[:, :n, 0] * d[:, :1]
+        for j in range(1, n):
+            b = b + t[:, :n, j] * d[:, j:j + 1]
         bary = np.concatenate([b, 1.0 - b.sum(axis=1, keepdims=True)], axis=1)
         # Inside the hull this picks a simplex containing q (smallest coordinate >= 0); outside,
         # the one q is least outside of (the stated extrapolation rule). Ties go to the lowest
@@ -165,7 +173,7 @@ class PiecewiseLinear:
         q = self._check_query(q)
         idx, b = self._coordinates(q)
         with np.errstate(all="ignore"):
-            theta = b @ self._theta[idx]
+            theta = portable.combine(b, self._theta[idx])
         if not np.isfinite(theta).all():
             raise ExtrapolationError(
                 f"cannot generalize to query {q.tolist()}: its barycentric coordinates {b.tolist()} "

@@ -26,6 +26,7 @@ pub mod low_rank_gp;
 pub mod lwr;
 pub mod optimize;
 pub mod output_gp;
+pub mod portable;
 pub mod quaternion;
 pub mod rollout;
 pub mod stepper;

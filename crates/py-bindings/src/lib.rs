@@ -8,6 +8,7 @@ mod generalize;
 mod gp;
 mod learners;
 mod matchbox;
+mod portable;
 mod primitive;
 mod ros2_robot;
 mod stepper;
@@ -34,6 +35,8 @@ mod _core {
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
     };
+    #[pymodule_export]
+    use super::portable::{dls_step, portable_binary, portable_norm, portable_unary};
     #[pymodule_export]
     use super::stepper::{PyCartesianStepper, PyStepper};
 

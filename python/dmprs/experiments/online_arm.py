@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, NumericalError
 from dmprs.experiments import arm_throwing
+from dmprs.portable import matvec_rows
 from dmprs.sim import arm_model as am
 from dmprs.sim import arm_scene, granular, throw_scene
 from dmprs.stepper import JointStepper
@@ -392,9 +393,9 @@ def path_deviation(points: NDArray[np.float64], path: NDArray[np.float64], chunk
         p = points[i:i + chunk]
         # every point against every segment by matrix products (|p - a|^2 expanded), which loses
         # digits to cancellation; the nearest segment's distance is then recomputed directly
-        along = p @ ab.T - a_ab
+        along = matvec_rows(p, ab) - a_ab
         s = np.clip(along / length2, 0.0, 1.0)
-        d2 = (p * p).sum(axis=1)[:, None] - 2 * p @ a.T + a2 - 2 * s * along + s * s * length2
+        d2 = (p * p).sum(axis=1)[:, None] - 2 * matvec_rows(p, a) + a2 - 2 * s * along + s * s * length2
         best = np.argmin(d2, axis=1)
         dist = np.full(len(p), np.inf)
         for j in (np.maximum(best - 1, 0), best, np.minimum(best + 1, len(a) - 1)):  # its neighbours too

@@ -26,6 +26,7 @@ from dmprs.experiments import arm_throwing
 from dmprs.experiments.arm_throwing import demonstrations
 from dmprs.loop import learn
 from dmprs.plots import pyplot, save_figure
+from dmprs.portable import norm
 from dmprs.reproduce.part import Part
 from dmprs.reproduce.stats import trial_stats
 from dmprs.tasks.noise import Noise
@@ -108,7 +109,7 @@ def run_throwing(spec: ThrowingSpec) -> dict[str, Any]:
               max_trials=spec.max_trials, seed=0 if spec.noise_seed is None else 1000 * spec.noise_seed)
     trials = [{"query": t.query.tolist(), "status": t.status, "success": t.success,
                "landing": None if "landing_x" not in t.signals else [t.signals["landing_x"], t.signals["landing_y"]],
-               "miss": None if t.eps is None else float(np.linalg.norm(t.eps))} for t in r.trials]
+               "miss": None if t.eps is None else norm(t.eps)} for t in r.trials]
     return {"kind": "throwing", "target": list(spec.target), "region": spec.region,
             "generalizer": spec.generalizer, "learner": spec.learner, "noise_seed": spec.noise_seed,
             "noise": None if noise is None else list(NOISE), "tol": spec.tol, "max_trials": spec.max_trials,

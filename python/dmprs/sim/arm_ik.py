@@ -13,6 +13,10 @@ joint-limit cost ``H = 1/2 sum ((q_i - m_i) / r_i)^2`` (m_i, r_i: the middle and
 joint i) whose gradient the redundant seventh DOF descends without moving the bottle. Steps are
 repeated (at most ``max_steps``) until the error is below ``tol``; the residual error is
 returned for every sample, so the caller decides what "unreachable" means.
+
+The step's linear algebra and the error norms are :mod:`dmprs.portable`'s (the Rust core's, in a
+fixed order), never BLAS's: the poured volume is chaotic in the joint trajectory, and a BLAS
+kernel chosen by the CPU would make it differ between machines.
 """
 
 from __future__ import annotations
@@ -22,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs import _core
+from dmprs.portable import norm
 from dmprs.sim import arm_model
 
 #: damping lambda of the least-squares step (m or rad): small enough not to slow convergence
@@ -62,6 +68,8 @@ class ArmKinematics:
         self._jacr = np.zeros((3, self.model.nv))
         self._quat = np.zeros(4)
         self._err = np.zeros(3)
+        self._rot_err = np.zeros(3)
+        self._no_motion = np.zeros(7)
 
     def _set(self, q: NDArray[np.float64]) -> None:
         self.data.qpos[:7] = q
@@ -83,28 +91,24 @@ class ArmKinematics:
         xmat = d.site_xmat[self.site]
         mj.mju_mat2Quat(self._quat, xmat)
         mj.mju_subQuat(self._err, np.ascontiguousarray(target[3:]), self._quat)  # in the site frame
+        mj.mju_mulMatVec(self._rot_err, xmat.reshape(3, 3), self._err)  # to the world frame
         e = np.empty(6)
         e[:3] = target[:3] - d.site_xpos[self.site]
-        e[3:] = xmat.reshape(3, 3) @ self._err
-        return e, np.vstack([self._jacp[:, :7], self._jacr[:, :7]])
+        e[3:] = self._rot_err
+        return e, np.ascontiguousarray(np.vstack([self._jacp[:, :7], self._jacr[:, :7]]))
 
     def limit_gradient(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """grad H of the joint-limit cost H = 1/2 sum ((q - middle) / half_range)^2."""
         middle = 0.5 * (self.lower + self.upper)
         half = 0.5 * (self.upper - self.lower)
-        return (q - middle) / half**2
+        return (q - middle) / (half * half)
 
     def step(self, q: NDArray[np.float64], target: NDArray[np.float64], null_step: float,
              ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """One damped-least-squares step toward ``target``: (new q, the error before the step)."""
         e, jac = self.error_and_jacobian(q, target)
-        jjt = jac @ jac.T + DAMPING**2 * np.eye(6)
-        pinv = jac.T @ np.linalg.solve(jjt, np.eye(6))
-        dq = pinv @ e
-        if null_step:
-            z = -null_step * self.limit_gradient(q)
-            dq += z - pinv @ (jac @ z)
-        return q + dq, e
+        z = -null_step * self.limit_gradient(q) if null_step else self._no_motion
+        return q + _core.dls_step(jac, e, z, DAMPING), e
 
     def solve(self, target: NDArray[np.float64], q_init: NDArray[np.float64], *, max_steps: int = 200,
               ) -> tuple[NDArray[np.float64], float, float]:
@@ -114,11 +118,11 @@ class ArmKinematics:
         q = np.array(q_init, dtype=float)
         for _ in range(max_steps):
             q_next, e = self.step(q, target, null_step=0.01)
-            if np.linalg.norm(e[:3]) < POSITION_TOL and np.linalg.norm(e[3:]) < ORIENTATION_TOL:
+            if norm(e[:3]) < POSITION_TOL and norm(e[3:]) < ORIENTATION_TOL:
                 break
             q = q_next
         e, _ = self.error_and_jacobian(q, target)
-        return q, float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))
+        return q, norm(e[:3]), norm(e[3:])
 
     def track(self, t: NDArray[np.float64], poses: NDArray[np.float64], q0: NDArray[np.float64], *,
               max_steps: int = 4) -> IKResult:
@@ -134,12 +138,12 @@ class ArmKinematics:
             dt = float(t[k] - t[k - 1]) if k else 0.0
             for i in range(max_steps):
                 q_next, e = self.step(q, poses[k], null_step=LIMIT_GAIN * dt if i == 0 else 0.0)
-                pe, re = float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))
+                pe, re = norm(e[:3]), norm(e[3:])
                 if pe < POSITION_TOL and re < ORIENTATION_TOL and i > 0:
                     break
                 q = q_next
             else:
                 e, _ = self.error_and_jacobian(q, poses[k])
-                pe, re = float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))
+                pe, re = norm(e[:3]), norm(e[3:])
             q_out[k], pos_err[k], rot_err[k] = q, pe, re
         return IKResult(np.asarray(t, dtype=float), q_out, pos_err, rot_err)

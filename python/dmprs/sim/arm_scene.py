@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import NumericalError
+from dmprs.portable import matvec_rows
 from dmprs.sim import arm_model as am
 from dmprs.sim import granular
 from dmprs.sim.arm_ik import ArmKinematics
@@ -119,7 +120,7 @@ def liquid_xml(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER,
     kd.qpos[:7] = home_configuration()
     mujoco.mj_kinematics(kinematic, kd)
     pos, mat = _bottle_frame(kinematic, kd)
-    world = pos + granular.spawn_sites(n, seed) @ mat.T
+    world = pos + matvec_rows(granular.spawn_sites(n, seed), mat)
     name, iterations, condim = solver
     return am.scene_xml(world, particle_radii=granular.radii(n, seed), solver=name, iterations=iterations,
                         condim=condim)

@@ -10,6 +10,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs.portable import arctan2, hypot, matvec_rows
 from dmprs.sim import arm_model as am
 
 #: region codes of :func:`classify`
@@ -67,9 +68,9 @@ def spawn_sites(n: int, seed: int) -> NDArray[np.float64]:
         x = (i + 0.5 * (j % 2) + (layer % 2) / 2.0) * d
         y = (j + (layer % 2) / 3.0) * d * math.sqrt(3) / 2
         px, py = c * x - s * y + shift[0], s * x + c * y + shift[1]
-        keep = np.hypot(px, py) <= limit
+        keep = hypot(px, py) <= limit
         pts = np.stack([px[keep], py[keep], np.full(int(keep.sum()), z)], axis=1)
-        pts = pts[np.lexsort((np.arctan2(pts[:, 1], pts[:, 0]), np.hypot(pts[:, 0], pts[:, 1]).round(6)))]
+        pts = pts[np.lexsort((arctan2(pts[:, 1], pts[:, 0]), hypot(pts[:, 0], pts[:, 1]).round(6)))]
         sites.append(pts[: n - count])
         count += len(sites[-1])
         z += layer_height
@@ -83,7 +84,7 @@ def in_glass(positions: NDArray[np.float64]) -> NDArray[np.bool_]:
     """
     p = np.asarray(positions, dtype=float)
     gx, gy = am.GLASS_CENTER
-    return ((np.hypot(p[:, 0] - gx, p[:, 1] - gy) < am.GLASS_RADIUS)
+    return ((hypot(p[:, 0] - gx, p[:, 1] - gy) < am.GLASS_RADIUS)
             & (p[:, 2] > 2 * am.WALL) & (p[:, 2] < am.GLASS_HEIGHT))
 
 
@@ -95,9 +96,9 @@ def classify(positions: NDArray[np.float64], bottle_pos: NDArray[np.float64],
     flight, on a rim). The bottle is at ``bottle_pos`` with rotation ``bottle_mat`` (3, 3).
     """
     p = np.asarray(positions, dtype=float)
-    local = (p - bottle_pos) @ np.asarray(bottle_mat).reshape(3, 3)
+    local = matvec_rows(p - bottle_pos, np.asarray(bottle_mat).reshape(3, 3).T)  # R^T (p - pos)
     z = local[:, 2]
-    in_bottle = (z <= 0) & (z >= -am.BOTTLE_LENGTH) & (np.hypot(local[:, 0], local[:, 1]) < cavity_radius(z))
+    in_bottle = (z <= 0) & (z >= -am.BOTTLE_LENGTH) & (hypot(local[:, 0], local[:, 1]) < cavity_radius(z))
     region = np.full(len(p), SPILLED, dtype=np.int8)
     region[in_glass(p)] = IN_GLASS
     region[in_bottle] = IN_BOTTLE

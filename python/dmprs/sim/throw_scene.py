@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import NumericalError
+from dmprs.portable import norm
 from dmprs.sim import arm_model as am
 
 #: m: the pedestal the arm stands on (a table's height), so that the floor is open around it
@@ -178,7 +179,7 @@ def reach() -> Reach:
     d.qpos[:] = settled_ball()[0]
     mujoco.mj_kinematics(m, d)
     points = [d.xanchor[m.joint(j).id].copy() for j in am.JOINT_NAMES] + [d.qpos[7:10].copy()]
-    links = [float(np.linalg.norm(b - a)) for a, b in itertools.pairwise(points)]
+    links = [norm(b - a) for a, b in itertools.pairwise(points)]
     chain = [sum(links[j:]) for j in range(7)]  # the longest joint j -> ball can be
     speed = sum(w * r for w, r in zip(am.VELOCITY_LIMITS, chain, strict=True))
     height = float(points[0][2]) + chain[0]

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
+from dmprs.portable import sin
 from dmprs.profiles import min_jerk
 from dmprs.tasks.base import Task
 from dmprs.tasks.noise import Noise
@@ -29,7 +30,8 @@ CONTROL_PERIOD = 0.002
 
 def outcome_map(peak: float | NDArray[np.float64]) -> float | NDArray[np.float64]:
     """The true, unknown-to-the-learner map from movement peak to outcome."""
-    return peak + 0.3 * np.sin(peak)
+    s = sin(peak)
+    return peak + 0.3 * (float(s) if np.ndim(peak) == 0 else s)
 
 
 def bump(amplitude: float, n: int = 501, duration: float = DURATION) -> Trajectory:

@@ -24,6 +24,7 @@ import numpy as np
 
 from dmprs._arrays import as_scalar
 from dmprs.errors import InvalidInputError
+from dmprs.portable import sin
 from dmprs.trajectory import Trajectory
 
 
@@ -70,7 +71,7 @@ class Noise:
         t = trajectory.t
         s = (t - t[0]) / (t[-1] - t[0])
         a, b = self.execution * rng.standard_normal((2, trajectory.n_dof))
-        e = np.sin(np.pi * s)[:, None] * a + np.sin(2 * np.pi * s)[:, None] * b
+        e = sin(np.pi * s)[:, None] * a + sin(2 * np.pi * s)[:, None] * b
         return Trajectory(t, trajectory.y + e)
 
     def factor(self, rng: np.random.Generator) -> float:

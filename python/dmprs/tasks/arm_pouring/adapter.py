@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from dmprs.adapters import BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.adapters.spec import pose_problems, start_problems
+from dmprs.portable import arccos
 from dmprs.sim import arm_scene as scene
 from dmprs.sim.arm_ik import ArmKinematics
 from dmprs.sim.arm_scene import HOME_POSE, home_configuration
@@ -38,7 +39,7 @@ def _tilt(quat: NDArray[np.float64]) -> NDArray[np.float64]:
     """The angle (rad) between the bottle's axis (the mouth frame's z) and the vertical."""
     _w, x, y = quat[:, 0], quat[:, 1], quat[:, 2]
     zz = 1 - 2 * (x * x + y * y)  # the z component of the rotated z axis
-    return np.arccos(np.clip(zz / np.sum(quat * quat, axis=1), -1.0, 1.0))
+    return arccos(np.clip(zz / np.sum(quat * quat, axis=1), -1.0, 1.0))
 
 
 @functools.lru_cache(maxsize=1)

@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from dmprs.errors import InvalidInputError
+from dmprs.portable import cos, sin
 from dmprs.profiles import min_jerk
 from dmprs.sim.arm_scene import HOME_POSE
 from dmprs.tasks.arm_pouring.adapter import CONTROL_PERIOD
@@ -40,7 +41,7 @@ def pour_poses(peak_tilt: float, timing: tuple[float, float, float, float] = DEM
     start, goal = np.asarray(HOME_POSE[:3]), np.asarray(POUR_POSITION)
     position = start + min_jerk(t / reach)[0][:, None] * (goal - start)
     angle = peak * (min_jerk((t - reach) / up)[0] - min_jerk((t - reach - up - hold) / down)[0])
-    quat = np.stack([np.cos(angle / 2), np.sin(angle / 2), np.zeros_like(t), np.zeros_like(t)], axis=1)
+    quat = np.stack([cos(angle / 2), sin(angle / 2), np.zeros_like(t), np.zeros_like(t)], axis=1)
     return CartesianTrajectory.from_pose(t, np.hstack([position, quat]))
 
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from dmprs.adapters import BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
+from dmprs.portable import norm
 from dmprs.sim.throw_scene import HOME, simulate_throw
 from dmprs.tasks import iiwa
 from dmprs.tasks.noise import Noise
@@ -82,6 +83,6 @@ class ArmThrowingAdapter(BaseAdapter):
         x, y = (self.noise.measure(float(v), self._rng) for v in r.landing)
         return Outcome(Status.OK, executed=done, signals={
             "landing_x": x, "landing_y": y, "landing_time": r.landing_time, "release_time": r.release_time,
-            "release_speed": float(np.linalg.norm(r.release_velocity)),
+            "release_speed": norm(r.release_velocity),
             "tracking_error": float(np.abs(r.q - r.q_ref).max()),
         })

@@ -10,6 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs._arrays import as_scalar
 from dmprs.adapters import Outcome
 from dmprs.errors import InvalidInputError
+from dmprs.portable import norm
 from dmprs.sim.throw_scene import reach
 from dmprs.tasks.arm_throwing.adapter import ArmThrowingAdapter
 from dmprs.tasks.base import Task
@@ -42,7 +43,7 @@ class ArmThrowing(Task):
         beyond it is refused, not simulated.
         """
         q = super().validate_query(query, name)
-        r, span = float(np.hypot(*q)), reach()
+        r, span = norm(q), reach()
         if not span.low <= r <= span.high:
             raise InvalidInputError(
                 f"{name} = ({q[0]:.6g}, {q[1]:.6g}) m is {r:.4g} m from the arm's base, beyond the task's reach: "
@@ -57,4 +58,4 @@ class ArmThrowing(Task):
 
     def success(self, desired_query: ArrayLike, outcome: Outcome) -> bool:
         """Whether the ball landed within ``tol`` of the target (a round basket)."""
-        return bool(np.linalg.norm(self.error(desired_query, outcome)) < self.tol)
+        return bool(norm(self.error(desired_query, outcome)) < self.tol)
