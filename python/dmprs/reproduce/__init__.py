@@ -27,7 +27,7 @@ from dmprs.parallel import pmap
 from dmprs.reproduce.figures import write_figures
 from dmprs.reproduce.plan import LearnSpec, plan, skipped
 from dmprs.reproduce.report import PAPER, markdown, summarize
-from dmprs.reproduce.run import _prepare_pouring, dispatch, run_learning
+from dmprs.reproduce.run import _prepare_pouring, dispatch, pinned_numerics, run_learning
 
 __all__ = ["PAPER", "LearnSpec", "dispatch", "markdown", "plan", "reproduce", "run_learning", "skipped",
            "summarize", "write_figures"]
@@ -55,7 +55,8 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
 
     try:
         _prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]))
-        results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result)
+        with pinned_numerics():
+            results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result)
         report = summarize(results)
         report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1),
                       skipped=skipped(quick))

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
+import importlib
+import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +15,45 @@ from dmprs.experiments.arm_pouring import demonstrations
 from dmprs.reproduce.parts import BY_KIND
 from dmprs.reproduce.plan import LearnSpec
 from dmprs.tasks.pouring import DEMO_VOLUMES, demonstration
+
+#: OpenBLAS's kernel for the x86-64 baseline (SSE3), which every x86-64 CPU can run
+PORTABLE_BLAS_KERNEL = "Prescott"
+
+
+def _numpy_dispatch_targets() -> str:
+    """numpy's run-time dispatch targets that this CPU has (empty if numpy does not say)."""
+    try:
+        m = importlib.import_module("numpy._core._multiarray_umath")  # numpy's record of its dispatch
+        features: dict[str, bool] = m.__cpu_features__
+        return " ".join(f for f in m.__cpu_dispatch__ if features.get(f))
+    except (ImportError, AttributeError):
+        return ""
+
+
+@contextlib.contextmanager
+def pinned_numerics() -> Iterator[None]:
+    """Local workers started inside run the same BLAS kernel and numpy loops on every machine.
+
+    dmprs's own numerics do not depend on the CPU (:mod:`dmprs.portable`), but the baselines'
+    packages do: scikit-learn's GP (Bayesian optimization) factors with LAPACK and takes numpy's
+    ``exp``, CMA-ES decomposes its covariance. OpenBLAS and numpy read their choice from the
+    environment when they load, so the workers (spawned, so they load afresh) are started with
+    OpenBLAS's baseline kernel, one thread, and numpy's dispatch beyond its baseline disabled.
+    This process keeps what it has; the variables are restored on leaving.
+    """
+    pins = {"OPENBLAS_CORETYPE": PORTABLE_BLAS_KERNEL, "OPENBLAS_NUM_THREADS": "1"}
+    if targets := _numpy_dispatch_targets():
+        pins["NPY_DISABLE_CPU_FEATURES"] = targets
+    saved = {k: os.environ.get(k) for k in pins}
+    os.environ.update(pins)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 def run_learning(spec: LearnSpec) -> dict[str, Any]:
