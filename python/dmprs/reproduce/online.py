@@ -18,7 +18,8 @@ import numpy as np
 from dmprs.errors import InvalidInputError
 from dmprs.experiments import online_arm as oa
 from dmprs.plots import pyplot, save_figure
-from dmprs.reproduce.part import Part
+from dmprs.portable import norm
+from dmprs.reproduce.part import LIQUID_SEEDS, Part
 from dmprs.tasks.arm_pouring import SUCCESS_TOLERANCE as POUR_TOLERANCE
 from dmprs.tasks.arm_pouring import TARGET_VOLUME
 from dmprs.tasks.arm_throwing import SUCCESS_TOLERANCE as BASKET_TOLERANCE
@@ -31,26 +32,30 @@ WRIST = 6
 
 @dataclass(frozen=True)
 class OnlineSpec:
-    """One scenario: ``"held-pour"`` (``value``: alpha_e), ``"moving-basket"`` (``value``: the
-    time of the basket's move, s) or ``"velocity-limit"`` (``value`` unused).
+    """One scenario: ``"held-pour"`` (``value``: alpha_e, with the liquid of ``liquid_seed``),
+    ``"moving-basket"`` (``value``: the time of the basket's move, s) or ``"velocity-limit"``
+    (``value`` unused).
     """
 
     scenario: str
     value: float = 0.0
+    liquid_seed: int = 0
     kind: str = "online"
 
     @property
     def label(self) -> str:
         """The run's name in progress lines and errors."""
-        return f"online {self.scenario} {self.value:g}"
+        return f"online {self.scenario} {self.value:g} (liquid {self.liquid_seed})"
 
 
 def plan_online(quick: bool = False) -> list[OnlineSpec]:
-    """The held pour with and without phase stopping, the basket moved at several times (one when
-    ``quick``), the velocity limit.
+    """The held pour with and without phase stopping, each with every liquid of
+    :data:`LIQUID_SEEDS`; the basket moved at several times; the velocity limit (``quick``: one
+    liquid, one move).
     """
     moves = (oa.MOVE_TIME,) if quick else (oa.MOVE_TIME, 0.6, 0.9, 1.1)
-    return [OnlineSpec("held-pour", 1e4), OnlineSpec("held-pour", 0.0),
+    liquids = LIQUID_SEEDS[:1] if quick else LIQUID_SEEDS
+    return [*(OnlineSpec("held-pour", alpha_e, seed) for alpha_e in (1e4, 0.0) for seed in liquids),
             *(OnlineSpec("moving-basket", t) for t in moves), OnlineSpec("velocity-limit")]
 
 
@@ -62,9 +67,9 @@ def run_online(spec: OnlineSpec) -> dict[str, Any]:
     """Runs one scenario; plain data (numbers, and the curves of the figure)."""
     out: dict[str, Any] = {"scenario": spec.scenario, "value": spec.value}
     if spec.scenario == "held-pour":
-        r = oa.held_pour(oa.pour_dmp(), alpha_e=spec.value)
+        r = oa.held_pour(oa.pour_dmp(), alpha_e=spec.value, liquid_seed=spec.liquid_seed)
         run, every = r.run, _every(r.run.times)
-        out.update(alpha_e=spec.value, hold=[oa.HOLD_START, oa.HOLD],
+        out.update(alpha_e=spec.value, liquid_seed=spec.liquid_seed, hold=[oa.HOLD_START, oa.HOLD],
                    poured_ml=1000 * r.poured_volume, error_ml=1000 * (r.poured_volume - TARGET_VOLUME),
                    tolerance_ml=1000 * POUR_TOLERANCE, tracking_error=run.tracking_error, hold_drift=r.hold_drift,
                    phase_kept=r.phase_kept, end_time=run.end_time,
@@ -73,7 +78,7 @@ def run_online(spec: OnlineSpec) -> dict[str, Any]:
                    q=run.q[every, WRIST].tolist())
     elif spec.scenario == "moving-basket":
         b = oa.moving_basket_throw(move_time=spec.value)
-        dist = {name: float(np.linalg.norm(getattr(b, name).landing - b.moved))
+        dist = {name: norm(getattr(b, name).landing - b.moved)
                 for name in ("updated", "ignored", "planned")}
         out.update(move_time=spec.value, basket=b.basket.tolist(), moved=b.moved.tolist(),
                    landings={name: getattr(b, name).landing.tolist() for name in dist}, distances=dist,
@@ -97,17 +102,37 @@ def run_online(spec: OnlineSpec) -> dict[str, Any]:
 
 
 def summarize_online(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """One row per run: the scenario, its setting, what was measured, its truth and whether it held."""
+    """One row per setting: the scenario, its setting, what was measured, its truth and whether it
+    held. The held pour's liquids are one setting: medians and ranges over them, held when every
+    liquid's pour is within the tolerance.
+    """
     rows = []
-    for r in (r for r in results if r.get("kind") == "online"):
+    online = [r for r in results if r.get("kind") == "online"]
+    held = [r for r in online if r["scenario"] == "held-pour"]
+    for alpha_e in dict.fromkeys(r["alpha_e"] for r in held):
+        runs = [r for r in held if r["alpha_e"] == alpha_e]
+        r = runs[0]
+
+        def spread(key: str, fmt: str, runs: list[dict[str, Any]] = runs) -> str:
+            v = [x[key] for x in runs]
+            if len(v) == 1:
+                return format(v[0], fmt)
+            return f"{format(float(np.median(v)), fmt)} [{format(min(v), fmt)}-{format(max(v), fmt)}]"
+
+        met = sum(x["met"] for x in runs)
+        rows.append({"part": "online", "scenario": "held-pour",
+                     "setting": f"held {r['hold'][1]:g} s from {r['hold'][0]:g} s, alpha_e = {alpha_e:g}, "
+                                f"{len(runs)} liquid(s)",
+                     "measured": (f"poured {spread('poured_ml', '.0f')} ml, {met}/{len(runs)} within; tracking "
+                                  f"error {spread('tracking_error', '.3f')} rad; phase kept {spread('phase_kept', '.3f')}; "
+                                  f"ends at {spread('end_time', '.2f')} s"),
+                     "truth": f"abs error < {r['tolerance_ml']:g} ml", "met": met == len(runs)})
+    for r in online:
         if r["scenario"] == "held-pour":
-            setting = f"held {r['hold'][1]:g} s from {r['hold'][0]:g} s, alpha_e = {r['alpha_e']:g}"
-            measured = (f"poured {r['poured_ml']:.0f} ml ({r['error_ml']:+.0f}); tracking error "
-                        f"{r['tracking_error']:.3f} rad; phase kept {r['phase_kept']:.3f}; ends at {r['end_time']:.2f} s")
-            truth = f"abs error < {r['tolerance_ml']:g} ml"
-        elif r["scenario"] == "moving-basket":
+            continue
+        if r["scenario"] == "moving-basket":
             d = r["distances"]
-            setting = f"basket moved {100 * np.linalg.norm(np.subtract(r['moved'], r['basket'])):.0f} cm at {r['move_time']:g} s"
+            setting = f"basket moved {100 * norm(np.subtract(r['moved'], r['basket'])):.0f} cm at {r['move_time']:g} s"
             measured = (f"landed {100 * d['updated']:.1f} cm from it (ignoring the move {100 * d['ignored']:.1f} cm, "
                         f"its own DMP {100 * d['planned']:.1f} cm); tau {r['tau'][0]:g} -> {r['tau'][1]:g} s")
             truth = f"< {100 * r['tolerance']:g} cm"
@@ -141,7 +166,8 @@ def figure_online(results: list[dict[str, Any]], out: str | Path) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))
     runs = [r for r in results if r.get("kind") == "online"]
-    for r in (r for r in runs if r["scenario"] == "held-pour"):
+    # one liquid's curves (the first): every liquid's would hide the hold in clutter
+    for r in (r for r in runs if r["scenario"] == "held-pour" and r.get("liquid_seed", 0) == 0):
         name = "phase stopping" if r["alpha_e"] > 0 else "no phase stopping"
         line, = ax[0].plot(r["t"], r["command"], "--", lw=1, label=f"command, {name}")
         ax[0].plot(r["t"], r["q"], color=line.get_color(), lw=1.5, label=f"arm, {name}")

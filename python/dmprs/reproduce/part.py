@@ -12,6 +12,11 @@ from typing import Any
 
 from dmprs._extras import available
 
+#: the liquids of every pouring setting, 2-D, on the arm and held in the servo loop: granular flow
+#: is chaotic (docs/arm.md, noise floor), so one liquid's result is one draw, and each setting is
+#: run with several and reported by its median and range
+LIQUID_SEEDS = (0, 1, 2, 3, 4)
+
 
 @dataclass(frozen=True)
 class Part:

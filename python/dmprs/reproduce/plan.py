@@ -10,13 +10,11 @@ from dmprs._extras import available, install_hint
 from dmprs.baselines import BaselineSpec
 from dmprs.experiments import needs
 from dmprs.experiments.arm_pouring import MAX_TRIALS
+from dmprs.reproduce.part import LIQUID_SEEDS
 from dmprs.reproduce.parts import PARTS
 
 #: l: the bottles the arm learns to pour from
 ARM_VOLUMES = (0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
-#: the arm's liquids: granular flow is chaotic (docs/arm.md, noise floor), so one liquid's trial
-#: count is one draw, and each setting is learned with several liquids
-ARM_LIQUID_SEEDS = (0, 1, 2, 3, 4)
 #: setup keys that draw a run's randomness rather than define its setting: runs that differ only
 #: in these are one setting, reported by their median, range and success count
 SEED_KEYS = ("liquid_seed",)
@@ -59,7 +57,9 @@ def _paper_specs(quick: bool) -> list[Any]:
     pour_learners = ["golden"] if quick else ["golden", "golden-robust", "fixed", "root", "broyden"]
     for v in volumes:
         for learner in pour_learners:
-            specs.append(LearnSpec("pouring", "pouring", learner, 7 if quick else 15, (("bottle_volume", v),)))
+            for seed in LIQUID_SEEDS[:1] if quick else LIQUID_SEEDS:
+                specs.append(LearnSpec("pouring", "pouring", learner, 7 if quick else 15,
+                                       (("bottle_volume", v), ("liquid_seed", seed))))
     seeds = range(2) if quick else range(10)
     budget = 30 if quick else 200
     sigmas = [0.1] if quick else [0.02, 0.05, 0.1]
@@ -76,7 +76,7 @@ def _paper_specs(quick: bool) -> list[Any]:
     # as the paper, the root finder beside it, each over several liquids
     for v in [0.6] if quick else ARM_VOLUMES:
         for learner in ["golden"] if quick else ["golden", "root"]:
-            for seed in ARM_LIQUID_SEEDS[:1] if quick else ARM_LIQUID_SEEDS:
+            for seed in LIQUID_SEEDS[:1] if quick else LIQUID_SEEDS:
                 specs.append(LearnSpec("arm_pouring", "arm-pouring", learner, MAX_TRIALS,
                                        (("bottle_volume", v), ("liquid_seed", seed))))
     return specs

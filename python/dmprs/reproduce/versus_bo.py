@@ -54,7 +54,8 @@ class Setting:
 SETTINGS = (
     Setting("matchbox, demos flipped back + over", "matchbox", (("demos", "default"),), 30),
     Setting("matchbox, both demos flipped back", "matchbox", (("demos", "both_flipped_back"),), 30),
-    *(Setting(f"pouring from {v} l", "pouring", (("bottle_volume", v),), 15) for v in (0.4, 0.5, 0.7, 0.25)),
+    *(Setting(f"pouring from {v} l, 5 liquids", "pouring", (("bottle_volume", v),), 15, draw="liquid")
+      for v in (0.4, 0.5, 0.7, 0.25)),
     Setting("arm pouring from 0.5 l, 5 liquids", "arm-pouring", (("bottle_volume", 0.5),), ARM_MAX_TRIALS,
             draw="liquid"),
     *(Setting(f"throwing into a 2 cm basket {region} the demos' range, 5 baskets", "arm-throwing",
