@@ -12,9 +12,20 @@ import pytest
 from click.testing import CliRunner
 
 from dmprs.cli import main
+from dmprs.errors import InvalidInputError
+from dmprs.reproduce.check import ReproductionMismatchError, check_summary, first_difference
 from dmprs.reproduce.report import summarize
 from dmprs.reproduce.stats import cell, trial_stats
-from dmprs.reproduce.tables import BEGIN, END, SUMMARY_PATH, TABLES, documents, render, update_docs
+from dmprs.reproduce.tables import (
+    BEGIN,
+    END,
+    QUICK_SUMMARY_PATH,
+    SUMMARY_PATH,
+    TABLES,
+    documents,
+    render,
+    update_docs,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -107,23 +118,60 @@ def test_update_docs_rewrites_only_the_marked_blocks_and_stores_the_summary(tmp_
     text = readme.read_text()
     assert text.startswith(prose) and text.endswith("\n\nText after.\n")
     assert TABLES["readme"](summary) in text and "stale" not in text
-    assert json.loads((tmp_path / SUMMARY_PATH).read_text()) == summary
+    assert json.loads((tmp_path / SUMMARY_PATH).read_text()) == {k: v for k, v in summary.items() if k != "seconds"}
     assert update_docs(tmp_path, summary) == []  # idempotent
 
 
-def test_update_docs_refuses_a_quick_summary_and_an_unknown_table(tmp_path):
-    with pytest.raises(ValueError, match="--quick"):
-        update_docs(tmp_path, {**committed_summary(), "quick": True})
+def test_a_quick_summary_is_stored_apart_and_rewrites_no_table(tmp_path):
+    (tmp_path / "README.md").write_text(f"{BEGIN.format(name='readme')}\nstale\n{END}\n")
+    (tmp_path / "docs").mkdir()
+    quick = {**committed_summary(), "quick": True, "seconds": 3.5}
+    assert update_docs(tmp_path, quick) == []
+    assert "stale" in (tmp_path / "README.md").read_text()
+    assert json.loads((tmp_path / QUICK_SUMMARY_PATH).read_text())["quick"] is True
+    assert not (tmp_path / SUMMARY_PATH).exists()
+
+
+def test_an_unknown_table_is_refused():
     with pytest.raises(KeyError, match="no generated table is named 'nope'"):
         render(f"{BEGIN.format(name='nope')}\n{END}", committed_summary())
 
 
+def test_the_docs_are_never_written_through_a_symbolic_link(tmp_path):
+    (tmp_path / "README.md").write_text("no tables\n")
+    (tmp_path / "docs").mkdir()
+    outside = tmp_path / "outside.json"
+    outside.write_text("keep me\n")
+    (tmp_path / SUMMARY_PATH).symlink_to(outside)
+    with pytest.raises(InvalidInputError, match="symbolic link"):
+        update_docs(tmp_path, committed_summary())
+    assert outside.read_text() == "keep me\n"
+
+
 @pytest.mark.parametrize(("args", "why"), [
-    (["--quick", "--update-docs", "."], "--update-docs takes a full run"),
-    (["--update-docs", "{tmp}"], "no README.md there"),
+    (["--update-docs", "{tmp}"], "not a checkout's root"),
+    (["--update-docs", "{tmp}/checkout"], "symbolic link"),
 ])
-def test_the_cli_refuses_update_docs_without_a_full_run_or_a_checkout(tmp_path, args, why):
+def test_the_cli_refuses_update_docs_without_a_checkout_before_the_run(tmp_path, args, why):
+    checkout = tmp_path / "checkout"
+    (checkout / "docs").mkdir(parents=True)
+    (checkout / "README.md").write_text("x\n")
+    (checkout / SUMMARY_PATH).symlink_to(tmp_path / "elsewhere.json")
     args = [a.format(tmp=tmp_path) for a in args]
     result = CliRunner().invoke(main, ["reproduce", *args, "--out", str(tmp_path / "out")])
     assert result.exit_code == 2 and why in result.output
     assert not (tmp_path / "out").exists()  # refused before any work
+
+
+def test_check_names_the_first_difference_and_ignores_timings(tmp_path):
+    summary = committed_summary()
+    stored = tmp_path / "summary.json"
+    stored.write_text(json.dumps({**summary, "seconds": 1.0}))
+    check_summary({**summary, "seconds": 99.0}, stored)  # timings aside, identical
+    changed = json.loads(json.dumps(summary))
+    changed["rows"][3]["median"] = 1 + (changed["rows"][3]["median"] or 0)
+    with pytest.raises(ReproductionMismatchError, match=r"summary\['rows'\]\[3\]\['median'\]"):
+        check_summary(changed, stored)
+    assert first_difference({"a": [1.0]}, {"a": [1.0000000000000002]}) == "summary['a'][0]: the reference has 1.0, this run 1.0000000000000002"
+    assert first_difference({"a": 1}, {"a": 1.0}) is not None  # an int is not a float
+    assert first_difference({"a": [1]}, {"a": [1, 2]}) == "summary['a']: 2 entries, the reference has 1"

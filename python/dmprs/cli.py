@@ -16,7 +16,8 @@ from dmprs.io.importer import build_database, load_demos
 from dmprs.loop import LearningResult, learn
 from dmprs.plots import plot_run
 from dmprs.reproduce import reproduce, skipped
-from dmprs.reproduce.tables import update_docs
+from dmprs.reproduce.check import check_summary
+from dmprs.reproduce.tables import docs_targets, update_docs
 from dmprs.runlog import RunLog
 
 
@@ -366,13 +367,20 @@ def serve_cmd(task: str, domain_id: int, speed: float, volume: float, liquid_see
 @click.option("--workers", type=int, default=None, help="parallel workers (default: all cores)")
 @click.option("--update-docs", "docs_root", type=click.Path(path_type=Path, file_okay=False, exists=True),
               default=None, help="after a full run, rewrite the generated result tables of this checkout "
-              "(README.md, docs/*.md) and store the summary they cite as docs/reproduction.json")
-def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None, docs_root: Path | None) -> None:
+              "(README.md, docs/*.md) and store the summary they cite as docs/reproduction.json; after a "
+              "--quick run, store its summary as docs/reproduction-quick.json")
+@click.option("--check", "reference", type=click.Path(path_type=Path, dir_okay=False, exists=True), default=None,
+              help="after the run, compare its summary with this stored one (docs/reproduction.json, or "
+              "docs/reproduction-quick.json with --quick) bit for bit, timings aside; exit 1 naming the "
+              "first difference")
+def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None, docs_root: Path | None,
+                  reference: Path | None) -> None:
     """Run the paper's experiments in simulation and the baselines; write the report."""
-    if docs_root is not None and quick:
-        raise click.UsageError("--update-docs takes a full run: the docs cite the full reproduction, not --quick")
-    if docs_root is not None and not (docs_root / "README.md").is_file():
-        raise click.UsageError(f"--update-docs {docs_root}: no README.md there (give the checkout's root)")
+    if docs_root is not None:
+        try:
+            docs_targets(docs_root, quick)  # before the run, not after an hour of it
+        except InvalidInputError as exc:
+            raise click.UsageError(str(exc)) from None
     import os
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -402,7 +410,13 @@ def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None, doc
     click.echo(f"finished in {report['seconds']} s; report and figures in {out}")
     if docs_root is not None:
         changed = update_docs(docs_root, report)
-        click.echo(f"tables rewritten in {', '.join(str(p) for p in changed) or 'no file (all current)'}")
+        click.echo(f"summary stored; tables rewritten in {', '.join(str(p) for p in changed) or 'no file'}")
+    if reference is not None:
+        try:
+            check_summary(report, reference)
+        except DmprsError as exc:
+            raise click.ClickException(str(exc)) from None
+        click.echo(f"the run reproduces {reference} bit for bit (timings aside)")
 
 
 @main.command("demo")

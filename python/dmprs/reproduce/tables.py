@@ -14,7 +14,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from dmprs._io import strict_json
+from dmprs._io import strict_json, write_atomic
+from dmprs.errors import InvalidInputError
+from dmprs.reproduce.check import TIMING_KEYS
 from dmprs.reproduce.stats import cell
 from dmprs.reproduce.versus_bo import markdown_versus
 
@@ -24,6 +26,8 @@ BEGIN = "<!-- generated from docs/reproduction.json by `dmprs reproduce --update
 END = "<!-- end of generated table -->"
 #: where a checkout keeps the summary its tables were written from
 SUMMARY_PATH = Path("docs") / "reproduction.json"
+#: where it keeps the quick reproduction's summary, the reference CI checks its own quick run with
+QUICK_SUMMARY_PATH = Path("docs") / "reproduction-quick.json"
 
 _BLOCK = re.compile(re.escape(BEGIN).replace(re.escape("{name}"), r"(?P<name>[a-z0-9-]+)")
                     + r"\n(?P<body>.*?)" + re.escape(END), re.DOTALL)
@@ -67,6 +71,7 @@ def readme(summary: dict[str, Any]) -> str:
         return cell(_one(_rows(summary, part, learner), **setting))
 
     pour = [0.4, 0.5, 0.7]
+    pour_liquids = max(r["runs"] for r in _rows(summary, "pouring", "golden"))
     arm_volumes = _volumes(_rows(summary, "arm_pouring", "golden"))
     liquids = max(r["runs"] for r in _rows(summary, "arm_pouring", "golden"))
     throws = [r for r in _section(summary, "throwing") if r["learner"] == "secant" and r["generalizer"] == "linear"
@@ -87,7 +92,7 @@ def readme(summary: dict[str, Any]) -> str:
         _line("matchbox, both demos flipped back (Fig. 7)", "eq. 17 (weighted) / eq. 16",
               _joined([learned("matchbox_both_flipped_back", lr) for lr in ("weighted", "error")]),
               "succeeds, no count"),
-        _line(f"pouring 0.2 l from {over(pour)} l (Fig. 9)", "golden section (paper mode)",
+        _line(f"pouring 0.2 l from {over(pour)} l, {pour_liquids} liquids each (Fig. 9)", "golden section (paper mode)",
               _joined([learned("pouring", "golden", bottle_volume=v) for v in pour]), "similar rates, no count"),
         _line("pouring, same volumes", "fixed-gain eq. 16, K = 1 l/l",
               _joined([learned("pouring", "fixed", bottle_volume=v) for v in pour]), '"less successful"'),
@@ -164,19 +169,39 @@ def documents(root: Path) -> list[Path]:
     return [p for p in [root / "README.md", *sorted((root / "docs").glob("*.md"))] if p.is_file()]
 
 
-def update_docs(root: str | Path, summary: dict[str, Any]) -> list[Path]:
-    """Rewrites the generated tables of the checkout at ``root`` from a full run's ``summary``
-    and stores it as :data:`SUMMARY_PATH`; returns the files that changed.
+def docs_targets(root: str | Path, quick: bool) -> list[Path]:
+    """The files :func:`update_docs` writes in the checkout at ``root``, checked before a run
+    so that a wrong root fails at once: the checkout must have README.md and docs/, and no target
+    may be a symbolic link (the docs are never written through one).
     """
-    if summary.get("quick"):
-        raise ValueError("the docs cite the full reproduction: this summary is of a --quick run")
     root = Path(root)
+    if not (root / "README.md").is_file() or not (root / "docs").is_dir() or (root / "docs").is_symlink():
+        raise InvalidInputError(f"--update-docs {root}: not a checkout's root (it needs README.md and a docs/ folder)")
+    targets = [root / (QUICK_SUMMARY_PATH if quick else SUMMARY_PATH)]
+    if not quick:
+        targets += documents(root)
+    links = [str(p) for p in targets if p.is_symlink()]
+    if links:
+        raise InvalidInputError(f"--update-docs {root}: {', '.join(links)} is a symbolic link; the docs are "
+                                "never written through one")
+    return targets
+
+
+def update_docs(root: str | Path, summary: dict[str, Any]) -> list[Path]:
+    """Stores a run's ``summary`` in the checkout at ``root``: a full run's as
+    :data:`SUMMARY_PATH` with every generated table rewritten from it, a quick run's as
+    :data:`QUICK_SUMMARY_PATH` (the reference of ``dmprs reproduce --quick --check``). Returns the
+    files that changed.
+    """
+    quick = bool(summary.get("quick"))
+    store, *docs = docs_targets(root, quick)
     changed = []
-    for path in documents(root):
+    for path in docs:
         text = path.read_text()
         new = render(text, summary)
         if new != text:
-            path.write_text(new)
+            write_atomic(path, new.encode())
             changed.append(path)
-    (root / SUMMARY_PATH).write_text(json.dumps(strict_json(summary), indent=1, default=str, allow_nan=False) + "\n")
+    stored = {k: v for k, v in summary.items() if k not in TIMING_KEYS}
+    write_atomic(store, (json.dumps(strict_json(stored), indent=1, default=str, allow_nan=False) + "\n").encode())
     return changed
