@@ -409,8 +409,13 @@ def write_atomic(path: Path, data: bytes, *, sync_dir: bool = True) -> None:
     calls :func:`fsync_dir` once after the last.
     """
     path = Path(path)
+    try:  # the file keeps its permissions; a new one gets a plain file's, not mkstemp's 0600
+        mode = stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        mode = 0o644
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        os.fchmod(fd, mode)
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
