@@ -52,9 +52,10 @@ class Controller(ControllerThread):
     joint), and before any goal a stale one.
     """
 
-    def __init__(self, robot: RobotNode, ending: str = "succeed"):
+    def __init__(self, robot: RobotNode, ending: str = "succeed", scale: float | None = None,
+                 robot_domain: int = 0):
         super().__init__()
-        self.robot, self.ending = robot, ending
+        self.robot, self.ending, self.scale, self.robot_domain = robot, ending, scale, robot_domain
         self.q = np.zeros(3)
         self.clock = CLOCK0
         self.goals: list = []
@@ -96,7 +97,14 @@ class Controller(ControllerThread):
                     active = None
                     time.sleep(0.05)  # the readings come a little after the motion, as a scale's would
                     self.clock += 0.05
-                    self.robot.publish_signal(SCALE.topic, float(self.q.sum()), time.time())
+                    if self.scale is None:
+                        self.robot.publish_signal(SCALE.topic, float(self.q.sum()), time.time())
+                    else:  # another publisher's reading (the robot node refuses a non-finite one)
+                        with Node("stray_scale", self.robot_domain) as node:
+                            stray = node.create_publisher(m.message_class("std_msgs/msg/Float64"), SCALE.topic)
+                            stray.wait_for_subscribers(1, 5.0)
+                            stray.publish(m.message_class("std_msgs/msg/Float64")(data=self.scale))
+                            time.sleep(0.2)
                     self.robot.publish_signal(CAMERA.topic, [float(self.q[0]), 0.0, 0.0], self.clock)
             if not (self.ending == "silent" and self.goals):
                 self.robot.publish_joint_state(self.clock, self.q)
@@ -232,6 +240,14 @@ def test_a_signal_that_never_comes_is_an_error(robot, domain_id):
         out = a.execute(move(0.2), timeout_s=10.0)
     assert out.status is Status.ERROR and "/scale/weight" in out.message
     assert out.executed is not None
+
+
+@pytest.mark.parametrize("reading", [float("nan"), float("inf")])
+def test_a_signal_that_is_not_a_number_is_an_error_naming_its_topic(robot, domain_id, reading):
+    with Controller(robot, scale=reading, robot_domain=domain_id), adapter(domain_id) as a:
+        out = a.execute(move(0.2), timeout_s=10.0)
+    assert out.status is Status.ERROR and "/scale/reading" in out.message and "not a measurement" in out.message
+    assert out.executed is not None  # the motion's record is kept
 
 
 def test_the_adapter_passes_the_conformance_check(robot, domain_id):

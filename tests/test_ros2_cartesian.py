@@ -17,8 +17,9 @@ from dmprs import CartesianDMP
 from dmprs._core import RobotNode
 from dmprs.adapters import AdapterSpec, Status, check_adapter
 from dmprs.errors import InvalidInputError
+from dmprs.ros2 import Node, messages
 from dmprs.ros2.adapter import SignalTopic, signal_specs
-from dmprs.ros2.cartesian import CARTESIAN_CONTROLLER, Ros2PoseAdapter
+from dmprs.ros2.cartesian import CARTESIAN_CONTROLLER, Ros2PoseAdapter, pose_stamped
 from dmprs.trajectory import CartesianTrajectory
 from tests.ros2_helpers import ControllerThread
 
@@ -127,6 +128,41 @@ def test_a_robot_away_from_the_start_is_refused_and_sent_nothing(robot, domain_i
     assert out.status is Status.REJECTED
     assert "the robot is at [0.42, 0.0, 0.3" in out.message and "20 mm" in out.message
     assert controller.targets == []
+
+
+class StrayPose(threading.Thread):
+    """Another publisher of the controller's current pose (Cyclone DDS, not the robot node, which
+    refuses to publish a non-finite pose), publishing ``pose`` every 2 ms until stopped.
+    """
+
+    def __init__(self, domain_id: int, pose):
+        super().__init__(daemon=True)
+        self.domain_id, self.pose, self.halt = domain_id, np.array(pose, dtype=float), threading.Event()
+
+    def run(self) -> None:
+        with Node("stray_pose", self.domain_id) as node:
+            publisher = node.create_publisher(messages.PoseStamped, f"{CARTESIAN_CONTROLLER}/current_pose")
+            while not self.halt.is_set():
+                publisher.publish(pose_stamped(self.pose, time.time(), "world"))
+                time.sleep(0.002)
+
+
+@pytest.mark.parametrize(("pose", "why"), [
+    ([0.4, 0.0, 0.3, 0.0, 0.0, 0.0, 0.0], "has norm 0, not a unit quaternion"),
+    ([float("nan"), 0.0, 0.3, 1.0, 0.0, 0.0, 0.0], "is not a finite pose"),
+])
+def test_a_robot_reporting_no_usable_pose_is_refused_and_sent_nothing(robot, domain_id, pose, why):
+    stray = StrayPose(domain_id, pose)
+    stray.start()
+    try:
+        with adapter(domain_id) as a:
+            out = a.execute(rollout(), timeout_s=10)
+    finally:
+        stray.halt.set()
+        stray.join()
+    assert out.status is Status.REJECTED and why in out.message
+    stamps, _, _ = robot.poll_poses()
+    assert len(stamps) == 0  # no target reached the robot
 
 
 def test_stop_ends_the_stream_where_it_is(robot, domain_id):

@@ -13,6 +13,7 @@ import numpy as np
 
 from dmprs import quaternion
 from dmprs.errors import InvalidInputError
+from dmprs.portable import norm
 from dmprs.trajectory import AnyTrajectory, CartesianTrajectory, Trajectory
 
 
@@ -132,7 +133,8 @@ class AdapterSpec:
         self._check_motion(problems, trajectory.duration, t, y, trajectory.yd, trajectory.ydd)
         if self.start_pose is not None:
             off = np.abs(y[0] - np.asarray(self.start_pose))
-            for d in np.flatnonzero(off > self.start_tolerance):
+            # `not <=`: a start the robot reports as NaN is away from every trajectory
+            for d in np.flatnonzero(~(off <= self.start_tolerance)):
                 problems.append(
                     f"{self.dof_names[d]} starts at {y[0, d]:.6g} {self.dof_units[d]}, "
                     f"{off[d]:.3g} from the start pose {self.start_pose[d]:.6g} "
@@ -282,13 +284,18 @@ def start_problems(tr: CartesianTrajectory, start_pose: tuple[float, ...], toler
     orientation. Empty when it starts there.
     """
     start = np.asarray(start_pose, dtype=float)
+    if start.shape != (7,) or not np.isfinite(start).all():
+        return [f"the start pose {start.tolist()} is not a finite pose (x, y, z, qw, qx, qy, qz)"]
+    q_norm = norm(start[3:])
+    if not q_norm > 0.5:  # a reported orientation must be a quaternion, not zeros or a scaled one
+        return [f"the start pose's quaternion {start[3:].tolist()} has norm {q_norm:.3g}, not a unit quaternion"]
     problems = []
-    off = float(np.linalg.norm(tr.position[0] - start[:3]))
-    if off > tolerance:
+    off = norm(tr.position[0] - start[:3])
+    if not off <= tolerance:
         problems.append(f"the position starts {off * 1000:.3g} mm from the start pose's {start[:3].tolist()} m "
                         f"(tolerance {tolerance * 1000:.3g} mm)")
-    turn = float(quaternion.angle(tr.quaternion[0], start[3:] / np.linalg.norm(start[3:])))
-    if turn > tolerance:
+    turn = float(quaternion.angle(tr.quaternion[0], start[3:] / q_norm))
+    if not turn <= tolerance:
         problems.append(f"the orientation starts {turn:.3g} rad from the start pose's (tolerance {tolerance:.3g} rad)")
     return problems
 

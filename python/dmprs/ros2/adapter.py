@@ -23,6 +23,7 @@ a signal that never came
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from typing import Any
 
@@ -31,7 +32,7 @@ import numpy as np
 from dmprs.adapters.base import BaseAdapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
-from dmprs.ros2 import messages
+from dmprs.ros2 import messages, names
 from dmprs.ros2.action import ActionClient, GoalHandle
 from dmprs.ros2.node import Node, Subscription, stamp_seconds
 from dmprs.ros2.qos import DEFAULT
@@ -127,7 +128,7 @@ class Ros2Adapter(BaseAdapter):
     as a ROS 2 node reads it.
     """
 
-    def __init__(self, spec: AdapterSpec, *, domain_id: int, signals: tuple[SignalTopic, ...], settle: float,
+    def __init__(self, spec: AdapterSpec, *, domain_id: int | None, signals: tuple[SignalTopic, ...], settle: float,
                  answer_timeout: float, node_name: str, namespace: str, config: str | None,
                  **more_times: float | None) -> None:
         declared = {s.name for s in spec.signals}
@@ -141,9 +142,9 @@ class Ros2Adapter(BaseAdapter):
             if value is not None and not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
                 raise InvalidInputError(f"{name} = {value!r} must be a finite number >= 0")
         super().__init__(spec)
-        self.domain_id, self.signal_topics = domain_id, tuple(signals)
+        self.domain_id, self.signal_topics = names.domain_id(domain_id), tuple(signals)
         self.settle, self.answer_timeout = float(settle), float(answer_timeout)
-        self._node_args = (node_name, domain_id, namespace, config)
+        self._node_args = (node_name, self.domain_id, namespace, config)
         self._node: Node | None = None
         self._signals: list[tuple[SignalTopic, Subscription[Any]]] = []
 
@@ -180,7 +181,11 @@ class Ros2Adapter(BaseAdapter):
                 return Outcome(Status.ERROR, executed=executed, message=(
                     f"no {topic.topic} sample stamped {self.settle:g} s or more after the motion ended "
                     f"within {self.settle + self.answer_timeout:g} s"))
-            signals[topic.name] = topic.read(sample)
+            value = topic.read(sample)
+            if not math.isfinite(value):
+                return Outcome(Status.ERROR, executed=executed, message=(
+                    f"{topic.topic} published {value!r} for the signal {topic.name!r}: not a measurement"))
+            signals[topic.name] = value
         return Outcome(Status.OK, signals=signals, executed=executed)
 
 
@@ -197,7 +202,7 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
     ``config`` as for :class:`Ros2Adapter`.
     """
 
-    def __init__(self, spec: AdapterSpec, *, domain_id: int = 0, controller: str = "/joint_trajectory_controller",
+    def __init__(self, spec: AdapterSpec, *, domain_id: int | None = None, controller: str = "/joint_trajectory_controller",
                  mode: str = "action", signals: tuple[SignalTopic, ...] = (), joint_states: str = "/joint_states",
                  path_tolerance: float | None = None, goal_tolerance: float | None = None,
                  goal_time_tolerance: float = 0.0, settle: float = 0.0, answer_timeout: float = 5.0,
