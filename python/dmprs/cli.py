@@ -70,8 +70,8 @@ def main() -> None:
 @click.option("--robot", type=click.Choice(["sim", "ros2"]), default=None,
               help="arm-pouring, arm-throwing: the scene in this process (sim, default) or a ROS 2 robot "
               "(ros2, e.g. `dmprs robot serve TASK`)")
-@click.option("--domain-id", type=click.IntRange(min=0, max=232), default=None,
-              help="the ROS 2 robot's ROS_DOMAIN_ID (with --robot ros2; default 0)")
+@click.option("--domain-id", type=click.IntRange(min=0, max=232), default=None, envvar="ROS_DOMAIN_ID",
+              show_envvar=True, help="the ROS 2 robot's domain (with --robot ros2; default 0)")
 def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials: int,
               tol: float | None, log_dir: Path | None, seed: int, noise: float | None,
               volume: float | None, demos: str | None, target: tuple[float, float] | None,
@@ -327,7 +327,7 @@ def robot_group() -> None:
 @robot_group.command("serve")
 @click.argument("task", type=click.Choice(["arm-throwing", "arm-pouring"]))
 @click.option("--domain-id", type=click.IntRange(min=0, max=232), default=0, show_default=True,
-              help="the ROS_DOMAIN_ID to serve on")
+              envvar="ROS_DOMAIN_ID", show_envvar=True, help="the ROS 2 domain to serve on")
 @click.option("--speed", type=click.FloatRange(min=0.01, max=1000.0), default=1.0, show_default=True,
               help="playback speed of each motion against real time")
 @click.option("--volume", type=float, default=0.5, show_default=True,

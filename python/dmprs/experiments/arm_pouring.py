@@ -62,7 +62,7 @@ def demonstrations(target_volume: float = TARGET_VOLUME, liquid_seed: int = 0, c
 
 def setup(bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME, tol: float = SUCCESS_TOLERANCE,
           liquid_seed: int = 0, demo_seed: int = 0, reseed_liquid: bool = False,
-          cache_dir: str | os.PathLike[str] | None = None, robot: str = "sim", domain_id: int = 0,
+          cache_dir: str | os.PathLike[str] | None = None, robot: str = "sim", domain_id: int | None = None,
           ) -> ExperimentSetup:
     """Pour ``target_volume`` with the arm from a bottle holding ``bottle_volume`` l: the two
     calibrated pose demonstrations generalized linearly as :class:`~dmprs.CartesianDMP` s with

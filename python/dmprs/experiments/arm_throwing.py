@@ -65,7 +65,7 @@ def demonstrations(n_basis: int = N_BASIS) -> tuple[tuple[NDArray[np.float64], T
 
 def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: float = SUCCESS_TOLERANCE,
           noise: Noise | None = None, n_basis: int = N_BASIS, max_trials: int = 50, robot: str = "sim",
-          domain_id: int = 0) -> ExperimentSetup:
+          domain_id: int | None = None) -> ExperimentSetup:
     """Throw the ball into a basket at ``target`` = (x, y) m on the floor (docs/throwing.md).
 
     Five scripted throws labelled with their measured landing points; ``generalizer``:

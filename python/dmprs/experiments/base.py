@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import learners as L
-from dmprs._arrays import as_count, short
+from dmprs._arrays import short
 from dmprs._extras import require
 from dmprs.bayesopt import BayesOpt
 from dmprs.cmaes import CMAES
@@ -215,14 +215,17 @@ class ExperimentSetup:
 
 def ros2_domain(robot: Any, domain_id: Any) -> int | None:
     """The ROS 2 domain of a robot option: ``robot = "ros2"`` (a served or real robot, through the
-    ``ros2`` extra) on ``domain_id``; None for ``"sim"`` (the scene in this process).
+    ``ros2`` extra) on ``domain_id`` (None: ``ROS_DOMAIN_ID``'s, else 0); None for ``"sim"`` (the
+    scene in this process).
     """
     if robot == "sim":
         return None
     if robot != "ros2":
         raise InvalidInputError(f"robot = {short(robot)} is invalid: use 'sim' or 'ros2'")
     require("cyclonedds", "robot='ros2'")
-    return as_count(domain_id, "domain_id", 0)
+    from dmprs.ros2.names import domain_id as resolved  # the ros2 extra's, known to be there now
+
+    return resolved(domain_id)
 
 
 def search_box(queries: Iterable[ArrayLike], q0: ArrayLike) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -61,7 +61,7 @@ class Ros2PoseAdapter(Ros2Adapter):
     ``settle``, ``answer_timeout`` and ``config`` as for :class:`~dmprs.ros2.adapter.Ros2Adapter`.
     """
 
-    def __init__(self, spec: AdapterSpec, *, domain_id: int = 0, controller: str = CARTESIAN_CONTROLLER,
+    def __init__(self, spec: AdapterSpec, *, domain_id: int | None = None, controller: str = CARTESIAN_CONTROLLER,
                  frame_id: str = "base_link", signals: tuple[SignalTopic, ...] = (), settle: float = 0.0,
                  answer_timeout: float = 5.0, node_name: str = "dmprs_adapter", namespace: str = "/",
                  config: str | None = None) -> None:

@@ -1,4 +1,5 @@
-"""ROS 2 names: resolving a topic or service name against a node, and its name on DDS.
+"""ROS 2 names: the domain a node joins, and resolving a topic or service name against a node,
+and its name on DDS.
 
 Follows design.ros2.org's "Topic and Service name mapping to DDS": a name is absolute (`/a/b`),
 relative (`a/b`, under the node's namespace) or private (`~/a`, under the node's fully qualified
@@ -8,9 +9,35 @@ name); on DDS a topic is `rt<name>`, a service's request and reply topics `rq<na
 
 from __future__ import annotations
 
+import os
 import re
 
+import numpy as np
+
 from dmprs.errors import InvalidInputError
+
+#: ROS 2 domain ids (RTPS port arithmetic leaves 0..232 usable).
+MAX_DOMAIN_ID = 232
+
+
+def domain_id(value: int | None = None) -> int:
+    """The ROS 2 domain to join: ``value``, or, when it is None, ``ROS_DOMAIN_ID`` as every ROS 2
+    tool reads it (0 when unset or empty). Raises naming the id (or the variable) outside
+    0..:data:`MAX_DOMAIN_ID`.
+    """
+    name = "domain_id"
+    if value is None:
+        raw = os.environ.get("ROS_DOMAIN_ID", "").strip()
+        if not raw:
+            return 0
+        name = "ROS_DOMAIN_ID"
+        try:
+            value = int(raw)
+        except ValueError:
+            raise InvalidInputError(f"ROS_DOMAIN_ID = {raw!r} must be an integer in 0..{MAX_DOMAIN_ID}") from None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= MAX_DOMAIN_ID:
+        raise InvalidInputError(f"{name} = {value!r} must be an integer in 0..{MAX_DOMAIN_ID}")
+    return int(value)
 
 _TOKEN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 

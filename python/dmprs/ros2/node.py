@@ -31,8 +31,7 @@ from dmprs.ros2.qos import DEFAULT, QosProfile
 
 M = TypeVar("M")
 
-#: ROS 2 domain ids (RTPS port arithmetic leaves 0..232 usable).
-MAX_DOMAIN_ID = 232
+MAX_DOMAIN_ID = names.MAX_DOMAIN_ID
 
 #: A Cyclone configuration that keeps a node on the loopback interface, discovering peers by
 #: unicast there (loopback carries no multicast on Linux).
@@ -61,14 +60,14 @@ def stamp_seconds(message: Any) -> float:
 
 class Node:
     """A ROS 2 node: `Node("dmprs", domain_id=0)`; close it (or use `with`) to leave the domain.
+    Without `domain_id` it joins `ROS_DOMAIN_ID`'s domain (0 when unset), as a ROS 2 node does.
 
     `config` is a Cyclone XML configuration for the domain (e.g. `LOOPBACK_CONFIG`); without it
     Cyclone reads `CYCLONEDDS_URI` as a ROS 2 node would.
     """
 
-    def __init__(self, name: str, domain_id: int = 0, namespace: str = "/", config: str | None = None):
-        if not isinstance(domain_id, int) or not 0 <= domain_id <= MAX_DOMAIN_ID:
-            raise InvalidInputError(f"domain_id {domain_id!r} must be an integer in 0..{MAX_DOMAIN_ID}")
+    def __init__(self, name: str, domain_id: int | None = None, namespace: str = "/", config: str | None = None):
+        domain_id = names.domain_id(domain_id)
         self.name = names.check_node_name(name)
         self.namespace = names.check_namespace(namespace)
         self.domain_id = domain_id

@@ -36,7 +36,7 @@ from dmprs._core import RobotNode
 from dmprs.adapters import BaseAdapter, Outcome, Status
 from dmprs.adapters.planned import PlannedAdapter
 from dmprs.errors import InvalidInputError
-from dmprs.ros2 import messages
+from dmprs.ros2 import messages, names
 from dmprs.ros2.adapter import Ros2TrajectoryAdapter, SignalTopic, signal_specs
 from dmprs.sim.throw_scene import HOME
 from dmprs.tasks.arm_pouring import ArmPouringAdapter
@@ -67,7 +67,7 @@ TASKS = ("arm-throwing", "arm-pouring")
 _RESULT = messages.FollowJointTrajectory_Result
 
 
-def throwing_adapter(domain_id: int, **options: Any) -> Ros2TrajectoryAdapter:
+def throwing_adapter(domain_id: int | None = None, **options: Any) -> Ros2TrajectoryAdapter:
     """A :class:`~dmprs.ros2.Ros2TrajectoryAdapter` for a throwing robot on ``domain_id``: the
     in-process adapter's joints, limits and start, the camera's landing point as the signals;
     ``options`` go to the adapter (``answer_timeout``, ``config``, ...).
@@ -76,7 +76,7 @@ def throwing_adapter(domain_id: int, **options: Any) -> Ros2TrajectoryAdapter:
     return Ros2TrajectoryAdapter(spec, domain_id=domain_id, controller=CONTROLLER, signals=LANDING, **options)
 
 
-def pouring_adapter(domain_id: int, **options: Any) -> PlannedAdapter:
+def pouring_adapter(domain_id: int | None = None, **options: Any) -> PlannedAdapter:
     """An adapter for a pouring robot on ``domain_id``: pose trajectories solved into joint
     trajectories by the arm's IK and checked (limits, collisions) on this machine, then sent to
     the robot's controller; ``poured_volume`` read from the scale once the pour has settled.
@@ -192,10 +192,11 @@ class _Pouring(_Robot):
         self.reading = float(outcome.signals["poured_volume"])
 
 
-def serve(task: str, domain_id: int, *, speed: float = 1.0, stop: threading.Event | None = None,
+def serve(task: str, domain_id: int | None = None, *, speed: float = 1.0, stop: threading.Event | None = None,
           on_ready: Callable[[], None] | None = None, loopback_only: bool = False,
           bottle_volume: float = 0.5, liquid_seed: int = 0) -> int:
-    """Serves ``task``'s arm (one of :data:`TASKS`) on ``domain_id`` until ``stop`` is set;
+    """Serves ``task``'s arm (one of :data:`TASKS`) on ``domain_id`` (default: ``ROS_DOMAIN_ID``'s,
+    else 0) until ``stop`` is set;
     returns the goals served. ``bottle_volume`` (l) and ``liquid_seed`` are the pouring robot's
     bottle and liquid (the in-process adapter's options).
 
@@ -210,7 +211,7 @@ def serve(task: str, domain_id: int, *, speed: float = 1.0, stop: threading.Even
     else:
         raise InvalidInputError(f"task = {task!r} cannot be served: use one of {', '.join(TASKS)}")
     stop = stop or threading.Event()
-    node = RobotNode(domain_id, CONTROLLER.strip("/"), list(robot.scene.spec.dof_names),
+    node = RobotNode(names.domain_id(domain_id), CONTROLLER.strip("/"), list(robot.scene.spec.dof_names),
                      float_signals=list(robot.float_topics), point_signals=list(robot.point_topics),
                      loopback_only=loopback_only)
     clock, period = _Clock(node), 1.0 / STATE_RATE
