@@ -303,3 +303,55 @@ def test_a_constant_coupling_term_shifts_the_rest_point_by_c_over_the_spring() -
     np.testing.assert_allclose(pose[:3], goal[:3] + c6[:3] / 576.0, atol=1e-6)
     turn = Rotation.from_quat(np.array(pose[3:]), scalar_first=True) * Rotation.from_quat(goal[3:], scalar_first=True).inv()
     np.testing.assert_allclose(turn.as_rotvec(), c6[3:] / 576.0, atol=1e-6)
+
+
+# --- options and measurements the integration cannot take: refused where they are given ------
+
+
+def test_a_goal_filter_whose_euler_step_would_overshoot_is_refused_at_construction() -> None:
+    dmp = reach(tau=0.5)
+    # alpha_g dt / (substeps tau): 150 x 0.004 / 0.5 = 1.2 > 1 overshoots (beyond 2 it diverges)
+    with pytest.raises(dmprs.errors.InvalidInputError, match="goal_filter") as err:
+        dmp.stepper(0.004, goal_filter=150.0, substeps=1)
+    assert "<= 1" in str(err.value)
+    dmp.stepper(0.004, goal_filter=100.0, substeps=1)  # 0.8: taken
+    dmp.stepper(0.004, goal_filter=150.0, substeps=2)  # 0.6 per sub-step: taken
+    s = dmp.stepper(0.004, goal_filter=100.0, substeps=1)
+    with pytest.raises(dmprs.errors.InvalidInputError, match="goal_filter"):
+        s.set_tau(0.3)  # 100 x 0.004 / 0.3 = 1.33: the same bound at the new tau
+    # at the bound itself (240 x 0.002 / 0.5 = 0.96) the goal change is followed and stays finite
+    s = dmp.stepper(0.004, goal_filter=240.0, substeps=2)
+    s.set_goal(dmp.goal + 1.0)
+    y = np.array([s.step()[0].copy() for _ in range(1000)])
+    assert np.isfinite(y).all()
+    np.testing.assert_allclose(y[-1], dmp.goal + 1.0, atol=1e-3)
+
+
+def test_gamma_a_zero_is_off_with_an_acceleration_limit() -> None:
+    dmp = reach()
+    s = dmp.stepper(0.001, acceleration_max=20.0, gamma_a=0.0)
+    y, _, ydd = run(s, 6000)
+    assert np.isfinite(y).all() and np.isfinite(ydd).all()
+    np.testing.assert_allclose(y[-1], dmp.goal, atol=1e-3)
+
+
+def test_a_measurement_the_stepper_cannot_use_is_refused_at_that_call_and_changes_nothing() -> None:
+    dmp = reach()
+    s, ref = dmp.stepper(0.001), dmp.stepper(0.001)
+    for _ in range(10):
+        s.step()
+        ref.step()
+    with pytest.raises(dmprs.errors.InvalidInputError, match="measured"):
+        s.step(measured=[1e154, 0.0, 0.0])
+    for bad in (np.array([0.1 + 1j, 0.0, 0.0]), np.array([True, False, True]), [[0.0, 0.0, 0.0]], "abc"):
+        with pytest.raises(dmprs.errors.InvalidInputError, match="measured"):
+            s.step(measured=bad)
+    # the stepper is as it was: the next step is the undisturbed one's
+    for a, b in zip(s.step(), ref.step(), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_one_element_limit_is_not_spread_over_the_coordinates() -> None:
+    with pytest.raises(dmprs.errors.InvalidInputError, match=r"acceleration_max has shape \(1,\)"):
+        reach(3).stepper(0.001, acceleration_max=[1.0])
+    reach(3).stepper(0.001, acceleration_max=1.0)  # a scalar is every coordinate's

@@ -59,8 +59,8 @@ def _per_coordinate(value: Any, name: str, n: int, what: str) -> NDArray[np.floa
     """A scalar for every coordinate, or one value each; no NaN (infinities are the caller's
     to allow).
     """
-    arr = np.atleast_1d(as_float_array(value, name, (0, 1)))
-    if arr.shape == (1,):
+    arr = as_float_array(value, name, (0, 1))
+    if np.ndim(value) == 0:  # a scalar is every coordinate's; a list of one is one coordinate's
         arr = np.repeat(arr, n)
     if arr.shape != (n,):
         raise InvalidInputError(f"{name} has shape {arr.shape}, expected a scalar or ({n},): one per {what}")

@@ -299,7 +299,7 @@ impl CartesianStepper {
                 let errors = (0..3)
                     .map(|d| m[d] - self.out_pose[d])
                     .chain(r.iter().map(|r| 2.0 * r));
-                self.clock.stop_factor(errors)
+                self.clock.stop_factor(errors)?
             }
             None => 1.0,
         };

@@ -157,6 +157,32 @@ pub(crate) fn phase_stopping_gains(alpha_e: &[f64], n: usize) -> Result<Vec<f64>
     }
 }
 
+/// That the goal filter's Euler step `g += alpha_g (g_target - g) hs / tau` (`hs = dt /
+/// substeps`, docs/method.md §2.5.3) approaches the new goal without overshooting it:
+/// `alpha_g hs / tau <= 1` at the nominal tau (temporal coupling only lengthens tau, which
+/// shortens the step). Beyond 1 the goal overshoots, beyond 2 it diverges.
+fn check_goal_filter(alpha_g: Option<f64>, dt: f64, substeps: usize, tau: f64) -> Result<()> {
+    let Some(alpha_g) = alpha_g else {
+        return Ok(());
+    };
+    let step = alpha_g * dt / (substeps as f64 * tau);
+    if step > 1.0 {
+        return Err(Error::InvalidParameter {
+            name: "goal_filter",
+            value: format!(
+                "{} (with dt = {}, tau = {} and {substeps} sub-step(s), its Euler step is {})",
+                fmt_g(alpha_g),
+                fmt_g(dt),
+                fmt_g(tau),
+                fmt_g(step)
+            ),
+            requirement: "must keep goal_filter x dt / (substeps x tau) <= 1, or the goal \
+                          overshoots (beyond 2 it diverges): lower it, or pass more substeps",
+        });
+    }
+    Ok(())
+}
+
 /// The fewest Euler sub-steps per period that are stable at time scale `tau` (the rollout's
 /// rule), or `requested` if it is at least that many.
 pub(crate) fn substeps_for(
@@ -269,6 +295,8 @@ impl Clock {
         if let Some(a) = opts.goal_filter {
             check_scalar("goal_filter", a, true)?;
         }
+        let substeps = substeps_for(cfg, tau, opts.dt, opts.substeps)?;
+        check_goal_filter(opts.goal_filter, opts.dt, substeps, tau)?;
         let coupling = if opts.velocity_max.is_some() || opts.acceleration_max.is_some() {
             Some(TemporalCoupling::new(
                 n,
@@ -281,7 +309,7 @@ impl Clock {
         };
         Ok(Self {
             dt: opts.dt,
-            substeps: substeps_for(cfg, tau, opts.dt, opts.substeps)?,
+            substeps,
             requested_substeps: opts.substeps,
             nominal: tau,
             tau,
@@ -295,19 +323,31 @@ impl Clock {
     /// A new nominal tau; the sub-steps follow it when they are the automatic count.
     pub fn set_nominal(&mut self, cfg: &DmpConfig, tau: f64) -> Result<()> {
         check_scalar("tau", tau, true)?;
-        self.substeps = substeps_for(cfg, tau, self.dt, self.requested_substeps)?;
+        let substeps = substeps_for(cfg, tau, self.dt, self.requested_substeps)?;
+        check_goal_filter(self.goal_filter, self.dt, substeps, tau)?;
+        self.substeps = substeps;
         self.nominal = tau;
         Ok(())
     }
 
-    /// The phase-stopping factor `1 + sum_d alpha_e,d e_d^2` for the tracking errors `e`.
+    /// The phase-stopping factor `1 + sum_d alpha_e,d e_d^2` for the tracking errors `e`; an
+    /// error so large that the factor overflows is refused as a measurement the stepper cannot
+    /// use (before anything changes, so the stepper stays usable).
     #[inline]
-    pub fn stop_factor(&self, errors: impl Iterator<Item = f64>) -> f64 {
+    pub fn stop_factor(&self, errors: impl Iterator<Item = f64>) -> Result<f64> {
         let mut s = 0.0;
         for (a, e) in self.alpha_e.iter().zip(errors) {
             s += a * e * e;
         }
-        1.0 + s
+        if !s.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "measured",
+                value: format!("(phase stopping's 1 + sum alpha_e e^2 = {})", fmt_g(1.0 + s)),
+                requirement: "must be near the last command: this far off, the phase-stopping \
+                              factor overflows (the stepper's state is unchanged)",
+            });
+        }
+        Ok(1.0 + s)
     }
 
     /// The time scale of this period given the phase-stopped target `nominal * factor`.
@@ -623,7 +663,7 @@ impl Stepper {
             Some(m) => {
                 check_coordinates("measured", m, self.n)?;
                 let e = m.iter().zip(&self.out_y).map(|(m, y)| m - y);
-                self.clock.stop_factor(e)
+                self.clock.stop_factor(e)?
             }
             None => 1.0,
         };

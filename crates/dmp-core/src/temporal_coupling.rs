@@ -181,14 +181,19 @@ impl TemporalCoupling {
                     continue;
                 }
                 let r = h[d] / (tau2 * a);
-                sigma += r * r / (1.0 - r * r).max(g.potential * g.eps);
+                // gamma_a = 0 is "off": no potential, not 0 x (r^2 / 0) = NaN at the limit.
+                if g.potential > 0.0 {
+                    sigma += r * r / (1.0 - r * r).max(g.potential * g.eps);
+                }
                 if z[d] != 0.0 {
                     let (p, q) = (h[d] / z[d], a * tau2 / z[d].abs());
                     lo = lo.max(p - q);
                     hi = hi.min(p + q);
                 }
             }
-            taud += tau * g.potential * sigma;
+            if g.potential > 0.0 {
+                taud += tau * g.potential * sigma;
+            }
             tau_floor = tau_floor.max(self.feasible_tau(z_next, h_next));
         }
         // The acceleration's upper bound first, then every lower bound (they win).

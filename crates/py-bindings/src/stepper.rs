@@ -77,20 +77,34 @@ fn read_vector(name: &str, value: &Bound<'_, PyAny>, buf: &mut Vec<f64>) -> PyRe
         buf.extend(a.as_array().iter().copied());
         return Ok(());
     }
-    match value.extract::<Vec<f64>>() {
-        Ok(v) => {
-            buf.extend_from_slice(&v);
-            Ok(())
-        }
-        Err(_) => Err(invalid_input(format!(
-            "{name} must be a 1-D array of floats; got {}",
+    // Anything else goes through numpy's reading, refused unless it is a 1-D array of real
+    // numbers: a complex value would lose its imaginary part, a bool is no position.
+    let refused = || {
+        invalid_input(format!(
+            "{name} must be a 1-D array of real numbers (float or integer); got {}",
             value
                 .get_type()
                 .name()
                 .map(|n| n.to_string())
                 .unwrap_or_else(|_| "an object".into())
-        ))),
+        ))
+    };
+    let arr = value
+        .py()
+        .import("numpy")?
+        .call_method1("asarray", (value,))
+        .map_err(|_| refused())?;
+    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+    let ndim: usize = arr.getattr("ndim")?.extract()?;
+    if ndim != 1 || !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(refused());
     }
+    let v: Vec<f64> = arr
+        .call_method1("astype", ("float64",))?
+        .extract()
+        .map_err(|_| refused())?;
+    buf.extend_from_slice(&v);
+    Ok(())
 }
 
 /// The options both steppers share, as `dmprs.stepper` passes them: a dict with these keys,
