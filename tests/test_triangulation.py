@@ -159,3 +159,17 @@ def test_1d_passes_through_every_demo_in_any_order(xs):
     gen = dmprs.Generalizer(database(xs), "linear", n_basis=N_BASIS)
     for x in xs:
         np.testing.assert_allclose(gen.parameters(x), fitted(x), rtol=1e-11, atol=1e-11)
+
+
+@pytest.mark.parametrize("scale", [1e-10, 1.0, 1e10])
+def test_spanning_queries_are_taken_whatever_the_units_of_a_dimension(scale):
+    # a 4 x 4 grid (triangulated) and a triangle (the core's affine map), the second dimension
+    # in units 1e-10, 1 or 1e10 times the first's: the span test is on each dimension's own range
+    grid = [np.array([i, scale * j]) for i in range(4) for j in range(4)]
+    gen = dmprs.Generalizer(database(grid), "linear", n_basis=N_BASIS)
+    np.testing.assert_array_equal(gen.parameters(grid[5]), fitted(grid[5]))
+    triangle = [np.array([0.0, 0.0]), np.array([1.0, 0.0]), np.array([0.0, scale])]
+    dmprs.Generalizer(database(triangle), "linear", n_basis=N_BASIS)
+    with pytest.raises(InvalidInputError, match="lower-dimensional"):
+        dmprs.Generalizer(database([np.array([0.0, 0.0]), np.array([1.0, scale]), np.array([2.0, 2 * scale])]),
+                          "linear", n_basis=N_BASIS)

@@ -97,8 +97,11 @@ class PiecewiseLinear:
         self._check_rank((nodes[1:] - nodes[0]).T, n)
         from scipy.spatial import Delaunay, QhullError
 
+        # Triangulated with each dimension in units of its range: Qhull takes a dimension whose
+        # units are 1e-10 of another's for a flat one (its points "coplanar", left out).
+        self._unit = np.ptp(nodes, axis=0)
         try:
-            tri = Delaunay(nodes)
+            tri = Delaunay(nodes / self._unit)
         except QhullError as exc:
             raise InvalidInputError(f"the demonstration queries cannot be triangulated: {exc}") from None
         self._simplices = tri.simplices
@@ -116,6 +119,10 @@ class PiecewiseLinear:
         self._star_ptr = np.searchsorted(incidence[order], np.arange(len(nodes) + 1))
 
     def _check_rank(self, delta: NDArray[np.float64], rank: int) -> None:
+        # Scale-free: each query dimension in units of its own range over the demos, so that a
+        # dimension measured in small units is not mistaken for a missing one.
+        span = np.ptp(self._nodes, axis=0)
+        delta = delta / np.where(span > 0, span, 1.0)[:, None]
         s = np.linalg.svd(delta, compute_uv=False)
         if s.size == 0 or s.min() <= 1e-10 * s.max() or np.linalg.matrix_rank(delta) < rank:
             raise InvalidInputError(
@@ -158,7 +165,7 @@ class PiecewiseLinear:
         """
         if self._simplices is None or len(self._simplices) < LOCAL_SEARCH_FROM:
             return None
-        found = int(self._tri.find_simplex(q))
+        found = int(self._tri.find_simplex(q / self._unit))
         if found < 0:
             return None
         star, ptr = self._star, self._star_ptr

@@ -270,8 +270,19 @@ impl Generalizer {
             });
         }
         let delta = DMatrix::from_fn(n, m - 1, |d, k| queries[k + 1][d] - queries[0][d]);
+        // Independence is judged scale-free: each dimension in units of its own range over the
+        // demos, so that a dimension measured in small units is not mistaken for a missing one.
+        let span = |d: usize| {
+            let (lo, hi) = queries.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                (lo.min(q[d]), hi.max(q[d]))
+            });
+            if hi > lo { hi - lo } else { 1.0 }
+        };
+        let spans: Vec<f64> = (0..n).map(span).collect();
+        let scaled = DMatrix::from_fn(n, m - 1, |d, k| delta[(d, k)] / spans[d]);
+        let sv = scaled.singular_values();
+        let (smax, smin) = (sv.max(), sv.min());
         let svd = delta.clone().svd(true, true);
-        let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
         if smin.is_nan() || smin <= 1e-10 * smax {
             return Err(Error::DegenerateQueries {
                 detail: format!(
