@@ -299,3 +299,20 @@ def test_malformed_joint_states_are_skipped_and_only_they_are_an_error(domain_id
             stop.set()
     assert out.status is Status.ERROR and "fewer than two /joint_states samples" in out.message
     assert "skipped" in out.message
+
+
+@pytest.mark.parametrize("bad", [233, -1, 2**40])
+def test_the_robot_node_takes_the_domains_every_entry_point_takes(bad):
+    with pytest.raises(InvalidInputError, match=f"domain_id = {bad} must be an integer in 0..232"):
+        RobotNode(bad, CONTROLLER.strip("/"), ROBOT_JOINTS)
+
+
+def test_the_robot_node_refuses_bad_values_with_dmprs_errors_and_takes_integer_positions(robot):
+    robot.publish_joint_state(CLOCK0, np.array([0, 1, 2], dtype=np.int64))  # integers are positions
+    for status in (300, -1, 3):
+        with pytest.raises(InvalidInputError, match="status"):
+            robot.finish_goal(b"\x00" * 16, status)
+    with pytest.raises(InvalidInputError, match="error_code"):
+        robot.finish_goal(b"\x00" * 16, 4, error_code=2**40)
+    with pytest.raises(InvalidInputError, match="position"):
+        robot.publish_joint_state(CLOCK0, np.array([1 + 1j, 0, 0]))

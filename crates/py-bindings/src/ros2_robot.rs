@@ -11,6 +11,7 @@ use ros2_robot::validate::{TrajectoryArrays, controller_order};
 use ros2_robot::{GoalId, GoalStatus, RobotConfig, RobotError, SignalKind};
 
 use crate::errors::{IntoPyResult, PyErrorClass, invalid_input};
+use crate::stepper::read_vector;
 
 impl<T> IntoPyResult<T> for Result<T, RobotError> {
     fn py_err(self) -> PyResult<T> {
@@ -153,6 +154,18 @@ fn point(
     }
 }
 
+/// A ROS 2 domain id as Python gives it, checked against the range every dmprs entry point takes
+/// (RTPS port arithmetic leaves 0..232), not wrapped into a `u16`.
+fn domain(domain_id: i64) -> PyResult<u16> {
+    if (0..=232).contains(&domain_id) {
+        Ok(domain_id as u16)
+    } else {
+        Err(invalid_input(format!(
+            "domain_id = {domain_id} must be an integer in 0..232"
+        )))
+    }
+}
+
 fn vector(name: &str, a: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option<Vec<f64>>> {
     a.map(|a| {
         a.as_slice()
@@ -185,7 +198,7 @@ impl PyRobotNode {
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        domain_id: u16,
+        domain_id: i64,
         controller: &str,
         joint_names: Vec<String>,
         node_name: &str,
@@ -196,7 +209,7 @@ impl PyRobotNode {
         point_signals: Vec<String>,
         loopback_only: bool,
     ) -> PyResult<Self> {
-        let mut config = RobotConfig::new(domain_id, controller, joint_names);
+        let mut config = RobotConfig::new(domain(domain_id)?, controller, joint_names);
         config.node_name = node_name.into();
         config.namespace = namespace.into();
         config.command_topic = command_topic.into();
@@ -311,11 +324,15 @@ impl PyRobotNode {
         &self,
         py: Python<'_>,
         stamp: f64,
-        position: PyReadonlyArray1<'_, f64>,
-        velocity: Option<PyReadonlyArray1<'_, f64>>,
+        position: &Bound<'_, PyAny>,
+        velocity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let position = vector("position", Some(position))?.unwrap_or_default();
-        let velocity = vector("velocity", velocity)?.unwrap_or_default();
+        let (mut position_, mut velocity_) = (Vec::new(), Vec::new());
+        read_vector("position", position, &mut position_)?;
+        if let Some(v) = velocity {
+            read_vector("velocity", v, &mut velocity_)?;
+        }
+        let (position, velocity) = (position_, velocity_);
         py.detach(|| self.inner.publish_joint_state(stamp, &position, &velocity))
             .py_err()
     }
@@ -359,12 +376,19 @@ impl PyRobotNode {
         &self,
         py: Python<'_>,
         goal_id: &[u8],
-        status: i8,
-        error_code: i32,
+        status: i64,
+        error_code: i64,
         error_string: &str,
     ) -> PyResult<()> {
         let id = self::goal_id(goal_id)?;
-        let status = GoalStatus::from_code(status)
+        let error_code = i32::try_from(error_code).map_err(|_| {
+            invalid_input(format!(
+                "error_code = {error_code} must fit a 32-bit integer"
+            ))
+        })?;
+        let status = i8::try_from(status)
+            .ok()
+            .and_then(GoalStatus::from_code)
             .filter(|s| s.is_terminal())
             .ok_or_else(|| {
                 invalid_input(format!(
@@ -416,7 +440,8 @@ pub struct PyRos2GoalClient {
 impl PyRos2GoalClient {
     #[new]
     #[pyo3(signature = (domain_id, action, loopback_only=true))]
-    fn new(py: Python<'_>, domain_id: u16, action: &str, loopback_only: bool) -> PyResult<Self> {
+    fn new(py: Python<'_>, domain_id: i64, action: &str, loopback_only: bool) -> PyResult<Self> {
+        let domain_id = domain(domain_id)?;
         let inner = py
             .detach(|| ros2_robot::probe::GoalClient::new(domain_id, action, loopback_only))
             .py_err()?;
@@ -478,11 +503,12 @@ impl PyRos2JointStateListener {
     #[pyo3(signature = (domain_id, topic="/joint_states", depth=1000, loopback_only=true))]
     fn new(
         py: Python<'_>,
-        domain_id: u16,
+        domain_id: i64,
         topic: &str,
         depth: usize,
         loopback_only: bool,
     ) -> PyResult<Self> {
+        let domain_id = domain(domain_id)?;
         let inner = py
             .detach(|| {
                 ros2_robot::probe::JointStateListener::start(domain_id, topic, depth, loopback_only)

@@ -66,7 +66,11 @@ impl Outputs {
 /// `value` (a 1-D float64 array, or anything `list[float]` accepts) copied into `buf`, which
 /// keeps its capacity across calls: the fast path neither allocates nor keeps a borrow of the
 /// caller's array while the step writes its outputs.
-fn read_vector(name: &str, value: &Bound<'_, PyAny>, buf: &mut Vec<f64>) -> PyResult<()> {
+pub(crate) fn read_vector(
+    name: &str,
+    value: &Bound<'_, PyAny>,
+    buf: &mut Vec<f64>,
+) -> PyResult<()> {
     buf.clear();
     if let Ok(a) = value.cast::<PyArray1<f64>>() {
         let a = a.readonly();
