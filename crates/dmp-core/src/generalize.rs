@@ -273,9 +273,11 @@ impl Generalizer {
         // Independence is judged scale-free: each dimension in units of its own range over the
         // demos, so that a dimension measured in small units is not mistaken for a missing one.
         let span = |d: usize| {
-            let (lo, hi) = queries.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
-                (lo.min(q[d]), hi.max(q[d]))
-            });
+            let (lo, hi) = queries
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                    (lo.min(q[d]), hi.max(q[d]))
+                });
             if hi > lo { hi - lo } else { 1.0 }
         };
         let spans: Vec<f64> = (0..n).map(span).collect();

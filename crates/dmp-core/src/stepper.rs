@@ -342,7 +342,10 @@ impl Clock {
         if !s.is_finite() {
             return Err(Error::InvalidParameter {
                 name: "measured",
-                value: format!("(phase stopping's 1 + sum alpha_e e^2 = {})", fmt_g(1.0 + s)),
+                value: format!(
+                    "(phase stopping's 1 + sum alpha_e e^2 = {})",
+                    fmt_g(1.0 + s)
+                ),
                 requirement: "must be near the last command: this far off, the phase-stopping \
                               factor overflows (the stepper's state is unchanged)",
             });
