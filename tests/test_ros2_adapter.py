@@ -316,3 +316,27 @@ def test_the_robot_node_refuses_bad_values_with_dmprs_errors_and_takes_integer_p
         robot.finish_goal(b"\x00" * 16, 4, error_code=2**40)
     with pytest.raises(InvalidInputError, match="position"):
         robot.publish_joint_state(CLOCK0, np.array([1 + 1j, 0, 0]))
+
+
+def test_joint_states_no_robot_could_send_are_skipped_and_the_outcome_says_so(robot, domain_id):
+    # mid-motion another publisher sends a sample stamped 2^31 - 1 s, one with a NaN and one
+    # with 1e200: the recording keeps the robot's samples around them, and says what it skipped
+    command = move(0.6)
+
+    def strays() -> None:
+        time.sleep(0.3)
+        with Node("stray_states", domain_id) as node:
+            stray = node.create_publisher(m.JointState, "/joint_states")
+            for stamp, q in ((2**31 - 1, [0.1, 0.1, 0.1]), (CLOCK0 + 0.3, [np.nan, 0, 0]), (CLOCK0 + 0.3, [1e200, 0, 0])):
+                sec, nanosec = divmod(int(stamp * 1e9), 1_000_000_000)
+                stray.publish(m.JointState(header=m.Header(stamp=m.Time(sec=sec, nanosec=nanosec), frame_id=""),
+                                           name=ROBOT_JOINTS, position=q, velocity=[], effort=[]))
+            time.sleep(0.1)
+
+    with Controller(robot), adapter(domain_id) as a:
+        threading.Thread(target=strays, daemon=True).start()
+        out = a.execute(command, timeout_s=10.0)
+    assert out.status is Status.OK, out.message
+    assert out.executed is not None and out.executed.duration < command.duration + 0.5
+    assert np.isfinite(out.executed.y).all()
+    assert "3 /joint_states sample(s) skipped as no robot's" in out.message

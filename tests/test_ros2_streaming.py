@@ -13,6 +13,7 @@ import pytest
 import dmprs
 from dmprs._core import RobotNode
 from dmprs.errors import AdapterError
+from dmprs.ros2 import messages as m
 from dmprs.ros2.streaming import stream
 from tests.ros2_helpers import ControllerThread
 
@@ -94,3 +95,28 @@ def test_phase_stopping_closes_on_joint_states_a_held_robot_holds_the_phase(robo
 def test_no_controller_is_an_adapter_error(node, dmp):
     with pytest.raises(AdapterError, match="nothing subscribes to /forward_position_controller/commands"):
         stream(dmp.stepper(DT), node, JOINTS, answer_timeout=0.3)
+
+
+def joint_state(names, position, stamp):
+    sec, nanosec = divmod(int(stamp * 1e9), 1_000_000_000)
+    return m.JointState(header=m.Header(stamp=m.Time(sec=sec, nanosec=nanosec), frame_id=""), name=list(names),
+                        position=list(position), velocity=[], effort=[])
+
+
+def test_joint_states_no_robot_could_send_are_skipped_and_counted(robot, node, dmp):
+    stray = node.create_publisher(m.JointState, "/joint_states")
+    with PositionController(robot):
+        def should_stop() -> bool:  # a stray publisher's samples mid-motion, once
+            if not getattr(should_stop, "sent", False) and time.monotonic() - started > 0.2:
+                for q in ([np.nan, 0.0, 0.0], [1e200, 0.0, 0.0]):
+                    stray.publish(joint_state(ROBOT_JOINTS, q, time.monotonic()))
+                should_stop.sent = True  # type: ignore[attr-defined]
+            return False
+
+        started = time.monotonic()
+        result = stream(dmp.stepper(DT, alpha_e=1e4), node, JOINTS, controller_joints=ROBOT_JOINTS,
+                        should_stop=should_stop)
+    assert result.done and not result.error
+    assert result.skipped == 2
+    assert np.isfinite(result.measured[1:]).all()
+    np.testing.assert_allclose(result.commands[-1], dmp.goal, atol=1e-3)

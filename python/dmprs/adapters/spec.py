@@ -322,7 +322,7 @@ class Outcome:
     ``signals`` maps the adapter's signal names to measured values (floats or arrays);
     ``executed`` is what the robot or simulation actually did, which may differ from the
     commanded trajectory (tracking error, early stop). ``message`` says why a non-ok trial
-    ended as it did.
+    ended as it did, or what an ok one left out (samples no robot could have sent).
     """
 
     status: Status

@@ -270,7 +270,12 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
                            f"({recorder.skipped} skipped: without the joints {', '.join(joints)}, or with "
                            "fewer positions than names)")
         # on the robot's clock the motion cannot end before its start plus the trajectory's duration
-        return self._signals_after(robot_start + float(trajectory.t[-1] - trajectory.t[0]), ended, executed)
+        outcome = self._signals_after(robot_start + float(trajectory.t[-1] - trajectory.t[0]), ended, executed)
+        if recorder.implausible:
+            note = (f"{recorder.implausible} {self.joint_states} sample(s) skipped as no robot's (not finite, "
+                    "beyond any joint's range, or stamped far ahead of the robot's clock)")
+            outcome = dataclasses.replace(outcome, message="; ".join(m for m in (outcome.message, note) if m))
+        return outcome
 
     def _follow(self, trajectory: Trajectory, recorder: JointStateRecorder) -> tuple[Status, str]:
         """The trajectory through the action: (status, why) once the goal has ended, or once the

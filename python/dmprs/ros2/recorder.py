@@ -9,6 +9,7 @@ arrives in between. `stop` wakes it and returns the arrays.
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
 import time
 from typing import Any
@@ -26,6 +27,15 @@ _WAKE_PERIOD = 0.5
 #: While samples keep coming, they are taken this often (s); the history must hold what
 #: arrives in one period (depth > rate x period).
 BATCH_PERIOD = 0.02
+#: A joint position or velocity beyond this (rad, m, or per s) is no robot's: such a sample is
+#: another publisher's, or garbage, and is skipped and counted.
+MAX_VALUE = 1e6
+#: A sample stamped this far (s) ahead of the last kept one, beyond the time that passed here
+#: between their arrivals, cannot be the same robot's (a stray publisher's clock): skipped.
+STAMP_JUMP = 1.0
+#: Name lists whose joint columns are remembered: a stream of ever new lists (a publisher
+#: renaming its joints) must not grow the cache without bound.
+MAX_CACHED_NAME_LISTS = 64
 
 
 def joint_columns(cache: dict[tuple[str, ...], list[int] | None], message: Any,
@@ -35,9 +45,16 @@ def joint_columns(cache: dict[tuple[str, ...], list[int] | None], message: Any,
     """
     names = tuple(message.name)
     if names not in cache:
+        if len(cache) >= MAX_CACHED_NAME_LISTS:
+            cache.clear()
         index = {name: i for i, name in enumerate(names)}
         cache[names] = [index[j] for j in joint_names] if all(j in index for j in joint_names) else None
     return cache[names] if len(message.position) == len(names) else None
+
+
+def plausible(values: list[float]) -> bool:
+    """Whether joint values can be a robot's: finite and within :data:`MAX_VALUE`."""
+    return all(math.isfinite(v) and abs(v) <= MAX_VALUE for v in values)
 
 
 def increasing(stamps: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -65,7 +82,10 @@ class JointRecording:
 class JointStateRecorder:
     """`JointStateRecorder(node, ["j1", "j2"]).start()`, later `.stop()` -> JointRecording.
 
-    Messages that lack one of the joints are counted in `skipped` and left out.
+    Messages that lack one of the joints are counted in `skipped` and left out, and so are
+    samples that cannot be the robot's (counted in `implausible` as well): a position or
+    velocity that is not finite or beyond :data:`MAX_VALUE`, or a stamp that jumps ahead of the
+    last kept one by more than :data:`STAMP_JUMP` beyond the time that passed here.
     """
 
     def __init__(self, node: Node, joint_names: list[str], topic: str = "/joint_states", depth: int = 1000):
@@ -75,6 +95,8 @@ class JointStateRecorder:
         self.depth = depth
         self.subscription = node.create_subscription(messages.JointState, topic, DEFAULT.with_depth(depth))
         self.skipped = 0
+        self.implausible = 0
+        self._last: tuple[float, float] | None = None  # (stamp, arrival) of the last kept sample
         self._rows: list[tuple[float, list[float], list[float]]] = []
         self._columns: dict[tuple[str, ...], list[int] | None] = {}
         self._stop = threading.Event()
@@ -82,28 +104,36 @@ class JointStateRecorder:
         #: time.monotonic() when samples last arrived (or when recording started)
         self.last_arrival = time.monotonic()
 
-    def _record(self, message: Any) -> None:
+    def _record(self, message: Any, arrival: float) -> None:
         columns = joint_columns(self._columns, message, self.joint_names)
         if columns is None:
             self.skipped += 1
             return
         t = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
-        q = [message.position[c] for c in columns]
-        v = [message.velocity[c] for c in columns] if len(message.velocity) == len(message.name) else []
+        q = [float(message.position[c]) for c in columns]
+        v = [float(message.velocity[c]) for c in columns] if len(message.velocity) == len(message.name) else []
+        jumped = self._last is not None and t - self._last[0] > arrival - self._last[1] + STAMP_JUMP
+        if not (plausible(q) and plausible(v) and math.isfinite(t)) or jumped:
+            self.skipped += 1
+            self.implausible += 1
+            return
+        self._last = (t, arrival)
         self._rows.append((t, q, v))
 
     def _run(self) -> None:
         while not self._stop.is_set():
             batch = self.subscription.take(max_samples=self.depth)
+            arrival = time.monotonic()
             for message in batch:
-                self._record(message)
+                self._record(message, arrival)
             if batch:
                 self.last_arrival = time.monotonic()
                 self._stop.wait(BATCH_PERIOD)
             else:
                 self.subscription.wait(_WAKE_PERIOD)
+        arrival = time.monotonic()
         for message in self.subscription.take():
-            self._record(message)
+            self._record(message, arrival)
 
     def start(self) -> JointStateRecorder:
         """Start recording in a background thread; returns the recorder."""

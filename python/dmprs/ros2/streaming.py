@@ -17,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from dmprs.errors import AdapterError, InvalidInputError
+from dmprs.errors import AdapterError, DmprsError, InvalidInputError
 from dmprs.ros2 import messages
 from dmprs.ros2.node import Node, check_timeout
 from dmprs.ros2.qos import DEFAULT
-from dmprs.ros2.recorder import joint_columns
+from dmprs.ros2.recorder import joint_columns, plausible
 
 #: the command topic of ros2_controllers' forward_position_controller
 FORWARD_COMMANDS = "/forward_position_controller/commands"
@@ -31,7 +31,10 @@ FORWARD_COMMANDS = "/forward_position_controller/commands"
 class StreamResult:
     """What a stream did: per control period its time (s from the start, this machine's clock),
     the stepper's phase, the command sent and the measured positions used (NaN before the first
-    sample); whether the stepper finished, and how many periods were overrun.
+    sample); whether the stepper finished, and how many periods were overrun. ``skipped``
+    counts the joint states no robot could have sent (not finite, beyond any joint's range),
+    which were not used; ``error`` is why the stream ended early, if the stepper refused a step
+    (the record up to it is kept).
     """
 
     times: np.ndarray
@@ -40,6 +43,8 @@ class StreamResult:
     measured: np.ndarray
     done: bool
     overruns: int
+    skipped: int = 0
+    error: str = ""
 
 
 class _Latest:
@@ -49,13 +54,19 @@ class _Latest:
         self.names = tuple(joint_names)
         self.subscription = node.create_subscription(messages.JointState, topic, DEFAULT.with_depth(100))
         self.position: np.ndarray | None = None
+        self.skipped = 0
         self._columns: dict[tuple[str, ...], list[int] | None] = {}
 
     def update(self) -> np.ndarray | None:
         for message in self.subscription.take():
             columns = joint_columns(self._columns, message, self.names)
-            if columns is not None:
-                self.position = np.array([message.position[c] for c in columns])
+            if columns is None:
+                continue
+            q = [float(message.position[c]) for c in columns]
+            if plausible(q):
+                self.position = np.array(q)
+            else:
+                self.skipped += 1
         return self.position
 
 
@@ -88,11 +99,15 @@ def stream(stepper: Any, node: Node, joint_names: Sequence[str], *, controller_j
     latest.update()
     dt = float(stepper.dt)
     times, phases, commands, measured = [], [], [], []
-    overruns, start = 0, time.monotonic()
+    overruns, start, error = 0, time.monotonic(), ""
     tick = start
     while not stepper.done() and time.monotonic() < deadline and not (should_stop and should_stop()):
         position = latest.update()
-        y = stepper.step(position if phase_stopping and position is not None else None)[0]
+        try:
+            y = stepper.step(position if phase_stopping and position is not None else None)[0]
+        except DmprsError as exc:  # nothing more is sent; what was sent stays on record
+            error = f"the stepper refused the step at {tick - start:.3f} s: {exc}"
+            break
         publisher.publish(messages.Float64MultiArray(data=[float(y[i]) for i in order]))
         times.append(tick - start)
         phases.append(stepper.phase)
@@ -107,4 +122,4 @@ def stream(stepper: Any, node: Node, joint_names: Sequence[str], *, controller_j
             tick = time.monotonic()
     n = len(names)
     return StreamResult(np.array(times), np.array(phases), np.array(commands).reshape(-1, n),
-                        np.array(measured).reshape(-1, n), bool(stepper.done()), overruns)
+                        np.array(measured).reshape(-1, n), bool(stepper.done()), overruns, latest.skipped, error)
