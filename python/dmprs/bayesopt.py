@@ -20,6 +20,8 @@ seed and the same told errors give the same queries, which is what resuming a lo
 
 from __future__ import annotations
 
+import contextlib
+import io
 import warnings
 from typing import Any
 
@@ -94,7 +96,9 @@ class BayesOpt(CandidateLearner):
         if eps.shape != qq.shape:
             raise InvalidInputError(f"eps has shape {eps.shape}; the query has {qq.shape}")
         score = norm(eps)
-        self._opt.register(dict(zip(self._keys, qq.tolist(), strict=True)), -score)
+        # the package prints a red "Data point ... is not unique" line for each repeated query
+        with contextlib.redirect_stdout(io.StringIO()):
+            self._opt.register(dict(zip(self._keys, qq.tolist(), strict=True)), -score)
         self._record(qq, eps, score, eps=eps)
 
     @property
