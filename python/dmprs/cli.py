@@ -15,7 +15,7 @@ from dmprs.experiments import learner_help
 from dmprs.io.importer import build_database, load_demos
 from dmprs.loop import LearningResult, learn
 from dmprs.plots import plot_run
-from dmprs.reproduce import reproduce, skipped
+from dmprs.reproduce import PartTime, reproduce, skipped
 from dmprs.reproduce.check import check_summary
 from dmprs.reproduce.tables import docs_targets, update_docs
 from dmprs.runlog import RunLog
@@ -402,8 +402,18 @@ def reproduce_cmd(out: Path, quick: bool, backend: str, workers: int | None, doc
             bar.update(job, completed=done, total=total,
                        description=f"{result['part']}: {what}".ljust(40)[:40])
 
+        # Where the bar is not drawn (a log file, CI), one line per finished part instead of an
+        # hour of silence.
+        terminal = sys.stderr.isatty()
+
+        def part_done(part: PartTime, elapsed: float, remaining: float) -> None:
+            if not terminal:
+                click.echo(f"finished {part.part}: {part.runs} run(s) at {elapsed / 60:.1f} min; about "
+                           f"{remaining / 60:.0f} min left", err=True)
+
         try:
-            report = reproduce(out, quick=quick, backend=backend, workers=workers, progress=progress)
+            report = reproduce(out, quick=quick, backend=backend, workers=workers, progress=progress,
+                               part_done=part_done)
         except DmprsError as exc:
             raise click.ClickException(str(exc)) from None
     click.echo((out / "report.md").read_text())

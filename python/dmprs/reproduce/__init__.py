@@ -15,9 +15,11 @@ job writes ``report.md``, ``report.json`` and PNG figures into ``out``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import time
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -27,16 +29,36 @@ from dmprs.parallel import pmap
 from dmprs.reproduce.figures import write_figures
 from dmprs.reproduce.plan import LearnSpec, plan, skipped
 from dmprs.reproduce.report import PAPER, markdown, summarize
-from dmprs.reproduce.run import _prepare_pouring, dispatch, pinned_numerics, run_learning
+from dmprs.reproduce.run import _prepare_pouring, dispatch, part_of, pinned_numerics, run_learning
 
-__all__ = ["PAPER", "LearnSpec", "dispatch", "markdown", "plan", "reproduce", "run_learning", "skipped",
+
+@dataclasses.dataclass
+class PartTime:
+    """Where a part's time went: its runs, their summed wall-clock seconds (in the workers), and
+    the job's elapsed seconds when its last run finished.
+    """
+
+    part: str
+    runs: int
+    seconds: float = 0.0
+    finished_at: float | None = None
+
+
+__all__ = ["PAPER", "LearnSpec", "PartTime", "dispatch", "markdown", "plan", "reproduce", "run_learning", "skipped",
            "summarize", "write_figures"]
 
 
 def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "local",
               workers: int | None = None,
-              progress: Callable[[int, int, dict[str, Any]], None] | None = None) -> dict[str, Any]:
-    """Runs the whole job; writes figures and the report into ``out``; returns the report."""
+              progress: Callable[[int, int, dict[str, Any]], None] | None = None,
+              part_done: Callable[[PartTime, float, float], None] | None = None) -> dict[str, Any]:
+    """Runs the whole job; writes figures and the report into ``out``; returns the report.
+
+    ``progress(done, total, result)`` follows every run; ``part_done(part, elapsed, remaining)``
+    every part as its last run finishes, with the job's elapsed seconds and an estimate of the
+    seconds left (the runs left at the pace so far). The report keeps each part's time
+    (``timing``: its runs, their summed run time, when it finished).
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cache = out / ".cache"
@@ -47,9 +69,19 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
     saved = os.environ.get("DMPRS_CACHE_DIR")
     os.environ["DMPRS_CACHE_DIR"] = saved or str(cache.resolve())
     done = [0]
+    parts = {name: PartTime(name, runs) for name, runs in Counter(part_of(s) for s in specs).items()}
+    left = Counter(part_of(s) for s in specs)
 
     def on_result(i: int, r: dict[str, Any]) -> None:
         done[0] += 1
+        part = part_of(specs[i])
+        parts[part].seconds += float(r.get("seconds", 0.0))
+        left[part] -= 1
+        elapsed = time.perf_counter() - start
+        if left[part] == 0:
+            parts[part].finished_at = round(elapsed, 1)
+            if part_done:
+                part_done(parts[part], elapsed, elapsed / done[0] * (len(specs) - done[0]))
         if progress:
             progress(done[0], len(specs), r)
 
@@ -59,7 +91,8 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
             results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result)
         report = summarize(results)
         report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1),
-                      skipped=skipped(quick))
+                      skipped=skipped(quick),
+                      timing=[dataclasses.asdict(p) for p in sorted(parts.values(), key=lambda p: -p.seconds)])
         text = json.dumps(strict_json({"summary": report, "runs": results}), indent=1, default=str, allow_nan=False)
         (out / "report.json").write_text(text)
         figures = write_figures(results, out)  # the arm's frame strip reads the cached calibration

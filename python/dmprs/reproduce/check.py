@@ -15,7 +15,7 @@ from dmprs._io import strict_json
 from dmprs.errors import DmprsError
 
 #: keys whose values are wall-clock times, which differ from run to run
-TIMING_KEYS = frozenset({"seconds"})
+TIMING_KEYS = frozenset({"seconds", "timing"})
 
 
 class ReproductionMismatchError(DmprsError):
@@ -25,6 +25,15 @@ class ReproductionMismatchError(DmprsError):
 def _plain(summary: dict[str, Any]) -> Any:
     """The summary as JSON would store it (tuples as lists, non-finite values as strings)."""
     return json.loads(json.dumps(strict_json(summary), default=str, allow_nan=False))
+
+
+def without_timings(value: Any) -> Any:
+    """``value`` with every entry under :data:`TIMING_KEYS` left out, at any depth."""
+    if isinstance(value, dict):
+        return {k: without_timings(v) for k, v in value.items() if k not in TIMING_KEYS}
+    if isinstance(value, list):
+        return [without_timings(v) for v in value]
+    return value
 
 
 def first_difference(expected: Any, actual: Any, path: str = "summary") -> str | None:

@@ -80,14 +80,20 @@ def markdown(report: dict[str, Any], figures: list[Path]) -> str:
              (f"Run {'--quick' if report.get('quick') else 'in full'} with backend "
               f"`{report.get('backend')}` in {report.get('seconds')} s. Trials count every executed "
               "trial, the first (purely generalized) one included. A query-space learner gives one run "
-              "per setting in the deterministic simulators, one per liquid on the arm (its granular "
-              "outcome is chaotic), and baselines vary their seed: several runs give the median "
-              "[range] and the successes."), "",
+              "per setting in the deterministic simulators and one per liquid wherever a granular liquid "
+              "is poured (its outcome is chaotic), and baselines vary their seed: several runs give the "
+              "median [range] and the successes."), "",
              "| experiment | learner | trials to success | paper |", "|---|---|---|---|"]
     for row in report["rows"]:
         lines.append(f"| {row['experiment']} | {row['learner']} | {cell(row)} | {row['paper']} |")
     for section in report.get("sections", []):
         lines += ["", f"## {section['title']}", "", section["markdown"].rstrip()]
     lines += [f"\n{note}" for note in report.get("skipped", [])]
+    if report.get("timing"):
+        lines += ["", "## Where the time went", "",
+                  ("Each part's runs, their wall-clock seconds summed over the workers, and when in the job "
+                   "its last run finished."), "",
+                  "| part | runs | run time (s) | finished at (s) |", "|---|---:|---:|---:|"]
+        lines += [f"| {p['part']} | {p['runs']} | {p['seconds']:.1f} | {p['finished_at']} |" for p in report["timing"]]
     lines += ["", "Figures:", ""] + [f"![{p.stem}]({p.name})" for p in figures]
     return "\n".join(lines) + "\n"

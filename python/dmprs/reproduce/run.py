@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import importlib
 import os
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -79,14 +80,28 @@ def _baseline(spec: BaselineSpec) -> dict[str, Any]:
     return out
 
 
-def dispatch(spec: Any) -> dict[str, Any]:
-    """Runs one spec of the plan: a paper experiment, a baseline, or a run of another part."""
+def part_of(spec: Any) -> str:
+    """The part of the report a spec's run belongs to (its result's ``part``)."""
     if isinstance(spec, LearnSpec):
-        return run_learning(spec)
+        return spec.part
     if isinstance(spec, BaselineSpec):
-        return _baseline(spec)
-    result = BY_KIND[spec.kind].run(spec)
-    result.update(kind=spec.kind, part=spec.kind)
+        return "baselines"
+    return str(spec.kind)
+
+
+def dispatch(spec: Any) -> dict[str, Any]:
+    """Runs one spec of the plan: a paper experiment, a baseline, or a run of another part; its
+    result carries the run's wall-clock ``seconds``.
+    """
+    start = time.perf_counter()
+    if isinstance(spec, LearnSpec):
+        result = run_learning(spec)
+    elif isinstance(spec, BaselineSpec):
+        result = _baseline(spec)
+    else:
+        result = BY_KIND[spec.kind].run(spec)
+        result.update(kind=spec.kind, part=spec.kind)
+    result["seconds"] = round(time.perf_counter() - start, 2)
     return result
 
 

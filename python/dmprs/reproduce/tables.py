@@ -16,7 +16,7 @@ from typing import Any
 
 from dmprs._io import strict_json, write_atomic
 from dmprs.errors import InvalidInputError
-from dmprs.reproduce.check import TIMING_KEYS
+from dmprs.reproduce.check import without_timings
 from dmprs.reproduce.stats import cell
 from dmprs.reproduce.versus_bo import markdown_versus
 
@@ -202,6 +202,6 @@ def update_docs(root: str | Path, summary: dict[str, Any]) -> list[Path]:
         if new != text:
             write_atomic(path, new.encode())
             changed.append(path)
-    stored = {k: v for k, v in summary.items() if k not in TIMING_KEYS}
+    stored = without_timings(summary)
     write_atomic(store, (json.dumps(strict_json(stored), indent=1, default=str, allow_nan=False) + "\n").encode())
     return changed
