@@ -70,3 +70,27 @@ def test_import_dmprs_leaves_cyclonedds_and_rosbags_alone() -> None:
         env={**os.environ, "PYTHONPATH": package_root},
     )
     assert out.stdout.strip() == "[]"
+
+
+def test_the_domain_is_ros_domain_ids_when_none_is_given(monkeypatch):
+    from dmprs.ros2.names import domain_id
+
+    monkeypatch.delenv("ROS_DOMAIN_ID", raising=False)
+    assert domain_id() == 0
+    monkeypatch.setenv("ROS_DOMAIN_ID", " 42 ")
+    assert domain_id() == 42 and domain_id(7) == 7
+    for bad in ("233", "-1", "x"):
+        monkeypatch.setenv("ROS_DOMAIN_ID", bad)
+        with pytest.raises(InvalidInputError, match="ROS_DOMAIN_ID"):
+            domain_id()
+    for bad in (233, -1, True, 1.5):
+        with pytest.raises(InvalidInputError, match="domain_id"):
+            domain_id(bad)
+
+
+def test_a_second_configuration_for_a_joined_domain_is_a_dmprs_error(domain_id):
+    from dmprs.errors import AdapterError
+    from dmprs.ros2 import LOOPBACK_CONFIG, Node
+
+    with Node("first", domain_id, config=LOOPBACK_CONFIG), pytest.raises(AdapterError, match="joined the domain"):
+        Node("second", domain_id, config=LOOPBACK_CONFIG)

@@ -11,6 +11,7 @@ import time
 from typing import Any, Generic, Self, TypeVar
 
 from cyclonedds.core import (
+    DDSException,
     DDSStatus,
     GuardCondition,
     InstanceState,
@@ -72,8 +73,13 @@ class Node:
         self.namespace = names.check_namespace(namespace)
         self.domain_id = domain_id
         # the Domain must outlive the participant, or Cyclone falls back to its default config
-        self._domain = Domain(domain_id, config) if config is not None else None
-        self.participant = DomainParticipant(domain_id)
+        try:
+            self._domain = Domain(domain_id, config) if config is not None else None
+            self.participant = DomainParticipant(domain_id)
+        except DDSException as exc:
+            why = (" (this process has joined the domain already, with its configuration: a second one "
+                   "cannot be given)" if config is not None else "")
+            raise AdapterError(f"cannot join ROS 2 domain {domain_id}{why}: {exc}") from None
         self._topics: dict[str, Topic] = {}
         self._closed = False
 
