@@ -53,9 +53,10 @@ class Controller(ControllerThread):
     """
 
     def __init__(self, robot: RobotNode, ending: str = "succeed", scale: float | None = None,
-                 robot_domain: int = 0):
+                 robot_domain: int = 0, abort_text: str = "a2 left its path"):
         super().__init__()
         self.robot, self.ending, self.scale, self.robot_domain = robot, ending, scale, robot_domain
+        self.abort_text = abort_text
         self.q = np.zeros(3)
         self.clock = CLOCK0
         self.goals: list = []
@@ -85,7 +86,7 @@ class Controller(ControllerThread):
                 self.q = np.array([np.interp(elapsed, tr.times, tr.positions[:, j]) for j in range(3)])
                 if self.ending == "abort" and elapsed > tr.times[-1] / 2:
                     self.robot.finish_goal(active.id, m.GoalStatus.STATUS_ABORTED,
-                                           m.FollowJointTrajectory_Result.PATH_TOLERANCE_VIOLATED, "a2 left its path")
+                                           m.FollowJointTrajectory_Result.PATH_TOLERANCE_VIOLATED, self.abort_text)
                     active = None
                 elif self.ending == "invalid":
                     self.robot.finish_goal(active.id, m.GoalStatus.STATUS_ABORTED,
@@ -340,3 +341,19 @@ def test_joint_states_no_robot_could_send_are_skipped_and_the_outcome_says_so(ro
     assert out.executed is not None and out.executed.duration < command.duration + 0.5
     assert np.isfinite(out.executed.y).all()
     assert "3 /joint_states sample(s) skipped as no robot's" in out.message
+
+
+def test_a_result_with_a_huge_error_string_still_crosses_to_cyclone_cut(robot, domain_id):
+    # RustDDS fragments a sample over about 64 KB, which Cyclone drops: the node cuts the text
+    text = "x" * 70_000 + " the end"
+    with Controller(robot, "abort", abort_text=text), adapter(domain_id) as a:
+        out = a.execute(move(0.4), timeout_s=10.0)
+    assert out.status is Status.ABORTED, out.message
+    assert "xxxx... (cut)" in out.message and "the end" not in out.message
+    assert len(out.message) < 5000
+
+
+def test_one_signal_topic_cannot_be_of_two_types(domain_id):
+    with pytest.raises(InvalidInputError, match="given twice"):
+        RobotNode(domain_id, CONTROLLER.strip("/"), ROBOT_JOINTS, float_signals=["/scale/reading"],
+                  point_signals=["/scale/reading"])

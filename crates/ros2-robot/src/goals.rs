@@ -76,7 +76,14 @@ pub enum GoalTableError {
     Finished(GoalId),
     #[error("a goal ends as succeeded, canceled or aborted, not as {0:?}")]
     NotTerminal(GoalStatus),
+    #[error("{0} goals are unfinished already: finish some before sending more")]
+    Full(usize),
 }
+
+/// The most goals the action server holds unfinished: beyond it a goal is rejected, so that
+/// memory and the status topic's array stay bounded (with the finished goals kept, the array has
+/// at most `MAX_UNFINISHED_GOALS + keep_finished` entries, a few kilobytes).
+pub const MAX_UNFINISHED_GOALS: usize = 64;
 
 struct Goal<RequestId> {
     id: GoalId,
@@ -116,6 +123,15 @@ impl<RequestId> GoalTable<RequestId> {
     pub fn accept(&mut self, id: GoalId, stamp: Time) -> Result<(), GoalTableError> {
         if self.goals.iter().any(|g| g.id == id) {
             return Err(GoalTableError::Duplicate(id));
+        }
+        if self
+            .goals
+            .iter()
+            .filter(|g| !g.status.is_terminal())
+            .count()
+            >= MAX_UNFINISHED_GOALS
+        {
+            return Err(GoalTableError::Full(MAX_UNFINISHED_GOALS));
         }
         self.goals.push_back(Goal {
             id,
@@ -243,6 +259,22 @@ mod tests {
             error_code: code,
             error_string: text.into(),
         }
+    }
+
+    #[test]
+    fn goals_beyond_the_unfinished_limit_are_rejected_until_one_finishes() {
+        let mut table: GoalTable<&str> = GoalTable::new(4);
+        for n in 0..MAX_UNFINISHED_GOALS {
+            table.accept([n as u8; 16], stamp(1)).unwrap();
+        }
+        assert_eq!(
+            table.accept(id(200), stamp(2)),
+            Err(GoalTableError::Full(MAX_UNFINISHED_GOALS))
+        );
+        table
+            .finish(&id(0), GoalStatus::Succeeded, result(0, ""))
+            .unwrap();
+        table.accept(id(200), stamp(2)).unwrap();
     }
 
     #[test]

@@ -46,6 +46,22 @@ use crate::{RobotError, wire};
 /// How many finished goals the action server remembers for late result requests and the status
 /// topic.
 const KEEP_FINISHED_GOALS: usize = 64;
+/// The longest error string a result carries (bytes, cut at a character): with the bounded
+/// status array it keeps every message of the node under the ~64 KB that RustDDS sends to Cyclone
+/// DDS in one piece (a larger one goes out in DATA_FRAG fragments that Cyclone drops).
+pub const MAX_ERROR_STRING: usize = 4096;
+
+/// `text` cut to at most [`MAX_ERROR_STRING`] bytes at a character boundary, marked as cut.
+fn bounded(text: &str) -> String {
+    if text.len() <= MAX_ERROR_STRING {
+        return text.into();
+    }
+    let mut end = MAX_ERROR_STRING - "... (cut)".len();
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!("{}... (cut)", &text[..end])
+}
 
 /// The node thread drains every reader at this period even without an event, so an edge lost
 /// between registration and the first poll delays nothing for longer.
@@ -600,7 +616,7 @@ impl RobotNode {
         self.check_running()?;
         let result = FollowJointTrajectoryResult {
             error_code,
-            error_string: error_string.into(),
+            error_string: bounded(error_string),
         };
         let mut side = self.action();
         let waiting = side.table.finish(id, status, result.clone())?;
@@ -795,7 +811,8 @@ fn signal_publishers<M: serde::Serialize>(
 ) -> Result<HashMap<String, Publisher<M>>, RobotError> {
     let mut publishers = HashMap::new();
     for (topic, _) in signals.iter().filter(|(_, k)| *k == kind) {
-        if publishers.contains_key(topic) {
+        // one topic carries one type: given twice, of either kind, is refused
+        if signals.iter().filter(|(t, _)| t == topic).count() > 1 {
             return Err(RobotError::InvalidInput(format!(
                 "signal topic {topic:?} given twice"
             )));
