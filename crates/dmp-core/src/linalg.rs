@@ -231,13 +231,24 @@ pub fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
         for j in 0..m {
             let (done, rest) = a.split_at_mut(j * m);
             let col = &mut rest[j..m];
+            let below = |k: usize| &done[k * m + j..(k + 1) * m];
+            // The columns k with L[j, k] != 0, four at a time in one pass over `col` (each entry
+            // still takes them in increasing k, so the bits are those of one column at a time).
+            let mut ks = [0usize; 4];
+            let mut n = 0;
             for k in 0..j {
-                let ljk = done[k * m + j];
-                if ljk != 0.0 {
-                    for (v, l) in col.iter_mut().zip(&done[k * m + j..(k + 1) * m]) {
-                        *v -= ljk * l;
+                if done[k * m + j] != 0.0 {
+                    ks[n] = k;
+                    n += 1;
+                    if n == 4 {
+                        let c = ks.map(|k| (done[k * m + j], below(k)));
+                        axpy4(col, &c);
+                        n = 0;
                     }
                 }
+            }
+            for &k in &ks[..n] {
+                axpy1(col, done[k * m + j], below(k));
             }
             let pivot = col[0];
             // `!(pivot > 0)` also refuses NaN.
@@ -287,18 +298,71 @@ pub fn solve_lower_many_in_place(l: &[f64], m: usize, b: &mut [f64], k: usize) {
     });
 }
 
+/// `v -= a c` entrywise.
+#[inline(always)]
+fn axpy1(v: &mut [f64], a: f64, c: &[f64]) {
+    for (v, c) in v.iter_mut().zip(c) {
+        *v -= a * c;
+    }
+}
+
+/// `v -= a_0 c_0`, then `- a_1 c_1`, `- a_2 c_2`, `- a_3 c_3`, entry by entry in one pass: the
+/// same operations in the same order as four [`axpy1`]s, reading and writing `v` once.
+#[inline(always)]
+fn axpy4(v: &mut [f64], c: &[(f64, &[f64]); 4]) {
+    let n = v.len();
+    let [(a0, c0), (a1, c1), (a2, c2), (a3, c3)] = c;
+    let (c0, c1, c2, c3) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n]);
+    for i in 0..n {
+        let mut x = v[i];
+        x -= a0 * c0[i];
+        x -= a1 * c1[i];
+        x -= a2 * c2[i];
+        x -= a3 * c3[i];
+        v[i] = x;
+    }
+}
+
 /// Forward substitution of `L x = b` for a `b` whose first `first` entries are zero (so are
-/// those of `x`), column-oriented.
+/// those of `x`), column-oriented: each solved `x_k != 0` is taken out of the entries below it.
+/// Four columns at a time, the entries below their diagonal block in one pass (in the same order
+/// per entry as one column at a time, so the same bits).
 #[inline(always)]
 fn solve_lower_from(l: &[f64], m: usize, b: &mut [f64], first: usize) {
-    for k in first..m {
-        let col = &l[k * m..(k + 1) * m];
-        let xk = b[k] / col[k];
+    let col = |k: usize| &l[k * m..(k + 1) * m];
+    let mut k = first;
+    while k + 4 <= m {
+        // The diagonal block, one column at a time.
+        for kk in k..k + 4 {
+            let xk = b[kk] / col(kk)[kk];
+            b[kk] = xk;
+            if xk != 0.0 {
+                axpy1(&mut b[kk + 1..k + 4], xk, &col(kk)[kk + 1..k + 4]);
+            }
+        }
+        // Below it: the block's nonzero x's, in increasing k.
+        let (mut c, mut n) = ([(0.0, &l[..0]); 4], 0);
+        for kk in k..k + 4 {
+            if b[kk] != 0.0 {
+                c[n] = (b[kk], &col(kk)[k + 4..]);
+                n += 1;
+            }
+        }
+        let rest = &mut b[k + 4..];
+        if n == 4 {
+            axpy4(rest, &c);
+        } else {
+            for &(xk, ck) in &c[..n] {
+                axpy1(rest, xk, ck);
+            }
+        }
+        k += 4;
+    }
+    for k in k..m {
+        let xk = b[k] / col(k)[k];
         b[k] = xk;
         if xk != 0.0 {
-            for (v, c) in b[k + 1..].iter_mut().zip(&col[k + 1..]) {
-                *v -= xk * c;
-            }
+            axpy1(&mut b[k + 1..], xk, &col(k)[k + 1..]);
         }
     }
 }
@@ -467,6 +531,68 @@ mod tests {
             }
         }
         assert_eq!(x, y);
+    }
+
+    #[test]
+    fn four_columns_at_a_time_give_the_bits_of_one_at_a_time() {
+        // The reference: the plain left-looking factor and forward substitution, one column at a
+        // time, skipping zero multipliers. Sizes around the blocking, with zeros in L (a
+        // block-diagonal part) so that skipped columns fall inside and across blocks.
+        fn reference_factor(a: &mut [f64], m: usize) {
+            for j in 0..m {
+                for k in 0..j {
+                    let ljk = a[k * m + j];
+                    if ljk != 0.0 {
+                        for i in j..m {
+                            a[j * m + i] -= ljk * a[k * m + i];
+                        }
+                    }
+                }
+                let d = a[j * m + j].sqrt();
+                a[j * m + j] = d;
+                for i in j + 1..m {
+                    a[j * m + i] /= d;
+                }
+            }
+        }
+        fn reference_solve(l: &[f64], m: usize, b: &mut [f64]) {
+            for k in 0..m {
+                let xk = b[k] / l[k * m + k];
+                b[k] = xk;
+                if xk != 0.0 {
+                    for i in k + 1..m {
+                        b[i] -= xk * l[k * m + i];
+                    }
+                }
+            }
+        }
+        for m in [1, 2, 3, 4, 5, 7, 8, 9, 13, 37, 64] {
+            let mut a = spd(m).as_slice().to_vec();
+            for j in 0..m {
+                for i in 0..m {
+                    if (i < m / 3) != (j < m / 3) {
+                        a[j * m + i] = 0.0; // two diagonal blocks: zeros in the factor
+                    }
+                }
+            }
+            let mut fast = a.clone();
+            assert!(cholesky_in_place(&mut fast, m));
+            reference_factor(&mut a, m);
+            for j in 0..m {
+                for i in j..m {
+                    assert_eq!(
+                        fast[j * m + i].to_bits(),
+                        a[j * m + i].to_bits(),
+                        "L[{i}, {j}], m = {m}"
+                    );
+                }
+            }
+            let b: Vec<f64> = (0..m).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
+            let (mut x, mut y) = (b.clone(), b.clone());
+            solve_lower_in_place(&a, m, &mut x);
+            reference_solve(&a, m, &mut y);
+            assert_eq!(x, y, "m = {m}");
+        }
     }
 
     #[test]
