@@ -251,8 +251,7 @@ pub fn cholesky_in_place(a: &mut [f64], m: usize) -> bool {
                 axpy1(col, done[k * m + j], below(k));
             }
             let pivot = col[0];
-            // `!(pivot > 0)` also refuses NaN.
-            if !(pivot > 0.0) {
+            if pivot.is_nan() || pivot <= 0.0 {
                 return false;
             }
             let d = pivot.sqrt();
@@ -342,9 +341,9 @@ fn solve_lower_from(l: &[f64], m: usize, b: &mut [f64], first: usize) {
         }
         // Below it: the block's nonzero x's, in increasing k.
         let (mut c, mut n) = ([(0.0, &l[..0]); 4], 0);
-        for kk in k..k + 4 {
-            if b[kk] != 0.0 {
-                c[n] = (b[kk], &col(kk)[k + 4..]);
+        for (kk, &xk) in b.iter().enumerate().take(k + 4).skip(k) {
+            if xk != 0.0 {
+                c[n] = (xk, &col(kk)[k + 4..]);
                 n += 1;
             }
         }
