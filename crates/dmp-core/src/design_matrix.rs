@@ -153,22 +153,35 @@ pub fn normal_equations(
             force[d] = tau * tau * demo.ydd[(d, j)]
                 - config.alpha_z * (config.beta_z * (demo.goal[d] - yj[d]) - tau * demo.yd[(d, j)]);
         }
-        // Column-major slices of the rows nz of A^T A and A^T F: contiguous, so vectorized.
-        let row = &psi[nz.clone()];
-        for l in nz.clone() {
-            let col = &mut ata.as_mut_slice()[l * n + nz.start..l * n + nz.end];
-            for (c, a) in col.iter_mut().zip(row) {
-                *c += a * psi[l];
-            }
-        }
-        for (d, &f) in force.iter().enumerate() {
-            let col = &mut atf.as_mut_slice()[d * n + nz.start..d * n + nz.end];
-            for (c, a) in col.iter_mut().zip(row) {
-                *c += a * f;
-            }
-        }
+        accumulate_row(&mut ata, &mut atf, &psi, nz, &force);
     }
     NormalEquations { ata, atf }
+}
+
+/// Adds one row of the design matrix to `A^T A` and `A^T F`: `row[k]` for `k` in `nz` (zero
+/// elsewhere) and its targets `force[d]`. Only the non-zero span is touched, and the column-major
+/// slices of the rows `nz` are contiguous, so the updates vectorize.
+pub(crate) fn accumulate_row(
+    ata: &mut DMatrix<f64>,
+    atf: &mut DMatrix<f64>,
+    row: &[f64],
+    nz: std::ops::Range<usize>,
+    force: &[f64],
+) {
+    let n = ata.nrows();
+    let span = &row[nz.clone()];
+    for l in nz.clone() {
+        let col = &mut ata.as_mut_slice()[l * n + nz.start..l * n + nz.end];
+        for (c, a) in col.iter_mut().zip(span) {
+            *c += a * row[l];
+        }
+    }
+    for (d, &f) in force.iter().enumerate() {
+        let col = &mut atf.as_mut_slice()[d * n + nz.start..d * n + nz.end];
+        for (c, a) in col.iter_mut().zip(span) {
+            *c += a * f;
+        }
+    }
 }
 
 /// Solves `(ata + lambda I) w = atf` with `lambda = relative_ridge * trace(ata) / N` (or

@@ -116,13 +116,19 @@ const STABILITY_MARGIN: f64 = 0.25;
 /// 4 alpha_z beta_z))` for real eigenvalues, `1 / beta_z` for complex ones. The phase eq. 3 stays
 /// positive iff `h < 1 / alpha_x`.
 pub fn stable_step(alpha_z: f64, beta_z: f64, alpha_x: f64) -> f64 {
+    spring_stable_step(alpha_z, beta_z).min(STABILITY_MARGIN / alpha_x)
+}
+
+/// The spring's part of [`stable_step`], with its margin: the bound of a system whose phase
+/// needs none (the periodic DMP's advances linearly).
+pub(crate) fn spring_stable_step(alpha_z: f64, beta_z: f64) -> f64 {
     let disc = alpha_z * alpha_z - 4.0 * alpha_z * beta_z;
     let spring = if disc >= 0.0 {
         4.0 / (alpha_z + disc.sqrt())
     } else {
         1.0 / beta_z
     };
-    STABILITY_MARGIN * spring.min(1.0 / alpha_x)
+    STABILITY_MARGIN * spring
 }
 
 impl Dmp {
@@ -226,7 +232,7 @@ impl Dmp {
             }
             step += 1;
         }
-        check_trajectory(&out)?;
+        check_trajectory(&out, "DMP rollout")?;
         Ok(out)
     }
 
@@ -271,7 +277,7 @@ impl Dmp {
 ///
 /// Only the last sample needs a look: the recurrence only adds and multiplies, so once a state
 /// is NaN or infinite every later one is too. The first offender is searched for the message.
-fn check_trajectory(tr: &Trajectory) -> Result<()> {
+pub(crate) fn check_trajectory(tr: &Trajectory, context: &'static str) -> Result<()> {
     let last = tr.y.len() - tr.n_dof;
     let finite = |v: &Vec<f64>| v[last..].iter().all(|v| v.is_finite());
     if finite(&tr.y) && finite(&tr.yd) && finite(&tr.ydd) {
@@ -281,7 +287,7 @@ fn check_trajectory(tr: &Trajectory) -> Result<()> {
         if let Some(i) = v.iter().position(|v| !v.is_finite()) {
             let (j, d) = (i / tr.n_dof, i % tr.n_dof);
             return Err(Error::Numerical {
-                context: "DMP rollout",
+                context,
                 detail: format!(
                     "{name}[{j}, {d}] at t = {} is {}: the goal, start or weights are too large for f64",
                     fmt_g(tr.t[j]),
