@@ -51,14 +51,14 @@ pub(crate) fn demonstration<'a>(
     })
 }
 
-type TrajectoryArrays<'py> = (
+pub(crate) type TrajectoryArrays<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<f64>>,
 );
 
-fn trajectory_arrays(py: Python<'_>, tr: Trajectory) -> PyResult<TrajectoryArrays<'_>> {
+pub(crate) fn trajectory_arrays(py: Python<'_>, tr: Trajectory) -> PyResult<TrajectoryArrays<'_>> {
     let shape = [tr.t.len(), tr.n_dof];
     Ok((
         tr.t.into_pyarray(py),

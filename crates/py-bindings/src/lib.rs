@@ -8,6 +8,7 @@ mod generalize;
 mod gp;
 mod learners;
 mod matchbox;
+mod periodic;
 mod portable;
 mod primitive;
 mod ros2_robot;
@@ -35,6 +36,8 @@ mod _core {
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
     };
+    #[pymodule_export]
+    use super::periodic::{PyPeriodicDmp, PyPeriodicOnlineFit, py_rollout_batch_periodic};
     #[pymodule_export]
     use super::portable::{dls_step, portable_binary, portable_norm, portable_unary};
     #[pymodule_export]

@@ -1,0 +1,248 @@
+//! `dmprs._core.PeriodicDmp`, `rollout_batch_periodic` and `PeriodicOnlineFit`: numpy in, numpy
+//! out. `dmprs.PeriodicDMP` (Python) wraps these and documents them.
+
+use dmp_core::online_fit::OnlineFit;
+use dmp_core::{PeriodicConfig, PeriodicDmp, rollout_batch_periodic};
+use nalgebra::DMatrix;
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+use crate::dmp::{
+    TrajectoryArrays, contiguous, demonstration, time_major, trajectory_arrays, vector,
+};
+use crate::errors::IntoPyResult;
+use crate::primitive::{vector_array, weights_array};
+
+/// The periodic DMP's constants as Python passes them (`dmprs.periodic` validates them).
+#[derive(FromPyObject, Clone, Copy)]
+#[pyo3(from_item_all)]
+pub(crate) struct PeriodicConstants {
+    alpha_z: f64,
+    beta_z: f64,
+    width_factor: f64,
+}
+
+impl PeriodicConstants {
+    fn config(self, n_basis: usize) -> PeriodicConfig {
+        PeriodicConfig {
+            n_basis,
+            alpha_z: self.alpha_z,
+            beta_z: self.beta_z,
+            width_factor: self.width_factor,
+        }
+    }
+}
+
+#[pyclass(name = "PeriodicDmp", module = "dmprs._core", frozen)]
+pub struct PyPeriodicDmp {
+    pub inner: PeriodicDmp,
+}
+
+#[pymethods]
+impl PyPeriodicDmp {
+    #[new]
+    #[pyo3(signature = (weights, goal, amplitude, start, tau, constants))]
+    fn new(
+        weights: PyReadonlyArray2<'_, f64>,
+        goal: PyReadonlyArray1<'_, f64>,
+        amplitude: PyReadonlyArray1<'_, f64>,
+        start: PyReadonlyArray1<'_, f64>,
+        tau: f64,
+        constants: PeriodicConstants,
+    ) -> PyResult<Self> {
+        let w = time_major("weights", &weights)?;
+        let inner = PeriodicDmp::new(
+            constants.config(weights.shape()[1]),
+            DMatrix::from(w),
+            vector("goal", &goal)?,
+            vector("amplitude", &amplitude)?,
+            vector("start", &start)?,
+            tau,
+        );
+        Ok(Self {
+            inner: inner.py_err()?,
+        })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (t, y, yd, ydd, period, n_basis, constants))]
+    fn fit(
+        t: PyReadonlyArray1<'_, f64>,
+        y: PyReadonlyArray2<'_, f64>,
+        yd: Option<PyReadonlyArray2<'_, f64>>,
+        ydd: Option<PyReadonlyArray2<'_, f64>>,
+        period: Option<f64>,
+        n_basis: usize,
+        constants: PeriodicConstants,
+    ) -> PyResult<Self> {
+        let demo = demonstration(&t, &y, yd.as_ref(), ydd.as_ref())?;
+        Ok(Self {
+            inner: PeriodicDmp::fit(&demo, period, constants.config(n_basis)).py_err()?,
+        })
+    }
+
+    #[pyo3(signature = (dt, duration, phase))]
+    fn rollout<'py>(
+        &self,
+        py: Python<'py>,
+        dt: f64,
+        duration: Option<f64>,
+        phase: f64,
+    ) -> PyResult<TrajectoryArrays<'py>> {
+        let tr = py
+            .detach(|| self.inner.rollout(dt, duration, phase))
+            .py_err()?;
+        trajectory_arrays(py, tr)
+    }
+
+    fn with_goal(&self, goal: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_goal(vector("goal", &goal)?).py_err()?,
+        })
+    }
+    fn with_amplitude(&self, amplitude: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self
+                .inner
+                .with_amplitude(vector("amplitude", &amplitude)?)
+                .py_err()?,
+        })
+    }
+    fn with_start(&self, start: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_start(vector("start", &start)?).py_err()?,
+        })
+    }
+    fn with_tau(&self, tau: f64) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_tau(tau).py_err()?,
+        })
+    }
+
+    /// `(D, N)`
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        weights_array(py, self.inner.weights())
+    }
+    #[getter]
+    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_array(py, self.inner.goal().as_slice().to_vec())
+    }
+    #[getter]
+    fn amplitude<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_array(py, self.inner.amplitude().as_slice().to_vec())
+    }
+    #[getter]
+    fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_array(py, self.inner.y0().as_slice().to_vec())
+    }
+    #[getter]
+    fn tau(&self) -> f64 {
+        self.inner.tau()
+    }
+    #[getter]
+    fn n_dof(&self) -> usize {
+        self.inner.n_dof()
+    }
+    #[getter]
+    fn n_basis(&self) -> usize {
+        self.inner.config().n_basis
+    }
+    #[getter]
+    fn alpha_z(&self) -> f64 {
+        self.inner.config().alpha_z
+    }
+    #[getter]
+    fn beta_z(&self) -> f64 {
+        self.inner.config().beta_z
+    }
+    #[getter]
+    fn width_factor(&self) -> f64 {
+        self.inner.config().width_factor
+    }
+    #[getter]
+    fn centers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_array(py, self.inner.basis().centers().to_vec())
+    }
+    /// The kernels' shared concentration h.
+    #[getter]
+    fn h(&self) -> f64 {
+        self.inner.basis().h()
+    }
+}
+
+/// Rolls out many periodic DMPs on all cores with the GIL released.
+#[pyfunction(name = "rollout_batch_periodic")]
+#[pyo3(signature = (dmps, dt, duration, phase))]
+pub fn py_rollout_batch_periodic<'py>(
+    py: Python<'py>,
+    dmps: Vec<PyRef<'py, PyPeriodicDmp>>,
+    dt: f64,
+    duration: Option<f64>,
+    phase: f64,
+) -> PyResult<Vec<TrajectoryArrays<'py>>> {
+    let owned: Vec<PeriodicDmp> = dmps.iter().map(|d| d.inner.clone()).collect();
+    let trajectories = py
+        .detach(|| rollout_batch_periodic(&owned, dt, duration, phase))
+        .py_err()?;
+    trajectories
+        .into_iter()
+        .map(|tr| trajectory_arrays(py, tr))
+        .collect()
+}
+
+#[pyclass(name = "PeriodicOnlineFit", module = "dmprs._core")]
+pub struct PyPeriodicOnlineFit {
+    inner: OnlineFit,
+}
+
+#[pymethods]
+impl PyPeriodicOnlineFit {
+    #[new]
+    #[pyo3(signature = (n_dof, n_basis, constants, forgetting, delta))]
+    fn new(
+        n_dof: usize,
+        n_basis: usize,
+        constants: PeriodicConstants,
+        forgetting: f64,
+        delta: f64,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            inner: OnlineFit::new(constants.config(n_basis), n_dof, forgetting, delta).py_err()?,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn update(
+        &mut self,
+        phase: f64,
+        tau: f64,
+        y: PyReadonlyArray1<'_, f64>,
+        yd: PyReadonlyArray1<'_, f64>,
+        ydd: PyReadonlyArray1<'_, f64>,
+        goal: PyReadonlyArray1<'_, f64>,
+        amplitude: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<()> {
+        self.inner
+            .update(
+                phase,
+                tau,
+                contiguous("y", &y)?,
+                contiguous("yd", &yd)?,
+                contiguous("ydd", &ydd)?,
+                contiguous("goal", &goal)?,
+                contiguous("amplitude", &amplitude)?,
+            )
+            .py_err()
+    }
+
+    /// `(D, N)`
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        weights_array(py, self.inner.weights())
+    }
+    #[getter]
+    fn samples(&self) -> u64 {
+        self.inner.samples()
+    }
+}
