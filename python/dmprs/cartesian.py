@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs import _core
 from dmprs._arrays import as_count, as_float_array
 from dmprs.errors import InvalidInputError
-from dmprs.primitive import Parameters, Primitive, constants, rollout_options
+from dmprs.primitive import DiscretePrimitive, Parameters, constants, rollout_options
 from dmprs.stepper import CartesianStepper
 from dmprs.trajectory import CartesianTrajectory
 
@@ -29,7 +29,7 @@ def _derivative(value: ArrayLike | None, name: str) -> NDArray[np.float64] | Non
     return None if value is None else as_float_array(value, name, 2)
 
 
-class CartesianDMP(Primitive):
+class CartesianDMP(DiscretePrimitive):
     r"""A DMP of an end-effector pose: position ``p`` (m) and orientation ``q``, a unit
     quaternion ``(w, x, y, z)``, sharing one phase, one basis and one tau.
 

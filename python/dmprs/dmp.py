@@ -12,14 +12,14 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs import _core
 from dmprs._arrays import as_count, as_float_array
 from dmprs.errors import InvalidInputError
-from dmprs.primitive import Parameters, Primitive, constants, rollout_options
+from dmprs.primitive import DiscretePrimitive, Parameters, constants, rollout_options
 from dmprs.stepper import JointStepper
 from dmprs.trajectory import Trajectory
 
 __all__ = ["DMP"]
 
 
-class DMP(Primitive):
+class DMP(DiscretePrimitive):
     r"""A discrete Dynamic Movement Primitive with D degrees of freedom sharing one phase.
 
     The equations (Nemec, Vuga, Ude 2013, eqs. 1-4; Ijspeert/Schaal), per DOF::

@@ -1,8 +1,10 @@
-"""What a joint-space :class:`dmprs.DMP` and a :class:`dmprs.CartesianDMP` share: the constants,
-the parameters, immutability, equality, pickling and the dict form, in one place.
+"""What every movement primitive shares (the spring's constants, the parameters, immutability,
+equality, pickling and the dict form), and what the discrete ones (:class:`dmprs.DMP`,
+:class:`dmprs.CartesianDMP`) add: the decaying phase.
 
-Both follow paper eqs. 1-4 on one phase with the same constants (``alpha_z = 48``,
-``beta_z = alpha_z / 4``, ``alpha_x = 2``, ``width_factor = 2``; docs/method.md §2.2).
+The discrete primitives follow paper eqs. 1-4 on one phase with the same constants
+(``alpha_z = 48``, ``beta_z = alpha_z / 4``, ``alpha_x = 2``, ``width_factor = 2``;
+docs/method.md §2.2); :class:`dmprs.PeriodicDMP` shares the spring on a periodic phase (§11).
 """
 
 from __future__ import annotations
@@ -17,27 +19,23 @@ from dmprs import _core
 from dmprs._arrays import as_flag, as_scalar, short
 from dmprs.errors import InvalidInputError
 
-__all__ = ["Primitive", "constants", "rollout_options"]
+__all__ = ["DiscretePrimitive", "Primitive", "constants", "rollout_options", "spring"]
 
 #: A primitive's weights, goal and start, validated as its core takes them.
 Parameters = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
 
-#: The constants' names, in the order of the dict form and of the core's argument.
-CONSTANTS = ("alpha_z", "beta_z", "alpha_x", "width_factor")
-
-
-def constants(alpha_z: Any, beta_z: Any, alpha_x: Any, width_factor: Any) -> dict[str, float]:
-    """The constants, validated, as the core takes them (``beta_z=None``: ``alpha_z / 4``,
-    critically damped).
+def spring(alpha_z: Any, beta_z: Any, width_factor: Any) -> dict[str, float]:
+    """The constants every primitive has, validated, as the core takes them (``beta_z=None``:
+    ``alpha_z / 4``, critically damped).
     """
     az = as_scalar(alpha_z, "alpha_z", positive=True)
     bz = az / 4.0 if beta_z is None else as_scalar(beta_z, "beta_z", positive=True)
-    return {
-        "alpha_z": az,
-        "beta_z": bz,
-        "alpha_x": as_scalar(alpha_x, "alpha_x", positive=True),
-        "width_factor": as_scalar(width_factor, "width_factor", positive=True),
-    }
+    return {"alpha_z": az, "beta_z": bz, "width_factor": as_scalar(width_factor, "width_factor", positive=True)}
+
+
+def constants(alpha_z: Any, beta_z: Any, alpha_x: Any, width_factor: Any) -> dict[str, float]:
+    """A discrete primitive's constants, validated, as the core takes them."""
+    return {**spring(alpha_z, beta_z, width_factor), "alpha_x": as_scalar(alpha_x, "alpha_x", positive=True)}
 
 
 def rollout_options(dt: Any, duration: Any, until_rest: Any, rest_tol: Any) -> dict[str, Any]:
@@ -53,44 +51,23 @@ def rollout_options(dt: Any, duration: Any, until_rest: Any, rest_tol: Any) -> d
 _DICT_VERSION = 2
 #: keys that version 1 of the dict form named otherwise (a DMP's start was "y0")
 _RENAMED_IN_2 = {"y0": "start"}
-_PARAMETERS = ("tau", "goal", "start", "weights")
 
 
 class Primitive:
-    """The shared half of :class:`dmprs.DMP` and :class:`dmprs.CartesianDMP`: an immutable
-    wrapper of the Rust core's primitive (``_core``), its parameters, ``with_tau``, ``==``,
-    pickling and :meth:`to_dict` / :meth:`from_dict`. Subclasses add how to build, fit and roll
-    out, and how a goal and a start are given.
+    """What every primitive shares: an immutable wrapper of the Rust core's primitive
+    (``_core``), its parameters, ``with_tau``, ``==``, pickling and :meth:`to_dict` /
+    :meth:`from_dict`. Subclasses add how to build, fit and roll out, and how a goal and a start
+    are given.
     """
 
     __slots__ = ("_core",)
-    #: the core's class the constructor builds
-    _CORE: ClassVar[type[_core.Dmp | _core.CartesianDmp]]
-    _core: _core.Dmp | _core.CartesianDmp
+    _core: _core.Dmp | _core.CartesianDmp | _core.PeriodicDmp
     #: the ``type`` of the dict form
     _DICT_TYPE: ClassVar[str]
-
-    def __init__(
-        self,
-        weights: ArrayLike,
-        goal: ArrayLike,
-        start: ArrayLike,
-        tau: float,
-        *,
-        alpha_z: float = 48.0,
-        beta_z: float | None = None,
-        alpha_x: float = 2.0,
-        width_factor: float = 2.0,
-    ) -> None:
-        w, g, s = self._parameters(weights, goal, start)
-        core = self._CORE(w, g, s, as_scalar(tau, "tau", positive=True),
-                          constants(alpha_z, beta_z, alpha_x, width_factor))
-        object.__setattr__(self, "_core", core)
-
-    @staticmethod
-    def _parameters(weights: ArrayLike, goal: ArrayLike, start: ArrayLike) -> Parameters:
-        """The weights, goal and start validated as the subclass's core takes them."""
-        raise NotImplementedError
+    #: the parameters' names, in the order of the dict form; the constructor takes each by name
+    _PARAMETERS: ClassVar[tuple[str, ...]] = ("tau", "goal", "start", "weights")
+    #: the constants' names, in the order of the dict form; the constructor takes each by name
+    _CONSTANTS: ClassVar[tuple[str, ...]] = ("alpha_z", "beta_z", "width_factor")
 
     @classmethod
     def _wrap(cls, core: Any) -> Self:
@@ -145,13 +122,8 @@ class Primitive:
         return self._core.beta_z
 
     @property
-    def alpha_x(self) -> float:
-        """The phase's decay in eq. 3."""
-        return self._core.alpha_x
-
-    @property
     def width_factor(self) -> float:
-        """The kernels' widths ``h_k = width_factor / (c_{k+1} - c_k)^2``."""
+        """How wide the kernels are relative to their spacing."""
         return self._core.width_factor
 
     @property
@@ -159,13 +131,8 @@ class Primitive:
         """Kernel centres c_k on the phase, (N,)."""
         return self._core.centers
 
-    @property
-    def widths(self) -> NDArray[np.float64]:
-        """Kernel widths h_k, (N,)."""
-        return self._core.widths
-
     def _constants(self) -> dict[str, float]:
-        return {name: getattr(self, name) for name in CONSTANTS}
+        return {name: getattr(self, name) for name in self._CONSTANTS}
 
     # --- behaviour --------------------------------------------------------------------------
     def with_tau(self, tau: float) -> Self:
@@ -175,13 +142,11 @@ class Primitive:
     # --- serialization ----------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """A JSON-safe dict of plain floats and lists; :meth:`from_dict` restores it exactly."""
+        parameters = {name: getattr(self, name) for name in self._PARAMETERS}
         return {
             "type": self._DICT_TYPE,
             "version": _DICT_VERSION,
-            "tau": self.tau,
-            "goal": self.goal.tolist(),
-            "start": self.start.tolist(),
-            "weights": self.weights.tolist(),
+            **{k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in parameters.items()},
             **self._constants(),
         }
 
@@ -199,7 +164,7 @@ class Primitive:
             raise InvalidInputError(f"{kind} dict version {short(version)} is not supported (this dmprs reads "
                                     f"versions 1 to {_DICT_VERSION})")
         fields = {(_RENAMED_IN_2.get(k, k) if version == 1 else k): v for k, v in data.items()}
-        required = (*_PARAMETERS, *CONSTANTS)
+        required = (*cls._PARAMETERS, *cls._CONSTANTS)
         missing = [k for k in required if k not in fields]
         if missing:
             raise InvalidInputError(f"{kind} dict is missing {', '.join(missing)}")
@@ -208,8 +173,7 @@ class Primitive:
             raise InvalidInputError(f"{kind} dict has unknown keys {', '.join(map(short, unknown))}")
         if fields["beta_z"] is None:
             raise InvalidInputError(f"{kind} dict has beta_z = None; to_dict() always writes a number")
-        return cls(fields["weights"], fields["goal"], fields["start"], fields["tau"],
-                   **{name: fields[name] for name in CONSTANTS})
+        return cls(**{name: fields[name] for name in required})
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (type(self).from_dict, (self.to_dict(),))
@@ -226,3 +190,46 @@ class Primitive:
         return (f"{type(self).__name__}(n_dof={self.n_dof}, n_basis={self.n_basis}, tau={self.tau:.6g}, "
                 f"goal={np.array2string(self.goal, precision=4)})")
 
+
+class DiscretePrimitive(Primitive):
+    """What :class:`dmprs.DMP` and :class:`dmprs.CartesianDMP` add to :class:`Primitive`: the
+    decaying phase of eq. 3 and its constant ``alpha_x``, and kernels of their own widths.
+    """
+
+    __slots__ = ()
+    #: the core's class the constructor builds
+    _CORE: ClassVar[type[_core.Dmp | _core.CartesianDmp]]
+    _core: _core.Dmp | _core.CartesianDmp
+    _CONSTANTS = ("alpha_z", "beta_z", "alpha_x", "width_factor")
+
+    def __init__(
+        self,
+        weights: ArrayLike,
+        goal: ArrayLike,
+        start: ArrayLike,
+        tau: float,
+        *,
+        alpha_z: float = 48.0,
+        beta_z: float | None = None,
+        alpha_x: float = 2.0,
+        width_factor: float = 2.0,
+    ) -> None:
+        w, g, s = self._parameters(weights, goal, start)
+        core = self._CORE(w, g, s, as_scalar(tau, "tau", positive=True),
+                          constants(alpha_z, beta_z, alpha_x, width_factor))
+        object.__setattr__(self, "_core", core)
+
+    @staticmethod
+    def _parameters(weights: ArrayLike, goal: ArrayLike, start: ArrayLike) -> Parameters:
+        """The weights, goal and start validated as the subclass's core takes them."""
+        raise NotImplementedError
+
+    @property
+    def alpha_x(self) -> float:
+        """The phase's decay in eq. 3."""
+        return self._core.alpha_x
+
+    @property
+    def widths(self) -> NDArray[np.float64]:
+        """Kernel widths ``h_k = width_factor / (c_{k+1} - c_k)^2``, (N,)."""
+        return self._core.widths
