@@ -21,6 +21,7 @@ from dmprs.errors import (
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
 from dmprs.loop import LearningResult, learn
+from dmprs.periodic import PeriodicDMP, PeriodicOnlineFit
 from dmprs.stepper import CartesianStepper, JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -41,6 +42,8 @@ __all__ = [
     "LearnerStateError",
     "LearningResult",
     "NumericalError",
+    "PeriodicDMP",
+    "PeriodicOnlineFit",
     "Trajectory",
     "__version__",
     "adapters",

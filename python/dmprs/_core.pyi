@@ -20,6 +20,8 @@ __all__ = [
     "GoldenSection",
     "IllinoisRootFinder",
     "MatchboxConfig",
+    "PeriodicDmp",
+    "PeriodicOnlineFit",
     "PoWER",
     "PolicyGradient",
     "RobotGoal",
@@ -38,6 +40,7 @@ __all__ = [
     "portable_unary",
     "rollout_batch",
     "rollout_batch_cartesian",
+    "rollout_batch_periodic",
 ]
 
 __version__: str
@@ -192,6 +195,83 @@ def rollout_batch_cartesian(
     until_rest: bool = False,
     rest_tol: float = 1e-4,
 ) -> list[_CartesianArrays]: ...
+
+@final
+class PeriodicDmp:
+    """Periodic DMP of crates/dmp-core/src/periodic.rs; documented by dmprs.periodic."""
+
+    def __new__(
+        cls,
+        weights: NDArray[np.float64],
+        goal: NDArray[np.float64],
+        amplitude: NDArray[np.float64],
+        start: NDArray[np.float64],
+        tau: float,
+        constants: _Constants,
+    ) -> PeriodicDmp: ...
+    @staticmethod
+    def fit(
+        t: NDArray[np.float64],
+        y: NDArray[np.float64],
+        yd: NDArray[np.float64] | None,
+        ydd: NDArray[np.float64] | None,
+        period: float | None,
+        n_basis: int,
+        constants: _Constants,
+    ) -> PeriodicDmp: ...
+    def rollout(self, dt: float, duration: float | None, phase: float) -> _TrajectoryArrays: ...
+    def with_goal(self, goal: NDArray[np.float64]) -> PeriodicDmp: ...
+    def with_amplitude(self, amplitude: NDArray[np.float64]) -> PeriodicDmp: ...
+    def with_start(self, start: NDArray[np.float64]) -> PeriodicDmp: ...
+    def with_tau(self, tau: float) -> PeriodicDmp: ...
+    @property
+    def weights(self) -> NDArray[np.float64]: ...
+    @property
+    def goal(self) -> NDArray[np.float64]: ...
+    @property
+    def amplitude(self) -> NDArray[np.float64]: ...
+    @property
+    def start(self) -> NDArray[np.float64]: ...
+    @property
+    def tau(self) -> float: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def alpha_z(self) -> float: ...
+    @property
+    def beta_z(self) -> float: ...
+    @property
+    def width_factor(self) -> float: ...
+    @property
+    def centers(self) -> NDArray[np.float64]: ...
+    @property
+    def h(self) -> float: ...
+
+def rollout_batch_periodic(
+    dmps: list[PeriodicDmp], dt: float, duration: float | None, phase: float
+) -> list[_TrajectoryArrays]: ...
+
+@final
+class PeriodicOnlineFit:
+    def __new__(
+        cls, n_dof: int, n_basis: int, constants: _Constants, forgetting: float, delta: float
+    ) -> PeriodicOnlineFit: ...
+    def update(
+        self,
+        phase: float,
+        tau: float,
+        y: NDArray[np.float64],
+        yd: NDArray[np.float64],
+        ydd: NDArray[np.float64],
+        goal: NDArray[np.float64],
+        amplitude: NDArray[np.float64],
+    ) -> None: ...
+    @property
+    def weights(self) -> NDArray[np.float64]: ...
+    @property
+    def samples(self) -> int: ...
 
 # The online steppers of crates/dmp-core (stepper.rs, cartesian_stepper.rs); subclassed, validated
 # and documented by dmprs.stepper. step() returns one cached tuple of read-only arrays that the
