@@ -191,9 +191,10 @@ def test_relative_links_in_readme_and_docs_point_to_existing_files():
     assert not problems, "\n".join(problems)
 
 
-def test_method_doc_keeps_the_section_numbers_zero_to_eleven():
+def test_method_doc_keeps_its_section_numbers_and_numbers_new_ones_after_them():
     numbered = sections(ROOT / "docs" / "method.md")
-    assert [str(k) for k in range(12)] == [s for s in numbered if "." not in s]
+    top = [s for s in numbered if "." not in s]
+    assert top == [str(k) for k in range(len(top))] and len(top) >= 12
 
 
 # --- the checker itself ---------------------------------------------------------------------------
