@@ -255,7 +255,10 @@ fn angular_velocity(t: &[f64], q: &[Quaternion]) -> DMatrix<f64> {
 }
 
 /// A pose `[x, y, z, qw, qx, qy, qz]` split into position and checked unit quaternion.
-fn split_pose(name: &'static str, pose: &[f64; POSE_WIDTH]) -> Result<([f64; 3], Quaternion)> {
+pub(crate) fn split_pose(
+    name: &'static str,
+    pose: &[f64; POSE_WIDTH],
+) -> Result<([f64; 3], Quaternion)> {
     if let Some((i, &v)) = pose.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(Error::NonFinite {
             name,
@@ -267,7 +270,7 @@ fn split_pose(name: &'static str, pose: &[f64; POSE_WIDTH]) -> Result<([f64; 3],
     Ok(([pose[0], pose[1], pose[2]], q))
 }
 
-fn join_pose(p: &[f64], q: &Quaternion) -> [f64; POSE_WIDTH] {
+pub(crate) fn join_pose(p: &[f64], q: &Quaternion) -> [f64; POSE_WIDTH] {
     [p[0], p[1], p[2], q[0], q[1], q[2], q[3]]
 }
 

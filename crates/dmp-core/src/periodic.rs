@@ -20,7 +20,7 @@
 
 use std::f64::consts::TAU as TWO_PI;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector};
 use rayon::prelude::*;
 
 use crate::design_matrix::{DESIGN_CUTOFF, PreparedDemo, accumulate_row, solve_ridge};
@@ -348,8 +348,21 @@ impl PeriodicDmp {
         period: Option<f64>,
         config: PeriodicConfig,
     ) -> Result<Self> {
-        config.validate()?;
         let prepared = PreparedDemo::new(demo)?;
+        let (goal, amplitude) = baseline_and_amplitude(&prepared.y);
+        Self::fit_about(&prepared, period, config, goal, amplitude)
+    }
+
+    /// The least squares of [`PeriodicDmp::fit`] about a given baseline and amplitude (the
+    /// periodic Cartesian DMP's orientation has its own).
+    pub(crate) fn fit_about(
+        prepared: &PreparedDemo<'_>,
+        period: Option<f64>,
+        config: PeriodicConfig,
+        goal: DVector<f64>,
+        amplitude: DVector<f64>,
+    ) -> Result<Self> {
+        config.validate()?;
         let period = period.unwrap_or(prepared.tau);
         check_scalar("period", period, true)?;
         if period > prepared.tau * (1.0 + 1e-9) {
@@ -363,7 +376,6 @@ impl PeriodicDmp {
         let basis = PeriodicBasis::new(config.n_basis, config.width_factor)?;
         let tau = period / TWO_PI;
         let n_dof = prepared.n_dof();
-        let (goal, amplitude) = baseline_and_amplitude(&prepared);
         let n = basis.len();
         let mut ata = DMatrix::<f64>::zeros(n, n);
         let mut atf = DMatrix::<f64>::zeros(n, n_dof);
@@ -523,27 +535,8 @@ impl PeriodicDmp {
     /// (default one period). Too coarse a `dt` is integrated in stable sub-steps, as for the
     /// discrete DMP.
     pub fn rollout(&self, dt: f64, duration: Option<f64>, phi0: f64) -> Result<Trajectory> {
-        check_scalar("dt", dt, true)?;
-        check_scalar("phase", phi0, false)?;
-        let duration = duration.unwrap_or(self.period());
-        check_scalar("duration", duration, true)?;
-        let steps = n_steps(duration, dt);
         let n_dof = self.n_dof();
-        let values = (steps + 1.0) * n_dof as f64;
-        if values.is_nan() || values > MAX_VALUES as f64 {
-            return Err(Error::InvalidParameter {
-                name: "dt",
-                value: fmt_g(dt),
-                requirement: "is too small for the duration: the rollout would exceed 20 million values",
-            });
-        }
-        let substeps = self.substeps(dt)?;
-        check_work(
-            (steps + 1.0) * substeps as f64,
-            n_dof,
-            "periodic DMP rollout",
-        )?;
-        let len = steps as usize + 1;
+        let (len, substeps) = self.plan(dt, duration, phi0, n_dof, "periodic DMP rollout")?;
         let mut out = Trajectory {
             t: Vec::with_capacity(len),
             y: Vec::with_capacity(len * n_dof),
@@ -578,6 +571,34 @@ impl PeriodicDmp {
         Ok(out)
     }
 
+    /// Validates a rollout's arguments and returns its samples and the sub-steps per sample;
+    /// `width` values are returned per sample.
+    pub(crate) fn plan(
+        &self,
+        dt: f64,
+        duration: Option<f64>,
+        phi0: f64,
+        width: usize,
+        context: &'static str,
+    ) -> Result<(usize, usize)> {
+        check_scalar("dt", dt, true)?;
+        check_scalar("phase", phi0, false)?;
+        let duration = duration.unwrap_or(self.period());
+        check_scalar("duration", duration, true)?;
+        let steps = n_steps(duration, dt);
+        let values = (steps + 1.0) * width as f64;
+        if values.is_nan() || values > MAX_VALUES as f64 {
+            return Err(Error::InvalidParameter {
+                name: "dt",
+                value: fmt_g(dt),
+                requirement: "is too small for the duration: the rollout would exceed 20 million values",
+            });
+        }
+        let substeps = self.substeps(dt)?;
+        check_work((steps + 1.0) * substeps as f64, self.n_dof(), context)?;
+        Ok((steps as usize + 1, substeps))
+    }
+
     /// Sub-steps per sample that keep the spring stable (1 when `dt` already is).
     fn substeps(&self, dt: f64) -> Result<usize> {
         let limit = spring_stable_step(self.config.alpha_z, self.config.beta_z) * self.tau;
@@ -605,12 +626,12 @@ impl PeriodicDmp {
 }
 
 /// `(min + max) / 2` and `(max - min) / 2` of every DOF of a demonstration (1 where it is 0).
-fn baseline_and_amplitude(demo: &PreparedDemo<'_>) -> (DVector<f64>, DVector<f64>) {
-    let n_dof = demo.n_dof();
+pub(crate) fn baseline_and_amplitude(y: &DMatrixView<'_, f64>) -> (DVector<f64>, DVector<f64>) {
+    let n_dof = y.nrows();
     let mut goal = DVector::zeros(n_dof);
     let mut amplitude = DVector::zeros(n_dof);
     for d in 0..n_dof {
-        let row = demo.y.row(d);
+        let row = y.row(d);
         let (lo, hi) = (row.min(), row.max());
         goal[d] = 0.5 * (lo + hi);
         let r = 0.5 * (hi - lo);
