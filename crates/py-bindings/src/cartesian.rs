@@ -19,7 +19,7 @@ use crate::generalize::{GeneralizerOptions, generalizer_methods, parse_method, p
 use crate::primitive::{Constants, parameter_getters};
 
 /// `(t, position, quaternion, velocity, angular_velocity, acceleration, angular_acceleration)`.
-type CartesianArrays<'py> = (
+pub(crate) type CartesianArrays<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<f64>>,
@@ -38,7 +38,10 @@ fn read_only<D>(a: Bound<'_, numpy::PyArray<f64, D>>) -> Bound<'_, numpy::PyArra
     a
 }
 
-fn trajectory_arrays(py: Python<'_>, tr: CartesianTrajectory) -> PyResult<CartesianArrays<'_>> {
+pub(crate) fn trajectory_arrays(
+    py: Python<'_>,
+    tr: CartesianTrajectory,
+) -> PyResult<CartesianArrays<'_>> {
     let n = tr.t.len();
     let block = |v: Vec<f64>, width: usize| -> PyResult<Bound<'_, PyArray2<f64>>> {
         Ok(read_only(v.into_pyarray(py).reshape([n, width])?))
@@ -54,7 +57,7 @@ fn trajectory_arrays(py: Python<'_>, tr: CartesianTrajectory) -> PyResult<Cartes
     ))
 }
 
-fn pose(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<[f64; POSE_WIDTH]> {
+pub(crate) fn pose(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<[f64; POSE_WIDTH]> {
     let slice = contiguous(name, a)?;
     slice.try_into().map_err(|_| {
         invalid_input(format!(
@@ -68,7 +71,7 @@ fn pose(name: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<[f64; POSE_WIDTH]
 /// (`(T, 3)` arrays, world frame).
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
-struct PoseDerivatives<'py> {
+pub(crate) struct PoseDerivatives<'py> {
     velocity: Option<PyReadonlyArray2<'py, f64>>,
     acceleration: Option<PyReadonlyArray2<'py, f64>>,
     angular_velocity: Option<PyReadonlyArray2<'py, f64>>,
@@ -80,6 +83,24 @@ fn optional<'a>(
     a: &'a Option<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<Option<DMatrixView<'a, f64>>> {
     a.as_ref().map(|a| time_major(name, a)).transpose()
+}
+
+/// A pose demonstration as the core takes it, from numpy arrays.
+pub(crate) fn pose_demonstration<'a>(
+    t: &'a PyReadonlyArray1<'_, f64>,
+    pose: &'a PyReadonlyArray2<'_, f64>,
+    derivatives: &'a PoseDerivatives<'_>,
+    normalize: bool,
+) -> PyResult<CartesianDemonstration<'a>> {
+    Ok(CartesianDemonstration {
+        t: contiguous("t", t)?,
+        pose: time_major("pose", pose)?,
+        velocity: optional("velocity", &derivatives.velocity)?,
+        acceleration: optional("acceleration", &derivatives.acceleration)?,
+        angular_velocity: optional("angular_velocity", &derivatives.angular_velocity)?,
+        angular_acceleration: optional("angular_acceleration", &derivatives.angular_acceleration)?,
+        normalize,
+    })
 }
 
 #[pyclass(name = "CartesianDmp", module = "dmprs._core", frozen)]
@@ -124,19 +145,7 @@ impl PyCartesianDmp {
         n_basis: usize,
         constants: Constants,
     ) -> PyResult<Self> {
-        let t = contiguous("t", &t)?;
-        let demo = CartesianDemonstration {
-            t,
-            pose: time_major("pose", &pose)?,
-            velocity: optional("velocity", &derivatives.velocity)?,
-            acceleration: optional("acceleration", &derivatives.acceleration)?,
-            angular_velocity: optional("angular_velocity", &derivatives.angular_velocity)?,
-            angular_acceleration: optional(
-                "angular_acceleration",
-                &derivatives.angular_acceleration,
-            )?,
-            normalize,
-        };
+        let demo = pose_demonstration(&t, &pose, &derivatives, normalize)?;
         let inner = py
             .detach(|| CartesianDmp::fit(&demo, constants.config(n_basis)))
             .py_err()?;

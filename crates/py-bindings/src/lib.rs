@@ -37,7 +37,10 @@ mod _core {
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
     };
     #[pymodule_export]
-    use super::periodic::{PyPeriodicDmp, PyPeriodicOnlineFit, py_rollout_batch_periodic};
+    use super::periodic::{
+        PyPeriodicCartesianDmp, PyPeriodicDmp, PyPeriodicOnlineFit, py_rollout_batch_periodic,
+        py_rollout_batch_periodic_cartesian,
+    };
     #[pymodule_export]
     use super::portable::{dls_step, portable_binary, portable_norm, portable_unary};
     #[pymodule_export]

@@ -1,12 +1,19 @@
-//! `dmprs._core.PeriodicDmp`, `rollout_batch_periodic` and `PeriodicOnlineFit`: numpy in, numpy
-//! out. `dmprs.PeriodicDMP` (Python) wraps these and documents them.
+//! `dmprs._core.PeriodicDmp`, `PeriodicCartesianDmp`, their batch rollouts and
+//! `PeriodicOnlineFit`: numpy in, numpy out. `dmprs.periodic` (Python) wraps these and documents
+//! them.
 
 use dmp_core::online_fit::OnlineFit;
-use dmp_core::{PeriodicConfig, PeriodicDmp, rollout_batch_periodic};
+use dmp_core::{
+    PeriodicCartesianDmp, PeriodicConfig, PeriodicDmp, rollout_batch_periodic,
+    rollout_batch_periodic_cartesian,
+};
 use nalgebra::DMatrix;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
+use crate::cartesian::{
+    CartesianArrays, PoseDerivatives, pose, pose_demonstration, trajectory_arrays as pose_arrays,
+};
 use crate::dmp::{
     TrajectoryArrays, contiguous, demonstration, time_major, trajectory_arrays, vector,
 };
@@ -31,6 +38,58 @@ impl PeriodicConstants {
             width_factor: self.width_factor,
         }
     }
+}
+
+/// The getters both periodic primitives share, read from their coordinates' periodic DMP (a
+/// second `#[pymethods]` block per class).
+macro_rules! rhythm_getters {
+    ($class:ty) => {
+        #[pymethods]
+        impl $class {
+            /// `(D, N)`
+            #[getter]
+            fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+                weights_array(py, self.coordinates().weights())
+            }
+            #[getter]
+            fn amplitude<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+                vector_array(py, self.coordinates().amplitude().as_slice().to_vec())
+            }
+            #[getter]
+            fn tau(&self) -> f64 {
+                self.coordinates().tau()
+            }
+            #[getter]
+            fn n_dof(&self) -> usize {
+                self.coordinates().n_dof()
+            }
+            #[getter]
+            fn n_basis(&self) -> usize {
+                self.coordinates().config().n_basis
+            }
+            #[getter]
+            fn alpha_z(&self) -> f64 {
+                self.coordinates().config().alpha_z
+            }
+            #[getter]
+            fn beta_z(&self) -> f64 {
+                self.coordinates().config().beta_z
+            }
+            #[getter]
+            fn width_factor(&self) -> f64 {
+                self.coordinates().config().width_factor
+            }
+            #[getter]
+            fn centers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+                vector_array(py, self.coordinates().basis().centers().to_vec())
+            }
+            /// The kernels' shared concentration h.
+            #[getter]
+            fn h(&self) -> f64 {
+                self.coordinates().basis().h()
+            }
+        }
+    };
 }
 
 #[pyclass(name = "PeriodicDmp", module = "dmprs._core", frozen)]
@@ -119,57 +178,23 @@ impl PyPeriodicDmp {
         })
     }
 
-    /// `(D, N)`
-    #[getter]
-    fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        weights_array(py, self.inner.weights())
-    }
     #[getter]
     fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vector_array(py, self.inner.goal().as_slice().to_vec())
     }
     #[getter]
-    fn amplitude<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector_array(py, self.inner.amplitude().as_slice().to_vec())
-    }
-    #[getter]
     fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vector_array(py, self.inner.y0().as_slice().to_vec())
     }
-    #[getter]
-    fn tau(&self) -> f64 {
-        self.inner.tau()
-    }
-    #[getter]
-    fn n_dof(&self) -> usize {
-        self.inner.n_dof()
-    }
-    #[getter]
-    fn n_basis(&self) -> usize {
-        self.inner.config().n_basis
-    }
-    #[getter]
-    fn alpha_z(&self) -> f64 {
-        self.inner.config().alpha_z
-    }
-    #[getter]
-    fn beta_z(&self) -> f64 {
-        self.inner.config().beta_z
-    }
-    #[getter]
-    fn width_factor(&self) -> f64 {
-        self.inner.config().width_factor
-    }
-    #[getter]
-    fn centers<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector_array(py, self.inner.basis().centers().to_vec())
-    }
-    /// The kernels' shared concentration h.
-    #[getter]
-    fn h(&self) -> f64 {
-        self.inner.basis().h()
+}
+
+impl PyPeriodicDmp {
+    fn coordinates(&self) -> &PeriodicDmp {
+        &self.inner
     }
 }
+
+rhythm_getters!(PyPeriodicDmp);
 
 /// Rolls out many periodic DMPs on all cores with the GIL released.
 #[pyfunction(name = "rollout_batch_periodic")]
@@ -245,4 +270,132 @@ impl PyPeriodicOnlineFit {
     fn samples(&self) -> u64 {
         self.inner.samples()
     }
+}
+
+#[pyclass(name = "PeriodicCartesianDmp", module = "dmprs._core", frozen)]
+pub struct PyPeriodicCartesianDmp {
+    pub inner: PeriodicCartesianDmp,
+}
+
+#[pymethods]
+impl PyPeriodicCartesianDmp {
+    #[new]
+    #[pyo3(signature = (weights, goal, amplitude, start, tau, constants))]
+    fn new(
+        weights: PyReadonlyArray2<'_, f64>,
+        goal: PyReadonlyArray1<'_, f64>,
+        amplitude: PyReadonlyArray1<'_, f64>,
+        start: PyReadonlyArray1<'_, f64>,
+        tau: f64,
+        constants: PeriodicConstants,
+    ) -> PyResult<Self> {
+        let w = time_major("weights", &weights)?;
+        let inner = PeriodicCartesianDmp::new(
+            constants.config(weights.shape()[1]),
+            DMatrix::from(w),
+            &pose("goal", &goal)?,
+            vector("amplitude", &amplitude)?,
+            &pose("start", &start)?,
+            tau,
+        );
+        Ok(Self {
+            inner: inner.py_err()?,
+        })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (t, pose, derivatives, normalize, period, n_basis, constants))]
+    #[allow(clippy::too_many_arguments)]
+    fn fit(
+        py: Python<'_>,
+        t: PyReadonlyArray1<'_, f64>,
+        pose: PyReadonlyArray2<'_, f64>,
+        derivatives: PoseDerivatives<'_>,
+        normalize: bool,
+        period: Option<f64>,
+        n_basis: usize,
+        constants: PeriodicConstants,
+    ) -> PyResult<Self> {
+        let demo = pose_demonstration(&t, &pose, &derivatives, normalize)?;
+        let inner = py
+            .detach(|| PeriodicCartesianDmp::fit(&demo, period, constants.config(n_basis)))
+            .py_err()?;
+        Ok(Self { inner })
+    }
+
+    #[pyo3(signature = (dt, duration, phase))]
+    fn rollout<'py>(
+        &self,
+        py: Python<'py>,
+        dt: f64,
+        duration: Option<f64>,
+        phase: f64,
+    ) -> PyResult<CartesianArrays<'py>> {
+        let tr = py
+            .detach(|| self.inner.rollout(dt, duration, phase))
+            .py_err()?;
+        pose_arrays(py, tr)
+    }
+
+    fn with_goal(&self, goal: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_goal(&pose("goal", &goal)?).py_err()?,
+        })
+    }
+    fn with_amplitude(&self, amplitude: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self
+                .inner
+                .with_amplitude(vector("amplitude", &amplitude)?)
+                .py_err()?,
+        })
+    }
+    fn with_start(&self, start: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_start(&pose("start", &start)?).py_err()?,
+        })
+    }
+    fn with_tau(&self, tau: f64) -> PyResult<Self> {
+        Ok(Self {
+            inner: self.inner.with_tau(tau).py_err()?,
+        })
+    }
+
+    /// The baseline pose `(7,)`.
+    #[getter]
+    fn goal<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_array(py, self.inner.goal().to_vec())
+    }
+    #[getter]
+    fn start<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_array(py, self.inner.start().to_vec())
+    }
+}
+
+impl PyPeriodicCartesianDmp {
+    fn coordinates(&self) -> &PeriodicDmp {
+        self.inner.coordinates()
+    }
+}
+
+rhythm_getters!(PyPeriodicCartesianDmp);
+
+/// Rolls out many periodic Cartesian DMPs on all cores with the GIL released.
+#[pyfunction(name = "rollout_batch_periodic_cartesian")]
+#[pyo3(signature = (dmps, dt, duration, phase))]
+pub fn py_rollout_batch_periodic_cartesian<'py>(
+    py: Python<'py>,
+    dmps: Vec<PyRef<'py, PyPeriodicCartesianDmp>>,
+    dt: f64,
+    duration: Option<f64>,
+    phase: f64,
+) -> PyResult<Vec<CartesianArrays<'py>>> {
+    let owned: Vec<PeriodicCartesianDmp> = dmps.iter().map(|d| d.inner.clone()).collect();
+    let trajectories = py
+        .detach(|| rollout_batch_periodic_cartesian(&owned, dt, duration, phase))
+        .py_err()?;
+    trajectories
+        .into_iter()
+        .map(|tr| pose_arrays(py, tr))
+        .collect()
 }
