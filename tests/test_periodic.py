@@ -245,3 +245,70 @@ def test_the_readmes_periodic_example_runs_and_does_what_it_says():
     # twice the amplitude at 1.5 times the frequency: the last period swings 0.8 peak to peak
     last = tr.y[tr.t >= 4.0 - 1 / 1.5, 0]
     assert np.ptp(last) == pytest.approx(0.8, rel=0.02)
+
+
+# --- the periodic pose ---------------------------------------------------------------------------
+
+def _rotation_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Unit quaternions (w, x, y, z) turning by ``angle`` about the unit ``axis``."""
+    return np.column_stack([np.cos(angle / 2), np.outer(np.sin(angle / 2), axis)])
+
+
+def _angle_between(q: np.ndarray, p: np.ndarray) -> np.ndarray:
+    return 2 * np.arccos(np.clip(np.abs(np.sum(q * p, axis=1)), 0.0, 1.0))
+
+
+def test_a_rotation_about_one_axis_is_the_periodic_dmp_of_its_angle_and_stays_unit():
+    tau = 0.2
+    t = np.linspace(0.0, TWO_PI * tau, 2001)
+    theta = 0.3 + 0.4 * np.sin(t / tau) + 0.1 * np.cos(2 * t / tau)
+    axis = np.array([2.0, -1.0, 0.5]) / np.linalg.norm([2.0, -1.0, 0.5])
+    pose = np.column_stack([np.outer(0.1 * theta, [1.0, 0.0, 0.0]), _rotation_about(axis, theta)])
+    dmp = dmprs.PeriodicCartesianDMP.fit(t, pose, n_basis=30)
+    angle = dmprs.PeriodicDMP.fit(t, theta, n_basis=30)
+    a = dmp.rollout(dt=1e-3, duration=1.0)
+    b = angle.rollout(dt=1e-3, duration=1.0)
+    np.testing.assert_allclose(np.linalg.norm(a.quaternion, axis=1), 1.0, rtol=0, atol=4e-16)
+    assert _angle_between(a.quaternion, _rotation_about(axis, b.y[:, 0])).max() < 1e-7
+    np.testing.assert_allclose(a.angular_velocity, np.outer(b.yd[:, 0], axis), atol=1e-8)
+    # the baseline orientation is the middle of the range; the amplitude per axis |axis| r
+    assert _angle_between(dmp.goal[None, 3:], _rotation_about(axis, angle.goal))[0] < 1e-12
+    np.testing.assert_allclose(dmp.amplitude[3:], np.abs(axis) * angle.amplitude[0], rtol=1e-9)
+
+
+def test_a_wobbling_wipe_is_reproduced_once_the_start_transient_has_gone():
+    tau = 0.15
+    t = np.linspace(0.0, 2 * TWO_PI * tau, 3001)
+    rotvec = np.column_stack([0.3 * np.sin(t / tau), 0.2 * np.cos(t / tau), 0.1 * np.sin(2 * t / tau)])
+    angle = np.linalg.norm(rotvec, axis=1)
+    axis = rotvec / angle[:, None]
+    q = np.column_stack([np.cos(angle / 2), axis * np.sin(angle / 2)[:, None]])
+    position = np.column_stack([0.2 * np.sin(t / tau), 0.05 * np.sin(2 * t / tau), 0.3 + 0 * t])
+    dmp = dmprs.PeriodicCartesianDMP.fit(t, np.column_stack([position, q]), period=TWO_PI * tau, n_basis=40)
+    tr = dmp.rollout(dt=5e-4, duration=3 * dmp.period)
+    late = tr.t >= 2 * dmp.period
+    rv = np.column_stack([0.3 * np.sin(tr.t / tau), 0.2 * np.cos(tr.t / tau), 0.1 * np.sin(2 * tr.t / tau)])
+    ang = np.linalg.norm(rv, axis=1)
+    want = np.column_stack([np.cos(ang / 2), rv / ang[:, None] * np.sin(ang / 2)[:, None]])
+    assert _angle_between(tr.quaternion[late], want[late]).max() < 5e-3
+    assert np.abs(tr.position[late, 0] - 0.2 * np.sin(tr.t[late] / tau)).max() < 2e-3
+    assert np.abs(tr.position[late, 2] - 0.3).max() < 1e-9
+
+
+def test_the_periodic_pose_round_trips_and_batches_with_the_same_bits():
+    tau = 0.2
+    t = np.linspace(0.0, TWO_PI * tau, 801)
+    theta = 0.5 * np.sin(t / tau)
+    pose = np.column_stack([np.outer(theta, [0.1, 0.2, 0.0]), _rotation_about(np.array([0.0, 0.0, 1.0]), theta)])
+    dmp = dmprs.PeriodicCartesianDMP.fit(t, pose, n_basis=15).with_amplitude(np.full(6, 0.5))
+    back = dmprs.PeriodicCartesianDMP.from_dict(json.loads(json.dumps(dmp.to_dict())))
+    assert back == dmp and pickle.loads(pickle.dumps(dmp)) == dmp
+    a, b = dmprs.rollout_batch([dmp, dmp.with_tau(0.3)], dt=2e-3, phase=1.0)
+    np.testing.assert_array_equal(a.quaternion, dmp.rollout(2e-3, phase=1.0).quaternion)
+    np.testing.assert_array_equal(b.position, dmp.with_tau(0.3).rollout(2e-3, phase=1.0).position)
+    with pytest.raises(InvalidInputError, match="amplitude"):
+        dmp.with_amplitude(np.ones(3))
+    with pytest.raises(InvalidInputError, match="weights"):
+        dmprs.PeriodicCartesianDMP(np.zeros((3, 10)), pose[0], pose[0], 1.0)
+    with pytest.raises(InvalidInputError, match="goal"):
+        dmp.with_goal([0, 0, 0, 2.0, 0, 0, 0])

@@ -21,7 +21,7 @@ from dmprs.errors import (
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
 from dmprs.loop import LearningResult, learn
-from dmprs.periodic import PeriodicDMP, PeriodicOnlineFit
+from dmprs.periodic import PeriodicCartesianDMP, PeriodicDMP, PeriodicOnlineFit
 from dmprs.stepper import CartesianStepper, JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -42,6 +42,7 @@ __all__ = [
     "LearnerStateError",
     "LearningResult",
     "NumericalError",
+    "PeriodicCartesianDMP",
     "PeriodicDMP",
     "PeriodicOnlineFit",
     "Trajectory",

@@ -20,6 +20,7 @@ __all__ = [
     "GoldenSection",
     "IllinoisRootFinder",
     "MatchboxConfig",
+    "PeriodicCartesianDmp",
     "PeriodicDmp",
     "PeriodicOnlineFit",
     "PoWER",
@@ -41,6 +42,7 @@ __all__ = [
     "rollout_batch",
     "rollout_batch_cartesian",
     "rollout_batch_periodic",
+    "rollout_batch_periodic_cartesian",
 ]
 
 __version__: str
@@ -252,6 +254,65 @@ class PeriodicDmp:
 def rollout_batch_periodic(
     dmps: list[PeriodicDmp], dt: float, duration: float | None, phase: float
 ) -> list[_TrajectoryArrays]: ...
+
+@final
+class PeriodicCartesianDmp:
+    """Periodic pose DMP of crates/dmp-core/src/periodic_cartesian.rs; documented by
+    dmprs.periodic. Rollouts give the arrays of CartesianDmp's.
+    """
+
+    def __new__(
+        cls,
+        weights: NDArray[np.float64],
+        goal: NDArray[np.float64],
+        amplitude: NDArray[np.float64],
+        start: NDArray[np.float64],
+        tau: float,
+        constants: _Constants,
+    ) -> PeriodicCartesianDmp: ...
+    @staticmethod
+    def fit(
+        t: NDArray[np.float64],
+        pose: NDArray[np.float64],
+        derivatives: dict[str, NDArray[np.float64] | None],
+        normalize: bool,
+        period: float | None,
+        n_basis: int,
+        constants: _Constants,
+    ) -> PeriodicCartesianDmp: ...
+    def rollout(self, dt: float, duration: float | None, phase: float) -> _CartesianArrays: ...
+    def with_goal(self, goal: NDArray[np.float64]) -> PeriodicCartesianDmp: ...
+    def with_amplitude(self, amplitude: NDArray[np.float64]) -> PeriodicCartesianDmp: ...
+    def with_start(self, start: NDArray[np.float64]) -> PeriodicCartesianDmp: ...
+    def with_tau(self, tau: float) -> PeriodicCartesianDmp: ...
+    @property
+    def weights(self) -> NDArray[np.float64]: ...
+    @property
+    def goal(self) -> NDArray[np.float64]: ...
+    @property
+    def amplitude(self) -> NDArray[np.float64]: ...
+    @property
+    def start(self) -> NDArray[np.float64]: ...
+    @property
+    def tau(self) -> float: ...
+    @property
+    def n_dof(self) -> int: ...
+    @property
+    def n_basis(self) -> int: ...
+    @property
+    def alpha_z(self) -> float: ...
+    @property
+    def beta_z(self) -> float: ...
+    @property
+    def width_factor(self) -> float: ...
+    @property
+    def centers(self) -> NDArray[np.float64]: ...
+    @property
+    def h(self) -> float: ...
+
+def rollout_batch_periodic_cartesian(
+    dmps: list[PeriodicCartesianDmp], dt: float, duration: float | None, phase: float
+) -> list[_CartesianArrays]: ...
 
 @final
 class PeriodicOnlineFit:

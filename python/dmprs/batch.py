@@ -10,7 +10,7 @@ from dmprs._arrays import as_scalar, short
 from dmprs.cartesian import CartesianDMP
 from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError
-from dmprs.periodic import PeriodicDMP
+from dmprs.periodic import PeriodicCartesianDMP, PeriodicDMP
 from dmprs.primitive import rollout_options
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -24,16 +24,17 @@ def rollout_batch(
 ) -> list[Trajectory]: ...
 @overload
 def rollout_batch(
-    dmps: Iterable[CartesianDMP], dt: float = ..., duration: float | None = ..., *,
+    dmps: Iterable[CartesianDMP | PeriodicCartesianDMP], dt: float = ..., duration: float | None = ..., *,
     until_rest: bool = ..., rest_tol: float = ..., phase: float = ...,
 ) -> list[CartesianTrajectory]: ...
 @overload
 def rollout_batch(
-    dmps: Iterable[DMP | CartesianDMP | PeriodicDMP], dt: float = ..., duration: float | None = ..., *,
+    dmps: Iterable[DMP | CartesianDMP | PeriodicDMP | PeriodicCartesianDMP], dt: float = ...,
+    duration: float | None = ..., *,
     until_rest: bool = ..., rest_tol: float = ..., phase: float = ...,
 ) -> list[Trajectory | CartesianTrajectory]: ...
 def rollout_batch(
-    dmps: Iterable[DMP | CartesianDMP | PeriodicDMP],
+    dmps: Iterable[DMP | CartesianDMP | PeriodicDMP | PeriodicCartesianDMP],
     dt: float = 0.001,
     duration: float | None = None,
     *,
@@ -45,12 +46,12 @@ def rollout_batch(
 
     The result equals ``[d.rollout(dt, duration, ...) for d in dmps]`` bit for bit. Each DMP
     keeps its own tau, so with ``duration=None`` the trajectories may differ in length.
-    :class:`dmprs.CartesianDMP` s (which give :class:`dmprs.CartesianTrajectory` s) and
-    :class:`dmprs.PeriodicDMP` s (started at ``phase``; a rhythm never comes to rest, so
-    ``until_rest`` is refused with them) may be mixed in.
+    :class:`dmprs.CartesianDMP` s (which give :class:`dmprs.CartesianTrajectory` s) and the
+    periodic :class:`dmprs.PeriodicDMP` s and :class:`dmprs.PeriodicCartesianDMP` s (started at
+    ``phase``; a rhythm never comes to rest, so ``until_rest`` is refused with them) may be mixed in.
     """
-    kinds = (DMP, CartesianDMP, PeriodicDMP)
-    names = "dmprs.DMP, dmprs.CartesianDMP or dmprs.PeriodicDMP"
+    kinds = (DMP, CartesianDMP, PeriodicDMP, PeriodicCartesianDMP)
+    names = "dmprs.DMP, dmprs.CartesianDMP, dmprs.PeriodicDMP or dmprs.PeriodicCartesianDMP"
     if isinstance(dmps, kinds) or not isinstance(dmps, Iterable):
         raise InvalidInputError(f"dmps must be an iterable of {names}; got {short(dmps)}")
     items = list(dmps)
@@ -62,8 +63,10 @@ def rollout_batch(
     joint = [(i, d) for i, d in enumerate(items) if isinstance(d, DMP)]
     pose = [(i, d) for i, d in enumerate(items) if isinstance(d, CartesianDMP)]
     rhythm = [(i, d) for i, d in enumerate(items) if isinstance(d, PeriodicDMP)]
-    if rhythm and opts["until_rest"]:
-        raise InvalidInputError(f"until_rest=True: dmps[{rhythm[0][0]}] is a PeriodicDMP, which never comes to rest")
+    posed = [(i, d) for i, d in enumerate(items) if isinstance(d, PeriodicCartesianDMP)]
+    if (rhythm or posed) and opts["until_rest"]:
+        i = min(i for i, _ in [*rhythm, *posed])
+        raise InvalidInputError(f"until_rest=True: dmps[{i}] is a {type(items[i]).__name__}, which never comes to rest")
     out: list[Any] = [None] * len(items)
     if joint:
         arrays = _core.rollout_batch([d._core for _, d in joint], **opts)
@@ -77,4 +80,9 @@ def rollout_batch(
         periodic = _core.rollout_batch_periodic([d._core for _, d in rhythm], opts["dt"], opts["duration"], phi0)
         for (i, _), a in zip(rhythm, periodic, strict=True):
             out[i] = Trajectory._trusted(*a)
+    if posed:
+        poses = _core.rollout_batch_periodic_cartesian([d._core for _, d in posed], opts["dt"], opts["duration"],
+                                                       phi0)
+        for (i, _), c in zip(posed, poses, strict=True):
+            out[i] = CartesianTrajectory._trusted(*c)
     return out

@@ -18,14 +18,16 @@ from dmprs.trajectory import CartesianTrajectory
 
 __all__ = ["CartesianDMP"]
 
-def _pose(value: ArrayLike, name: str) -> NDArray[np.float64]:
+def pose_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    """A pose ``(7,)``, ``x, y, z, qw, qx, qy, qz``, validated (the core checks the quaternion)."""
     p = as_float_array(value, name, 1)
     if p.shape != (7,):
         raise InvalidInputError(f"{name} has shape {p.shape}, expected (7,): x, y, z, qw, qx, qy, qz")
     return p
 
 
-def _derivative(value: ArrayLike | None, name: str) -> NDArray[np.float64] | None:
+def derivative_array(value: ArrayLike | None, name: str) -> NDArray[np.float64] | None:
+    """A pose demonstration's measured derivative ``(T, 3)``, or None."""
     return None if value is None else as_float_array(value, name, 2)
 
 
@@ -68,7 +70,7 @@ class CartesianDMP(DiscretePrimitive):
                 f"weights has shape {w.shape}, expected (6, N): x, y, z, then 3 orientation rows"
             )
         as_count(w.shape[1], "n_basis (columns of weights)", 2)
-        return w, _pose(goal, "goal"), _pose(start, "start")
+        return w, pose_array(goal, "goal"), pose_array(start, "start")
 
     @classmethod
     def fit(
@@ -116,10 +118,10 @@ class CartesianDMP(DiscretePrimitive):
             width_factor: kernel width relative to the spacing of the kernel centres.
         """
         derivatives = {
-            "velocity": _derivative(velocity, "velocity"),
-            "acceleration": _derivative(acceleration, "acceleration"),
-            "angular_velocity": _derivative(angular_velocity, "angular_velocity"),
-            "angular_acceleration": _derivative(angular_acceleration, "angular_acceleration"),
+            "velocity": derivative_array(velocity, "velocity"),
+            "acceleration": derivative_array(acceleration, "acceleration"),
+            "angular_velocity": derivative_array(angular_velocity, "angular_velocity"),
+            "angular_acceleration": derivative_array(angular_acceleration, "angular_acceleration"),
         }
         core = _core.CartesianDmp.fit(as_float_array(t, "t", 1), as_float_array(pose, "pose", 2), derivatives,
                                       bool(normalize), as_count(n_basis, "n_basis", 2),
@@ -171,8 +173,8 @@ class CartesianDMP(DiscretePrimitive):
         """The same movement towards a new goal pose (7,). The quaternion's sign is taken on the
         side of the current goal, so ``q`` and ``-q`` give the same movement.
         """
-        return CartesianDMP._wrap(self._core.with_goal(_pose(pose, "goal")))
+        return CartesianDMP._wrap(self._core.with_goal(pose_array(pose, "goal")))
 
     def with_start(self, pose: ArrayLike) -> CartesianDMP:
         """The same movement from a new start pose (7,) (sign on the side of the current start)."""
-        return CartesianDMP._wrap(self._core.with_start(_pose(pose, "start")))
+        return CartesianDMP._wrap(self._core.with_start(pose_array(pose, "start")))

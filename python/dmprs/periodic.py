@@ -1,21 +1,23 @@
 """Periodic Dynamic Movement Primitives: a rhythm (wiping, stirring, bouncing a ball) about a
-baseline, fitted in batch or online and rolled out by the Rust core (docs/method.md §12).
+baseline, in joint space or as a full pose, fitted in batch or online and rolled out by the Rust
+core (docs/method.md §12).
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
 from dmprs._arrays import as_count, as_float_array, as_scalar
+from dmprs.cartesian import derivative_array, pose_array
 from dmprs.errors import InvalidInputError
 from dmprs.primitive import Primitive, spring
-from dmprs.trajectory import Trajectory
+from dmprs.trajectory import CartesianTrajectory, Trajectory
 
-__all__ = ["PeriodicDMP", "PeriodicOnlineFit"]
+__all__ = ["PeriodicCartesianDMP", "PeriodicDMP", "PeriodicOnlineFit"]
 
 
 def _vector(value: ArrayLike, name: str) -> NDArray[np.float64]:
@@ -33,7 +35,44 @@ def _phase(value: Any) -> float:
     return as_scalar(value, "phase")
 
 
-class PeriodicDMP(Primitive):
+class _Rhythm(Primitive):
+    """What both periodic primitives add to :class:`dmprs.primitive.Primitive`: the amplitude,
+    the period and the von Mises kernels' concentration, a rollout from a phase, and
+    ``with_amplitude``.
+    """
+
+    __slots__ = ()
+    _core: _core.PeriodicDmp | _core.PeriodicCartesianDmp
+    _PARAMETERS = ("tau", "goal", "amplitude", "start", "weights")
+
+    @property
+    def amplitude(self) -> NDArray[np.float64]:
+        """The amplitude r per coordinate: the forcing term's scale (P4), so the rhythm's size
+        about the baseline.
+        """
+        return self._core.amplitude
+
+    @property
+    def period(self) -> float:
+        """``2 pi tau`` (s)."""
+        return 2.0 * np.pi * self.tau
+
+    @property
+    def h(self) -> float:
+        """The von Mises kernels' shared concentration."""
+        return self._core.h
+
+    def _rollout(self, dt: float, duration: float | None, phase: float) -> Any:
+        dt_ = as_scalar(dt, "dt", positive=True)
+        d = None if duration is None else as_scalar(duration, "duration", positive=True)
+        return self._core.rollout(dt_, d, _phase(phase))
+
+    def with_amplitude(self, amplitude: ArrayLike) -> Self:
+        """The same rhythm scaled about its baseline: r multiplies the forcing term (P4)."""
+        return self._wrap(self._core.with_amplitude(_per_dof(amplitude, "amplitude", self.n_dof)))
+
+
+class PeriodicDMP(_Rhythm):
     r"""A periodic Dynamic Movement Primitive with D degrees of freedom sharing one phase.
 
     The equations (Ijspeert, Nakanishi, Hoffmann, Pastor, Schaal 2013; Ude et al. 2010), per DOF::
@@ -61,7 +100,6 @@ class PeriodicDMP(Primitive):
     __slots__ = ()
     _core: _core.PeriodicDmp
     _DICT_TYPE = "dmprs.PeriodicDMP"
-    _PARAMETERS = ("tau", "goal", "amplitude", "start", "weights")
 
     def __init__(
         self,
@@ -140,21 +178,6 @@ class PeriodicDMP(Primitive):
         return cls._wrap(core)
 
     # --- parameters -------------------------------------------------------------------------
-    @property
-    def amplitude(self) -> NDArray[np.float64]:
-        """The amplitude r, (D,): the forcing term's scale (P4), so the rhythm's about g."""
-        return self._core.amplitude
-
-    @property
-    def period(self) -> float:
-        """``2 pi tau`` (s)."""
-        return 2.0 * np.pi * self.tau
-
-    @property
-    def h(self) -> float:
-        """The von Mises kernels' shared concentration."""
-        return self._core.h
-
     # --- behaviour --------------------------------------------------------------------------
     def rollout(self, dt: float = 0.001, duration: float | None = None, *, phase: float = 0.0) -> Trajectory:
         """Integrates eqs. P1-P3 with semi-implicit Euler at step ``dt`` (s) from the start at rest
@@ -164,17 +187,11 @@ class PeriodicDMP(Primitive):
         period; rounded up to a whole step). From rest the spring settles within about
         ``8 tau / alpha_z`` into the steady rhythm.
         """
-        dt_ = as_scalar(dt, "dt", positive=True)
-        d = None if duration is None else as_scalar(duration, "duration", positive=True)
-        return Trajectory._trusted(*self._core.rollout(dt_, d, _phase(phase)))
+        return Trajectory._trusted(*self._rollout(dt, duration, phase))
 
     def with_goal(self, goal: ArrayLike) -> PeriodicDMP:
         """The same rhythm about a new baseline g."""
         return self._wrap(self._core.with_goal(_per_dof(goal, "goal", self.n_dof)))
-
-    def with_amplitude(self, amplitude: ArrayLike) -> PeriodicDMP:
-        """The same rhythm scaled about its baseline: r multiplies the forcing term (P4)."""
-        return self._wrap(self._core.with_amplitude(_per_dof(amplitude, "amplitude", self.n_dof)))
 
     def with_start(self, start: ArrayLike) -> PeriodicDMP:
         """The same rhythm started (at rest) from a new position."""
@@ -184,6 +201,126 @@ class PeriodicDMP(Primitive):
         return (f"PeriodicDMP(n_dof={self.n_dof}, n_basis={self.n_basis}, period={self.period:.6g}, "
                 f"goal={np.array2string(self.goal, precision=4)}, "
                 f"amplitude={np.array2string(self.amplitude, precision=4)})")
+
+
+class PeriodicCartesianDMP(_Rhythm):
+    r"""A periodic DMP of an end-effector pose: position (m) and orientation (a unit quaternion
+    ``(w, x, y, z)``) on one periodic phase, one basis and one tau.
+
+    The position follows :class:`PeriodicDMP`; the orientation its quaternion counterpart
+    (Abu-Dakka, Saveriano, Kyrki 2021)::
+
+        tau * d(eta)/dt = alpha_z * (beta_z * 2 log(g_o * conj(q)) - eta) + r_o * f_o(phi)
+        tau * dq/dt     = 1/2 * eta * q
+
+    with ``eta = tau * omega`` (world frame), ``g_o`` the baseline orientation the rhythm turns
+    about and ``r_o`` the amplitude per axis; the rollout turns ``q`` by ``exp(h / (2 tau) eta)``
+    each step, so it stays a unit quaternion. For a rotation about one fixed axis it is exactly
+    the :class:`PeriodicDMP` of the angle.
+
+    Poses are ``(7,)`` arrays ``x, y, z, qw, qx, qy, qz``; ``amplitude`` is ``(6,)`` (x, y, z,
+    then the three axes of rotation); weights ``(6, N)``::
+
+        PeriodicCartesianDMP(weights, goal, start, tau, amplitude=...)   # goal: the baseline pose
+
+    Immutable; ``with_goal``, ``with_amplitude``, ``with_start`` and ``with_tau`` return new ones.
+    """
+
+    __slots__ = ()
+    _core: _core.PeriodicCartesianDmp
+    _DICT_TYPE = "dmprs.PeriodicCartesianDMP"
+
+    def __init__(
+        self,
+        weights: ArrayLike,
+        goal: ArrayLike,
+        start: ArrayLike,
+        tau: float,
+        *,
+        amplitude: ArrayLike | None = None,
+        alpha_z: float = 48.0,
+        beta_z: float | None = None,
+        width_factor: float = 2.0,
+    ) -> None:
+        w = as_float_array(weights, "weights", 2)
+        if w.shape[0] != 6:
+            raise InvalidInputError(
+                f"weights has shape {w.shape}, expected (6, N): x, y, z, then 3 orientation rows")
+        as_count(w.shape[1], "n_basis (columns of weights)", 3)
+        r = np.ones(6) if amplitude is None else _per_dof(amplitude, "amplitude", 6)
+        core = _core.PeriodicCartesianDmp(w, pose_array(goal, "goal"), r, pose_array(start, "start"),
+                                          as_scalar(tau, "tau", positive=True),
+                                          spring(alpha_z, beta_z, width_factor))
+        object.__setattr__(self, "_core", core)
+
+    @classmethod
+    def fit(
+        cls,
+        t: ArrayLike,
+        pose: ArrayLike,
+        period: float | None = None,
+        n_basis: int = 25,
+        *,
+        velocity: ArrayLike | None = None,
+        angular_velocity: ArrayLike | None = None,
+        acceleration: ArrayLike | None = None,
+        angular_acceleration: ArrayLike | None = None,
+        normalize: bool = False,
+        alpha_z: float = 48.0,
+        beta_z: float | None = None,
+        width_factor: float = 2.0,
+    ) -> PeriodicCartesianDMP:
+        """Fits a rhythmic pose to a demonstration of one or more whole periods (docs/method.md
+        §12.4).
+
+        The position as :meth:`PeriodicDMP.fit`; the baseline orientation is the middle of the
+        demonstration's range of rotation (component-wise, in rotation vectors relative to the
+        first sample), the amplitude per axis the half range about it, and the orientation's
+        forcing target ``tau^2 omegadot - alpha_z (beta_z 2 log(g_o * conj(q)) - tau omega)``.
+
+        Args:
+            t: sample times (T,), strictly increasing; T >= 3.
+            pose: (T, 7) ``x, y, z, qw, qx, qy, qz``; quaternions unit to 1e-6.
+            period: the rhythm's period (s), at most the duration; by default the duration.
+            n_basis: kernels N >= 3 on the circle.
+            velocity: measured linear velocity (T, 3); finite differences when omitted.
+            angular_velocity: measured, world frame (T, 3); when omitted, as
+                :meth:`dmprs.CartesianDMP.fit` computes it.
+            acceleration: measured linear acceleration (T, 3).
+            angular_acceleration: measured, world frame (T, 3).
+            normalize: scale every quaternion to unit norm instead of refusing one whose norm is
+                off by more than 1e-6.
+            alpha_z: the spring's gain.
+            beta_z: its damping, ``alpha_z / 4`` when None.
+            width_factor: the kernels' width relative to their spacing.
+        """
+        derivatives = {
+            "velocity": derivative_array(velocity, "velocity"),
+            "acceleration": derivative_array(acceleration, "acceleration"),
+            "angular_velocity": derivative_array(angular_velocity, "angular_velocity"),
+            "angular_acceleration": derivative_array(angular_acceleration, "angular_acceleration"),
+        }
+        p = None if period is None else as_scalar(period, "period", positive=True)
+        core = _core.PeriodicCartesianDmp.fit(
+            as_float_array(t, "t", 1), as_float_array(pose, "pose", 2), derivatives, bool(normalize), p,
+            as_count(n_basis, "n_basis", 3), spring(alpha_z, beta_z, width_factor))
+        return cls._wrap(core)
+
+    def rollout(self, dt: float = 0.001, duration: float | None = None, *,
+                phase: float = 0.0) -> CartesianTrajectory:
+        """Integrates position and orientation with semi-implicit Euler at step ``dt`` (s) from
+        the start pose at rest at ``phase`` (rad); a :class:`~dmprs.CartesianTrajectory` up to
+        ``duration`` (default one period).
+        """
+        return CartesianTrajectory._trusted(*self._rollout(dt, duration, phase))
+
+    def with_goal(self, pose: ArrayLike) -> PeriodicCartesianDMP:
+        """The same rhythm about a new baseline pose (7,)."""
+        return self._wrap(self._core.with_goal(pose_array(pose, "goal")))
+
+    def with_start(self, pose: ArrayLike) -> PeriodicCartesianDMP:
+        """The same rhythm started (at rest) from a new pose (7,)."""
+        return self._wrap(self._core.with_start(pose_array(pose, "start")))
 
 
 class PeriodicOnlineFit:

@@ -61,7 +61,7 @@ class Primitive:
     """
 
     __slots__ = ("_core",)
-    _core: _core.Dmp | _core.CartesianDmp | _core.PeriodicDmp
+    _core: _core.Dmp | _core.CartesianDmp | _core.PeriodicDmp | _core.PeriodicCartesianDmp
     #: the ``type`` of the dict form
     _DICT_TYPE: ClassVar[str]
     #: the parameters' names, in the order of the dict form; the constructor takes each by name
