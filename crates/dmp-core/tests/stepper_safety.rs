@@ -1,0 +1,244 @@
+//! What the steppers must never command, whatever the options: obstacles that hold the start or
+//! the goal, gains that would make the obstacles' field unbounded, a sphere straight ahead, a
+//! movement that cannot go on.
+
+use dmp_core::coupling::{OBSTACLE_PUSH_MAX, OBSTACLE_SPEED_UP_MAX, ObstacleGains, SphereObstacle};
+use dmp_core::{CartesianDmp, CartesianStepper, CartesianStepperOptions, DmpConfig, Error};
+use nalgebra::DMatrix;
+use proptest::prelude::*;
+
+/// A straight 0.3 m reach along x with a constant orientation.
+fn line() -> CartesianDmp {
+    let t: Vec<f64> = (0..500).map(|j| j as f64 / 499.0).collect();
+    let pose = DMatrix::from_fn(7, 500, |r, j| {
+        let s = t[j];
+        let a = 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5);
+        match r {
+            0 => 0.3 * a,
+            3 => 1.0,
+            _ => 0.0,
+        }
+    });
+    let demo = dmp_core::CartesianDemonstration {
+        t: &t,
+        pose: pose.as_view(),
+        velocity: None,
+        acceleration: None,
+        angular_velocity: None,
+        angular_acceleration: None,
+        normalize: false,
+    };
+    let cfg = DmpConfig {
+        n_basis: 30,
+        ..DmpConfig::default()
+    };
+    CartesianDmp::fit(&demo, cfg).unwrap()
+}
+
+fn sphere(center: [f64; 3], radius: f64) -> SphereObstacle {
+    SphereObstacle { center, radius }
+}
+
+fn stepper(obstacles: Vec<SphereObstacle>, lambda: f64) -> Result<CartesianStepper, Error> {
+    let mut opts = CartesianStepperOptions::new(1e-3);
+    opts.obstacles = obstacles;
+    opts.obstacle_gains.lambda = lambda;
+    CartesianStepper::new(&line(), &opts)
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|c| c * c).sum::<f64>().sqrt()
+}
+
+/// The largest speed and acceleration of the position, the steps and the least clearance of a
+/// run of at most `steps` steps (until done).
+fn run(s: &mut CartesianStepper, obstacle: &SphereObstacle, steps: u64) -> (f64, f64, f64) {
+    let (mut v, mut a, mut clearance) = (0.0f64, 0.0f64, f64::INFINITY);
+    while !s.done() && s.steps() < steps {
+        let (pose, vel, acc) = s.step(None).unwrap();
+        v = v.max(norm(&vel[..3]));
+        a = a.max(norm(&acc[..3]));
+        clearance = clearance.min(obstacle.clearance(&[pose[0], pose[1], pose[2]]));
+    }
+    (v, a, clearance)
+}
+
+fn refused_naming(r: Result<impl Sized, Error>, name: &str) {
+    match r {
+        Err(e @ Error::InvalidParameter { .. }) => {
+            let msg = e.to_string();
+            assert!(msg.starts_with(name), "{msg}");
+            assert!(msg.contains("holds the"), "{msg}");
+        }
+        Err(e) => panic!("refused with {e}"),
+        Ok(_) => panic!("taken"),
+    }
+}
+
+#[test]
+fn a_start_or_goal_inside_an_obstacle_is_refused_where_it_is_given() {
+    // Construction: the DMP's start, its goal.
+    refused_naming(
+        stepper(vec![sphere([0.0, 0.0, 0.0], 0.05)], 0.1),
+        "obstacles",
+    );
+    refused_naming(
+        stepper(vec![sphere([0.3, 0.0, 0.0], 0.05)], 0.1),
+        "obstacles",
+    );
+    // A point exactly on the goal, a surface through the start.
+    refused_naming(
+        stepper(vec![sphere([0.3, 0.0, 0.0], 0.0)], 0.1),
+        "obstacles",
+    );
+    refused_naming(
+        stepper(vec![sphere([0.0, 0.05, 0.0], 0.05)], 0.1),
+        "obstacles",
+    );
+    let mut s = stepper(vec![sphere([0.15, 0.2, 0.0], 0.05)], 0.1).unwrap();
+    for _ in 0..100 {
+        s.step(None).unwrap();
+    }
+    let before = s.clone();
+    refused_naming(s.set_goal(&[0.15, 0.21, 0.0, 1.0, 0.0, 0.0, 0.0]), "goal");
+    refused_naming(
+        s.reset(Some(&[0.15, 0.18, 0.0, 1.0, 0.0, 0.0, 0.0])),
+        "start",
+    );
+    let here = [s.output().0[0], s.output().0[1], s.output().0[2]];
+    refused_naming(s.set_obstacles(&[sphere(here, 0.01)]), "obstacles");
+    refused_naming(
+        s.set_obstacles(&[sphere([0.3, 0.0, 0.0], 0.01)]),
+        "obstacles",
+    );
+    // Nothing changed: the next steps are the untouched copy's.
+    let mut before = before;
+    for _ in 0..50 {
+        let a = s.step(None).unwrap().0.map(f64::to_bits);
+        assert_eq!(a, before.step(None).unwrap().0.map(f64::to_bits));
+    }
+    assert_eq!(s.obstacles(), before.obstacles());
+}
+
+/// Once refused at a start inside the sphere, this 0.3 m reach commanded up to 40 m/s and
+/// 4e7 m/s^2; with gains of 1e3 to 1e300 its speed grew without bound (1e6 m/s at 1e300).
+#[test]
+fn any_obstacle_gain_keeps_the_command_bounded() {
+    let ob = sphere([0.15, 0.01, 0.0], 0.03);
+    let (free_v, free_a, _) = run(&mut stepper(vec![], 0.1).unwrap(), &ob, 10_000);
+    for lambda in [0.1, 1e3, 1e6, 1e12, 1e300] {
+        let mut s = stepper(vec![ob], lambda).unwrap();
+        let (v, a, clearance) = run(&mut s, &ob, 10_000);
+        println!(
+            "obstacle_gain {lambda:e}: max |v| {v:.3} m/s, max |a| {a:.1} m/s^2 (free {free_v:.3}, \
+             {free_a:.2}), clearance {clearance:.4} m, done {} after {} steps",
+            s.done(),
+            s.steps()
+        );
+        assert!(v.is_finite() && a.is_finite());
+        assert!(v < 5.0 * free_v, "{lambda}: {v}");
+        // The field's push: at most OBSTACLE_PUSH_MAX alpha_z |yd| / tau, plus the DMP's own.
+        assert!(
+            a < OBSTACLE_PUSH_MAX * 48.0 * v / s.tau() + 100.0 * free_a,
+            "{lambda}: {a}"
+        );
+        assert!(clearance > 0.0);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// The field of one sphere is at most `bound` long and lengthens `z` at most by `speed_up`,
+    /// for any gain, position (also inside the sphere) and velocity.
+    #[test]
+    fn the_field_is_bounded_and_never_speeds_up_past_its_bound(
+        lambda_exp in -6.0f64..300.0,
+        beta in 1.0f64..6.0,
+        pos in prop::array::uniform3(-1.0f64..1.0),
+        z in prop::array::uniform3(-3.0f64..3.0),
+        radius in 0.0f64..0.5,
+    ) {
+        let ob = sphere([0.1, -0.2, 0.05], radius);
+        let gains = ObstacleGains { lambda: 10f64.powf(lambda_exp), beta };
+        let speed = norm(&z);
+        let bound = OBSTACLE_PUSH_MAX * 48.0 * speed;
+        let speed_up = OBSTACLE_SPEED_UP_MAX * 48.0;
+        let mut out = [0.0; 3];
+        let rate = ob.add_repulsion(&gains, &pos, &z, bound, speed_up, &mut out);
+        prop_assert!(out.iter().all(|c| c.is_finite()) && rate.is_finite());
+        prop_assert!(norm(&out) <= bound * (1.0 + 1e-12));
+        let along = out[0] * z[0] + out[1] * z[1] + out[2] * z[2];
+        prop_assert!(along <= speed_up * speed * speed * (1.0 + 1e-9) + 1e-300);
+    }
+}
+
+/// A sphere centred on a straight path, the velocity pointing at its centre: once a saddle at
+/// which the movement stopped short for good (each step running 1000 sub-steps), now passed
+/// on a fixed side, the goal reached.
+#[test]
+fn a_sphere_straight_ahead_is_passed_on_a_fixed_side() {
+    for (center, radius) in [
+        ([0.15, 0.0, 0.0], 0.03),
+        ([0.15, 0.0, 0.0], 0.0),
+        ([0.2, 0.0, 0.0], 0.08),
+    ] {
+        let ob = sphere(center, radius);
+        let mut s = stepper(vec![ob], 0.1).unwrap();
+        let mut side = 0.0f64;
+        let mut clearance = f64::INFINITY;
+        while !s.done() && s.steps() < 10_000 {
+            let (pose, _, _) = s.step(None).unwrap();
+            clearance = clearance.min(ob.clearance(&[pose[0], pose[1], pose[2]]));
+            if side.abs() < pose[1].abs() {
+                side = pose[1];
+            }
+            assert!(!s.blocked());
+        }
+        println!(
+            "sphere of radius {radius} straight ahead: passed at y up to {side:.4}, clearance \
+             {clearance:.4} m, at rest after {} steps",
+            s.steps()
+        );
+        assert!(s.done(), "stopped short at {:?}", s.output().0);
+        assert!(clearance > 0.0);
+        // The fixed side: +y (the world axis least aligned with the heading, x before y before z).
+        assert!(side > 0.0);
+        // The same movement, again: the same bits.
+        let mut again = stepper(vec![ob], 0.1).unwrap();
+        let mut first = stepper(vec![ob], 0.1).unwrap();
+        for _ in 0..2000 {
+            let a = again.step(None).unwrap().0.map(f64::to_bits);
+            assert_eq!(a, first.step(None).unwrap().0.map(f64::to_bits));
+        }
+    }
+}
+
+/// A movement held away from its goal says so: `blocked`, not a silent loop; one that moves or
+/// rests at its goal does not.
+#[test]
+fn a_stepper_held_away_from_its_goal_reports_blocked() {
+    let mut s = stepper(vec![], 0.1).unwrap();
+    let mut blocked_at = None;
+    for k in 0..8000 {
+        // A coupling that holds the position 5 cm short of the goal (C = alpha_z beta_z 0.05).
+        s.step_coupled(None, Some(&[-28.8, 0.0, 0.0, 0.0, 0.0, 0.0]))
+            .unwrap();
+        if s.blocked() && blocked_at.is_none() {
+            blocked_at = Some(k);
+        }
+    }
+    assert!(blocked_at.is_some() && s.blocked() && !s.done());
+    assert!((s.output().0[0] - 0.25).abs() < 1e-3);
+    // Released, it goes on to the goal and is no longer blocked.
+    while !s.done() && s.steps() < 20_000 {
+        s.step(None).unwrap();
+        assert!(!s.blocked() || s.steps() < 8002);
+    }
+    assert!(s.done() && !s.blocked());
+    let mut free = stepper(vec![sphere([0.15, 0.01, 0.0], 0.03)], 0.1).unwrap();
+    while !free.done() && free.steps() < 10_000 {
+        free.step(None).unwrap();
+        assert!(!free.blocked(), "step {}", free.steps());
+    }
+}
