@@ -27,7 +27,8 @@ use crate::forcing::{Forcing, padded};
 use crate::quaternion::{self, Quaternion};
 use crate::rollout::MAX_SUBSTEPS;
 use crate::stepper::{
-    Clock, StepperOptions, check_coordinates, check_state, implicit_step, position_limits,
+    Clock, StepperOptions, acceleration_at, check_coordinates, check_state, implicit_step,
+    position_limits,
 };
 
 /// The coordinates of the underlying DMP: x, y, z, then the three of the orientation.
@@ -151,6 +152,8 @@ pub struct CartesianStepper {
     at_rest: bool,
     /// Whether the last command rests away from the goal (see [`CartesianStepper::blocked`]).
     blocked: bool,
+    /// Whether the last command's acceleration exceeds a limit.
+    over_limit: bool,
     steps: u64,
 }
 
@@ -210,6 +213,7 @@ impl CartesianStepper {
             out_tau: dmp.tau(),
             at_rest: false,
             blocked: false,
+            over_limit: false,
             steps: 0,
         };
         s.reset(None)?;
@@ -252,7 +256,6 @@ impl CartesianStepper {
         self.forcing.restart();
         self.update_forcing();
         let nominal = self.clock.nominal;
-        self.clock.previous = nominal;
         self.clock.tau = nominal;
         if self.clock.coupling.is_some() {
             self.h = self.derivative(false);
@@ -266,6 +269,7 @@ impl CartesianStepper {
         self.out_tau = self.clock.tau;
         self.at_rest = false;
         self.blocked = false;
+        self.over_limit = false;
         self.steps = 0;
         Ok(())
     }
@@ -378,7 +382,8 @@ impl CartesianStepper {
         } else {
             self.clock.nominal * factor
         };
-        let tau = self.clock.period_tau(target);
+        // This period's scale was chosen by the last step; this step chooses the next one's.
+        let tau = self.clock.tau;
         let inv_tau = 1.0 / tau;
         self.h = self.derivative(coupled);
         let obstacle_rate = self.obstacle_rate();
@@ -394,7 +399,7 @@ impl CartesianStepper {
         }
         let (z_k, h_k) = (self.z, self.h);
         self.integrate(inv_tau, coupled, obstacle_rate);
-        let taud = if self.clock.coupling.is_some() {
+        let next = if self.clock.coupling.is_some() {
             let limits_acceleration = self
                 .clock
                 .coupling
@@ -405,22 +410,32 @@ impl CartesianStepper {
             } else {
                 [0.0; N]
             };
+            let nominal = self.clock.nominal;
             let tc = self.clock.coupling.as_mut().expect("checked");
-            let (next, taud) =
-                tc.next_tau(tau, target, &z_k, &h_k, &self.z, &h_next, self.clock.dt);
-            self.clock.tau = next;
-            taud
+            tc.next_tau(
+                tau,
+                nominal,
+                target,
+                &z_k,
+                &h_k,
+                &self.z,
+                &h_next,
+                self.clock.dt,
+            )
         } else {
-            self.clock.backward_rate(tau)
+            target
         };
+        self.clock.tau = next;
+        let taud = self.clock.rate(tau, next);
+        let inv_next = 1.0 / next;
         for d in 0..N {
-            self.out_acceleration[d] = if taud == 0.0 {
-                h_k[d] * inv_tau * inv_tau
-            } else {
-                (h_k[d] - taud * z_k[d]) * inv_tau * inv_tau
-            };
+            self.out_acceleration[d] = acceleration_at(h_k[d], z_k[d], taud, inv_tau, inv_next);
         }
-        self.clock.previous = tau;
+        self.over_limit = self
+            .clock
+            .coupling
+            .as_ref()
+            .is_some_and(|tc| tc.exceeded(&self.out_acceleration));
         self.steps += 1;
         self.check_finite()?;
         Ok((&self.out_pose, &self.out_velocity, &self.out_acceleration))
@@ -673,6 +688,10 @@ impl CartesianStepper {
     /// coupling change. False before the first step and while moving.
     pub fn blocked(&self) -> bool {
         self.blocked
+    }
+    /// As [`crate::stepper::Stepper::over_limit`].
+    pub fn over_limit(&self) -> bool {
+        self.over_limit
     }
     pub fn steps(&self) -> u64 {
         self.steps

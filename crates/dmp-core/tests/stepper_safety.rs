@@ -242,3 +242,194 @@ fn a_stepper_held_away_from_its_goal_reports_blocked() {
         assert!(!free.blocked(), "step {}", free.steps());
     }
 }
+
+/// The reach of the behaviour tests: 3 DOF, a min-jerk with a bump, 1 s.
+fn reach(n_dof: usize) -> dmp_core::Dmp {
+    let t: Vec<f64> = (0..500).map(|j| j as f64 / 499.0).collect();
+    let y = DMatrix::from_fn(n_dof, 500, |d, j| {
+        let s = t[j];
+        let mj = 10.0 * s.powi(3) - 15.0 * s.powi(4) + 6.0 * s.powi(5);
+        (1.0 + 0.5 * d as f64) * mj + 0.3 * (std::f64::consts::PI * s).sin().powi(2)
+    });
+    let demo = dmp_core::Demonstration {
+        t: &t,
+        y: y.as_view(),
+        yd: None,
+        ydd: None,
+    };
+    let cfg = DmpConfig {
+        n_basis: 30,
+        ..DmpConfig::default()
+    };
+    dmp_core::Dmp::fit(&demo, cfg).unwrap()
+}
+
+/// What a run showed: the largest `|ydd| / limit`, how many samples exceeded a limit, whether
+/// `over_limit` said so for exactly those, and the largest `|yd[k+1] - yd[k] - ydd[k] dt|`
+/// relative to `max(1, |ydd| dt)`.
+struct Seen {
+    worst: f64,
+    over: usize,
+    reported_exactly: bool,
+    mismatch: f64,
+}
+
+/// `steps` steps of `s`, the robot's measurement `measured(k, command)`, `tau_at(k)` a new
+/// nominal tau before step k.
+fn watch(
+    s: &mut dmp_core::Stepper,
+    steps: usize,
+    a_max: f64,
+    measured: impl Fn(usize, &[f64]) -> Option<Vec<f64>>,
+    tau_at: impl Fn(usize) -> Option<f64>,
+) -> Seen {
+    let dt = s.dt();
+    let mut seen = Seen {
+        worst: 0.0,
+        over: 0,
+        reported_exactly: true,
+        mismatch: 0.0,
+    };
+    let mut last: Option<(Vec<f64>, Vec<f64>)> = None;
+    for k in 0..steps {
+        if let Some(tau) = tau_at(k) {
+            s.set_tau(tau).unwrap();
+        }
+        let m = measured(k, s.output().0);
+        let (y, yd, ydd) = s.step(m.as_deref()).unwrap();
+        assert!(y.iter().chain(yd).chain(ydd).all(|v| v.is_finite()));
+        let (yd, ydd) = (yd.to_vec(), ydd.to_vec());
+        if let Some((yd0, ydd0)) = &last {
+            for d in 0..yd.len() {
+                let step = ydd0[d] * dt;
+                seen.mismatch = seen
+                    .mismatch
+                    .max((yd[d] - yd0[d] - step).abs() / step.abs().max(1.0));
+            }
+        }
+        let r = ydd.iter().fold(0.0f64, |m, v| m.max(v.abs())) / a_max;
+        seen.worst = seen.worst.max(r);
+        let over = r > 1.0 + 1e-12;
+        seen.over += usize::from(over);
+        seen.reported_exactly &= over == s.over_limit();
+        last = Some((yd, ydd));
+    }
+    seen
+}
+
+fn joint(velocity_max: Option<f64>, acceleration_max: Option<f64>) -> dmp_core::Stepper {
+    let mut o = dmp_core::StepperOptions::new(1e-3);
+    o.velocity_max = velocity_max.map(|v| vec![v; 3]);
+    o.acceleration_max = acceleration_max.map(|a| vec![a; 3]);
+    dmp_core::Stepper::new(&reach(3), &o).unwrap()
+}
+
+fn lagging(from: usize, to: usize, lag: f64) -> impl Fn(usize, &[f64]) -> Option<Vec<f64>> {
+    move |k, y| {
+        let off = if (from..to).contains(&k) { lag } else { 0.0 };
+        Some(y.iter().map(|y| y - off).collect())
+    }
+}
+
+/// Phase stopping with an acceleration limit: a robot 0.02 behind for 0.2 s, or one sample 1.0
+/// off, once slowed the clock at once (a floor that won over the limit): |ydd| reached 600 and
+/// 1.8e6 times the limit of 2. The phase-stopped scale is now approached as fast as the limits
+/// allow.
+#[test]
+fn phase_stopping_keeps_the_acceleration_limit() {
+    let none = |_: usize| None;
+    for (name, measured) in [
+        ("a 0.02 lag held 0.2 s", lagging(300, 500, 0.02)),
+        ("one sample 1.0 off", lagging(300, 301, 1.0)),
+    ] {
+        let seen = watch(&mut joint(None, Some(2.0)), 6000, 2.0, measured, none);
+        println!(
+            "{name}, acceleration_max 2: max |ydd| / limit {:.6}, over in {} samples",
+            seen.worst, seen.over
+        );
+        assert_eq!(seen.over, 0, "{name}: {}", seen.worst);
+        assert!(seen.mismatch < 1e-12, "{name}: {}", seen.mismatch);
+    }
+}
+
+/// Without limits phase stopping follows the measurement at once (docs/method.md §2.5.2), but
+/// the returned acceleration is the change of the returned velocity: once 1.1e4 after the lag's
+/// release where the velocity changed by 3.4 per ms, and 1.07e8 for a sample 1.0 off where it
+/// changed by 3.6.
+#[test]
+fn the_returned_acceleration_is_the_change_of_the_returned_velocity() {
+    let none = |_: usize| None;
+    let free = watch(
+        &mut joint(None, None),
+        3000,
+        1.0,
+        lagging(300, 500, 0.02),
+        none,
+    );
+    assert!(free.mismatch < 1e-12, "{}", free.mismatch);
+    let spike = watch(
+        &mut joint(None, None),
+        3000,
+        1.0,
+        lagging(300, 301, 1.0),
+        none,
+    );
+    assert!(spike.mismatch < 1e-12, "{}", spike.mismatch);
+    // A new nominal tau, with and without limits, each twice.
+    let taus = |k: usize| match k {
+        200 => Some(2.0),
+        700 => Some(1.0),
+        1000 => Some(0.5),
+        _ => None,
+    };
+    let open = |_: usize, _: &[f64]| None;
+    for (v, a) in [
+        (None, None),
+        (Some(1.0), None),
+        (None, Some(2.0)),
+        (Some(1.0), Some(2.0)),
+    ] {
+        let seen = watch(
+            &mut joint(v, a),
+            6000,
+            a.unwrap_or(f64::INFINITY),
+            open,
+            taus,
+        );
+        println!(
+            "set_tau 2, 1, 0.5 with velocity_max {v:?}, acceleration_max {a:?}: max |ydd| / \
+             limit {:.4} ({} samples over, each reported: {}), velocity mismatch {:.1e}",
+            seen.worst, seen.over, seen.reported_exactly, seen.mismatch
+        );
+        assert!(seen.mismatch < 1e-12);
+        // Where the limits cannot be kept (the paper's feasibility condition), the stepper says
+        // so, sample by sample.
+        assert!(seen.reported_exactly);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// For any limits, lag and tau change: every sample finite, velocities within their limits,
+    /// accelerations within theirs or reported, and the velocity's change the acceleration.
+    #[test]
+    fn every_sample_is_finite_within_its_limits_or_reported_and_consistent(
+        v_max in prop::option::of(0.3f64..5.0),
+        a_max in prop::option::of(0.5f64..50.0),
+        lag in -0.2f64..0.2,
+        hold in 0usize..800,
+        spike in -2.0f64..2.0,
+        tau in 0.3f64..3.0,
+    ) {
+        let mut s = joint(v_max, a_max);
+        let measured = move |k: usize, y: &[f64]| {
+            let off = if (hold..hold + 150).contains(&k) { lag } else if k == 900 { spike } else { 0.0 };
+            Some(y.iter().map(|y| y - off).collect::<Vec<_>>())
+        };
+        let taus = move |k: usize| (k == 400).then_some(tau);
+        let seen = watch(&mut s, 2500, a_max.unwrap_or(f64::INFINITY), measured, taus);
+        prop_assert!(seen.mismatch < 1e-12);
+        prop_assert!(seen.reported_exactly);
+    }
+}
