@@ -20,7 +20,8 @@ Open loop and without coupling, the k-th call of ``step()`` returns sample k of 
   potential field); and the caller's ``step(coupling=...)``.
 
 ``step()`` returns three read-only arrays that the **next call overwrites** (so that a call costs
-no allocation): copy them to keep them.
+no allocation): copy them to keep them. ``copy.copy`` and ``copy.deepcopy`` give an independent
+stepper in the same state, whose steps are this one's bit for bit.
 
 Example::
 
