@@ -205,7 +205,7 @@ pub const OBSTACLE_SPEED_UP_MAX: f64 = 0.5;
 /// that those are unchanged.
 const HEAD_ON: f64 = 1e-4;
 /// A crossing part below this fraction of the speed is rounding, its direction noise: the side
-/// to pass on is then [`SphereObstacle::side`]'s, fixed.
+/// to pass on is then `SphereObstacle::side`'s, fixed.
 const HEAD_ON_NOISE: f64 = 1e-9;
 
 impl SphereObstacle {
@@ -276,8 +276,8 @@ impl SphereObstacle {
     ///
     /// where `z_perp = z - (z . n) n`: the first term turns the velocity away from the obstacle,
     /// the second pushes straight away from it, both growing as the clearance shrinks. A
-    /// `z_perp` shorter than [`HEAD_ON`] `|z|` is taken at that length (in its own direction, or
-    /// [`SphereObstacle::side`]'s if it is rounding), so that a heading straight at the centre
+    /// `z_perp` shorter than `HEAD_ON |z|` (1e-4) is taken at that length (in its own direction, or
+    /// the fixed side's if it is rounding), so that a heading straight at the centre
     /// is turned.
     #[inline]
     pub fn add_repulsion(
