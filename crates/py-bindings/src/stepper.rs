@@ -329,6 +329,12 @@ impl PyCartesianStepper {
         self.inner.set_obstacles(&spheres(obstacles)?).py_err()
     }
 
+    /// Whether the last command came to rest away from its goal (an obstacle, a limit or a
+    /// coupling holds it): further steps repeat it until the goal, obstacles or coupling change.
+    fn blocked(&self) -> bool {
+        self.inner.blocked()
+    }
+
     #[getter]
     fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let rows: Vec<f64> = self
@@ -453,6 +459,11 @@ macro_rules! stepper_methods {
             }
             fn done(&self) -> bool {
                 self.inner.done()
+            }
+            /// Whether the last command's acceleration exceeds `acceleration_max` (where the
+            /// temporal coupling's feasibility condition fails; docs/method.md §2.5.4).
+            fn over_limit(&self) -> bool {
+                self.inner.over_limit()
             }
             #[getter]
             fn steps(&self) -> u64 {
