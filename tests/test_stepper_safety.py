@@ -139,6 +139,19 @@ def test_a_movement_held_away_from_its_goal_says_blocked() -> None:
     assert not s.blocked()
 
 
+def test_a_joint_movement_held_short_of_its_goal_says_blocked() -> None:
+    dmp = reach()
+    limited = dmp.stepper(0.001, position_min=-10.0, position_max=[dmp.goal[0] - 0.1, 10.0, 10.0])
+    free = dmp.stepper(0.001)
+    for _ in range(10_000):
+        limited.step()
+        if not free.done():
+            free.step()
+            assert not free.blocked()
+    assert limited.blocked() and not limited.done()
+    assert free.done() and not free.blocked()
+
+
 # --- limits and consistency ----------------------------------------------------------------------
 
 

@@ -19,7 +19,8 @@ Open loop and without coupling, the k-th call of ``step()`` returns sample k of 
   :meth:`~JointStepper.over_limit` says when they are not (docs/method.md §2.5.4);
 * **coupling terms** added to ``tau dz/dt`` (eq. 1): a repulsion from ``position_min`` /
   ``position_max``; for a Cartesian DMP, sphere ``obstacles`` (Park et al. 2008's dynamic
-  potential field); and the caller's ``step(coupling=...)``.
+  potential field); and the caller's ``step(coupling=...)``. A command that they hold at rest
+  short of its goal is never ``done()`` but ``blocked()``.
 
 ``step()`` returns three read-only arrays that the **next call overwrites** (so that a call costs
 no allocation): copy them to keep them. Each step knows the time scale of the next, so the

@@ -520,6 +520,8 @@ pub struct Stepper {
     at_rest: bool,
     /// Whether the last command's acceleration exceeds a limit (see [`Stepper::over_limit`]).
     over_limit: bool,
+    /// Whether the last command rests away from the goal (see [`Stepper::blocked`]).
+    blocked: bool,
     steps: u64,
 }
 
@@ -559,6 +561,7 @@ impl Stepper {
             out_tau: dmp.tau(),
             at_rest: false,
             over_limit: false,
+            blocked: false,
             steps: 0,
         };
         s.reset(None)?;
@@ -600,6 +603,7 @@ impl Stepper {
         self.out_tau = self.clock.tau;
         self.at_rest = false;
         self.over_limit = false;
+        self.blocked = false;
         self.steps = 0;
         Ok(())
     }
@@ -691,6 +695,7 @@ impl Stepper {
         }
         self.derivative(coupled);
         self.at_rest = self.rest();
+        self.blocked = !self.at_rest && self.stalled();
         self.out_x = self.x;
         self.out_tau = tau;
         let n = self.n;
@@ -775,6 +780,8 @@ impl Stepper {
         self.update_forcing();
         self.clock.tau = next;
         self.over_limit = false;
+        // Without coupling terms or limits the spring always pulls on to the goal.
+        self.blocked = false;
         self.steps += 1;
         if finite && self.x.is_finite() {
             return Ok(());
@@ -1024,6 +1031,20 @@ impl Stepper {
             && (0..self.n).all(|d| rests_at(self.g_target[d], self.y[d], self.z[d], tol))
     }
 
+    /// Whether the current state, whose `tau dz/dt` is `self.h`, has stopped for good without a
+    /// new goal or coupling: the forcing term spent, the goal filter settled, every scaled
+    /// velocity within `rest_tol` and every net pull too small to move the rest point by
+    /// `rest_tol` (`|h| <= alpha_z beta_z rest_tol`; a turning point has a large one).
+    #[inline(always)]
+    fn stalled(&self) -> bool {
+        let cfg = self.dmp.config();
+        let (n, tol) = (self.n, self.rest_tol);
+        let spring = cfg.alpha_z * cfg.beta_z;
+        self.forcing_spent()
+            && self.z[..n].iter().all(|z| z.abs() <= tol)
+            && self.h[..n].iter().all(|h| h.abs() <= spring * tol)
+    }
+
     /// Whether the forcing term can no longer move the state by more than `rest_tol`, the goal
     /// filter settled (the part of [`Stepper::rest`] that is not per coordinate).
     #[inline(always)]
@@ -1063,6 +1084,14 @@ impl Stepper {
     /// velocity limits win and this says so. False without acceleration limits.
     pub fn over_limit(&self) -> bool {
         self.over_limit
+    }
+    /// Whether the last command came to rest away from its goal: it stopped (every scaled
+    /// velocity within `rest_tol`, the net pull `|tau dz/dt|` within `alpha_z beta_z rest_tol`,
+    /// the forcing term spent, the goal filter settled) but is not [`Stepper::done`]. Something
+    /// holds it (a position limit before the goal, a coupling term): further steps repeat it
+    /// until the goal or the coupling change. False before the first step and while moving.
+    pub fn blocked(&self) -> bool {
+        self.blocked
     }
     /// Calls of `step` since the start or the last reset; the last command is at
     /// `t = (steps - 1) dt` of the stepper's clock.

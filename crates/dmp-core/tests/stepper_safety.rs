@@ -433,3 +433,35 @@ proptest! {
         prop_assert!(seen.reported_exactly);
     }
 }
+
+/// A joint movement held short of its goal, by a coupling term or by a position limit before
+/// the goal, says `blocked`; a free one never does.
+#[test]
+fn a_joint_stepper_held_away_from_its_goal_reports_blocked() {
+    let dmp = reach(3);
+    let goal = dmp.goal().clone();
+    let mut s = joint(None, None);
+    let hold = [-28.8, 0.0, 0.0]; // alpha_z beta_z x 0.05 short on the first joint
+    for _ in 0..8000 {
+        s.step_coupled(None, Some(&hold)).unwrap();
+    }
+    assert!(s.blocked() && !s.done());
+    while !s.done() && s.steps() < 20_000 {
+        s.step(None).unwrap();
+    }
+    assert!(s.done() && !s.blocked());
+    // The first joint's upper limit 0.1 before its goal.
+    let mut o = dmp_core::StepperOptions::new(1e-3);
+    o.position_min = Some(vec![-10.0; 3]);
+    o.position_max = Some(vec![goal[0] - 0.1, 10.0, 10.0]);
+    let mut limited = dmp_core::Stepper::new(&dmp, &o).unwrap();
+    for _ in 0..10_000 {
+        limited.step(None).unwrap();
+    }
+    assert!(limited.blocked() && !limited.done());
+    let mut free = joint(None, None);
+    while !free.done() && free.steps() < 20_000 {
+        free.step(None).unwrap();
+        assert!(!free.blocked());
+    }
+}

@@ -329,12 +329,6 @@ impl PyCartesianStepper {
         self.inner.set_obstacles(&spheres(obstacles)?).py_err()
     }
 
-    /// Whether the last command came to rest away from its goal (an obstacle, a limit or a
-    /// coupling holds it): further steps repeat it until the goal, obstacles or coupling change.
-    fn blocked(&self) -> bool {
-        self.inner.blocked()
-    }
-
     #[getter]
     fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let rows: Vec<f64> = self
@@ -464,6 +458,12 @@ macro_rules! stepper_methods {
             /// temporal coupling's feasibility condition fails; docs/method.md §2.5.4).
             fn over_limit(&self) -> bool {
                 self.inner.over_limit()
+            }
+            /// Whether the last command came to rest away from its goal (an obstacle, a limit
+            /// or a coupling holds it): further steps repeat it until the goal, the obstacles
+            /// or the coupling change.
+            fn blocked(&self) -> bool {
+                self.inner.blocked()
             }
             #[getter]
             fn steps(&self) -> u64 {
