@@ -92,25 +92,30 @@ fn check_outside(
     p: &[f64; 3],
     obstacles: &[SphereObstacle],
 ) -> Result<()> {
-    match obstacles.iter().position(|o| o.holds(p)) {
-        None => Ok(()),
-        Some(i) => Err(Error::InvalidParameter {
-            name,
-            value: format!(
-                "obstacles[{i}] (centre [{}, {}, {}], radius {}) holds the {what} [{}, {}, {}]",
-                fmt_g(obstacles[i].center[0]),
-                fmt_g(obstacles[i].center[1]),
-                fmt_g(obstacles[i].center[2]),
-                fmt_g(obstacles[i].radius),
-                fmt_g(p[0]),
-                fmt_g(p[1]),
-                fmt_g(p[2])
-            ),
-            requirement: "the start, the goal and the current position must be outside every \
-                          obstacle (clearance > 0): the field cannot push a movement out of a \
-                          sphere, only keep one from entering it",
-        }),
-    }
+    let Some(i) = obstacles.iter().position(|o| o.holds(p)) else {
+        return Ok(());
+    };
+    let o = &obstacles[i];
+    let sphere = format!(
+        "obstacles[{i}] (centre [{}, {}, {}], radius {})",
+        fmt_g(o.center[0]),
+        fmt_g(o.center[1]),
+        fmt_g(o.center[2]),
+        fmt_g(o.radius)
+    );
+    let point = format!("[{}, {}, {}]", fmt_g(p[0]), fmt_g(p[1]), fmt_g(p[2]));
+    Err(Error::InvalidParameter {
+        name,
+        // Worded after what the caller just gave: new spheres, or a new position in one.
+        value: if name == "obstacles" {
+            format!("{sphere}, around the {what} {point}")
+        } else {
+            format!("{point}, inside {sphere}")
+        },
+        requirement: "the start, the goal and the current position must be outside every \
+                      obstacle (clearance > 0): the field cannot push a movement out of a \
+                      sphere, only keep one from entering it",
+    })
 }
 
 /// Executes a [`CartesianDmp`] one control period at a time (module docs).

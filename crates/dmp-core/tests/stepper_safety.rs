@@ -68,7 +68,13 @@ fn refused_naming(r: Result<impl Sized, Error>, name: &str) {
         Err(e @ Error::InvalidParameter { .. }) => {
             let msg = e.to_string();
             assert!(msg.starts_with(name), "{msg}");
-            assert!(msg.contains("holds the"), "{msg}");
+            let place = if name == "obstacles" {
+                "), around the "
+            } else {
+                ", inside obstacles["
+            };
+            assert!(msg.contains(place), "{msg}");
+            assert!(msg.contains("must be outside every obstacle"), "{msg}");
         }
         Err(e) => panic!("refused with {e}"),
         Ok(_) => panic!("taken"),
