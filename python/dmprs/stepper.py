@@ -7,20 +7,27 @@ Open loop and without coupling, the k-th call of ``step()`` returns sample k of 
 
 * **phase stopping** (Ijspeert et al. 2002, 2013): ``step(measured)`` with the robot's position
   slows the clock by ``1 + sum_d alpha_e[d] (measured[d] - y[d])^2`` (``y`` the last command),
-  the phase and the transformation system alike, so a held robot waits at one phase and
-  resumes without a jump;
+  the phase and the transformation system alike, from the next sample on, so a held robot waits
+  at one phase and resumes; without ``acceleration_max`` the clock follows the measurement at
+  once (a measurement that jumps jumps the velocity), with it as fast as the limit allows;
 * **a goal filter**: :meth:`~JointStepper.set_goal` moves the attractor as
   ``tau dg/dt = goal_filter (g_new - g)`` (the orientation along the geodesic), so a goal jump
   does not jump the acceleration; ``goal_filter=None`` switches to the goal at once;
 * **limits by temporal coupling** (Dahlin & Karayiannidis, IEEE RA-L 2021): ``velocity_max`` and
   ``acceleration_max`` slow the clock (tau grows) instead of clipping the command, so the path
-  stays the DMP's; velocities are never exceeded, accelerations whenever feasible;
+  stays the DMP's; velocities are never exceeded, accelerations whenever feasible, and
+  :meth:`~JointStepper.over_limit` says when they are not (docs/method.md §2.5.4);
 * **coupling terms** added to ``tau dz/dt`` (eq. 1): a repulsion from ``position_min`` /
   ``position_max``; for a Cartesian DMP, sphere ``obstacles`` (Park et al. 2008's dynamic
-  potential field); and the caller's ``step(coupling=...)``.
+  potential field); and the caller's ``step(coupling=...)``. A command that they hold at rest
+  short of its goal is never ``done()`` but ``blocked()``.
 
 ``step()`` returns three read-only arrays that the **next call overwrites** (so that a call costs
-no allocation): copy them to keep them.
+no allocation): copy them to keep them. Each step knows the time scale of the next, so the
+returned acceleration is the change of the returned velocity to the next sample's:
+``yd[k+1] == yd[k] + ydd[k] * dt`` to rounding with one sub-step. ``copy.copy`` and
+``copy.deepcopy`` give an independent stepper in the same state, whose steps are this one's
+bit for bit.
 
 Example::
 
@@ -244,7 +251,13 @@ class CartesianStepper(_core.CartesianStepper):
     position in a box. ``obstacles`` are spheres, an ``(M, 4)`` array of ``x, y, z, radius``
     (radius 0: a point), avoided with Park et al.'s dynamic potential field of gain
     ``obstacle_gain`` (lambda, units of position squared) and ``obstacle_beta``; replace them
-    while running with :meth:`set_obstacles`. Other options as :class:`JointStepper`.
+    while running with :meth:`set_obstacles`. The field's push is bounded (at most
+    ``16 alpha_z |z|``, and it never lengthens ``z`` by more than half the DMP's damping), a
+    start, goal or current position inside a sphere (or on its surface) is refused naming the
+    argument that brought it, and a sphere exactly ahead is passed on a fixed side
+    (docs/method.md §2.5.5). :meth:`blocked` says when the movement came to rest away from its
+    goal (held by an obstacle, a limit or a coupling term). Other options as
+    :class:`JointStepper`.
     """
 
     __slots__ = ()
@@ -286,5 +299,7 @@ class CartesianStepper(_core.CartesianStepper):
         )
 
     def set_obstacles(self, obstacles: ArrayLike | None) -> None:
-        """Replaces the sphere obstacles, ``(M, 4)`` rows ``x, y, z, radius`` (None: none)."""
+        """Replaces the sphere obstacles, ``(M, 4)`` rows ``x, y, z, radius`` (None: none); a
+        sphere holding the goal or the current position is refused, the obstacles unchanged.
+        """
         super().set_obstacles(_obstacles(obstacles))

@@ -18,14 +18,17 @@
 //! sphere obstacles ([`crate::coupling`]) act on the position.
 
 use crate::cartesian::{CartesianDmp, POSE_WIDTH, UNIT_TOLERANCE};
-use crate::coupling::{ObstacleGains, PositionLimits, SphereObstacle};
+use crate::coupling::{
+    OBSTACLE_PUSH_MAX, OBSTACLE_SPEED_UP_MAX, ObstacleGains, PositionLimits, SphereObstacle,
+};
 use crate::dmp::DmpConfig;
 use crate::error::{Error, Result, fmt_g};
 use crate::forcing::{Forcing, padded};
 use crate::quaternion::{self, Quaternion};
 use crate::rollout::MAX_SUBSTEPS;
 use crate::stepper::{
-    Clock, StepperOptions, check_coordinates, check_state, implicit_step, position_limits,
+    Clock, StepperOptions, acceleration_at, check_coordinates, check_state, implicit_step,
+    position_limits,
 };
 
 /// The coordinates of the underlying DMP: x, y, z, then the three of the orientation.
@@ -80,6 +83,41 @@ fn check_pose(name: &'static str, pose: &[f64]) -> Result<Quaternion> {
     unit(name, &pose[3..])
 }
 
+/// That no sphere of `obstacles` holds the position `p` (`what` of the movement): the field is
+/// not defined inside a sphere, and a movement that starts or ends in one cannot avoid it.
+/// The error names `name`, the argument that brought the conflict.
+fn check_outside(
+    name: &'static str,
+    what: &str,
+    p: &[f64; 3],
+    obstacles: &[SphereObstacle],
+) -> Result<()> {
+    let Some(i) = obstacles.iter().position(|o| o.holds(p)) else {
+        return Ok(());
+    };
+    let o = &obstacles[i];
+    let sphere = format!(
+        "obstacles[{i}] (centre [{}, {}, {}], radius {})",
+        fmt_g(o.center[0]),
+        fmt_g(o.center[1]),
+        fmt_g(o.center[2]),
+        fmt_g(o.radius)
+    );
+    let point = format!("[{}, {}, {}]", fmt_g(p[0]), fmt_g(p[1]), fmt_g(p[2]));
+    Err(Error::InvalidParameter {
+        name,
+        // Worded after what the caller just gave: new spheres, or a new position in one.
+        value: if name == "obstacles" {
+            format!("{sphere}, around the {what} {point}")
+        } else {
+            format!("{point}, inside {sphere}")
+        },
+        requirement: "the start, the goal and the current position must be outside every \
+                      obstacle (clearance > 0): the field cannot push a movement out of a \
+                      sphere, only keep one from entering it",
+    })
+}
+
 /// Executes a [`CartesianDmp`] one control period at a time (module docs).
 #[derive(Debug, Clone)]
 pub struct CartesianStepper {
@@ -117,6 +155,10 @@ pub struct CartesianStepper {
     out_x: f64,
     out_tau: f64,
     at_rest: bool,
+    /// Whether the last command rests away from the goal (see [`CartesianStepper::blocked`]).
+    blocked: bool,
+    /// Whether the last command's acceleration exceeds a limit.
+    over_limit: bool,
     steps: u64,
 }
 
@@ -129,6 +171,20 @@ impl CartesianStepper {
         for (i, o) in opts.obstacles.iter().enumerate() {
             o.validate(i)?;
         }
+        let goal = dmp.goal();
+        check_outside(
+            "obstacles",
+            "goal",
+            &[goal[0], goal[1], goal[2]],
+            &opts.obstacles,
+        )?;
+        let start = dmp.start();
+        check_outside(
+            "obstacles",
+            "start",
+            &[start[0], start[1], start[2]],
+            &opts.obstacles,
+        )?;
         let w = dmp.weights();
         let goal = dmp.goal();
         let mut s = Self {
@@ -161,6 +217,8 @@ impl CartesianStepper {
             out_x: 1.0,
             out_tau: dmp.tau(),
             at_rest: false,
+            blocked: false,
+            over_limit: false,
             steps: 0,
         };
         s.reset(None)?;
@@ -187,6 +245,12 @@ impl CartesianStepper {
                 requirement: "must be strictly inside position_min and position_max",
             });
         }
+        check_outside(
+            "start",
+            "start",
+            &[start[0], start[1], start[2]],
+            &self.obstacles,
+        )?;
         self.p = [start[0], start[1], start[2]];
         self.q = [start[3], start[4], start[5], start[6]];
         self.z = [0.0; N];
@@ -197,7 +261,6 @@ impl CartesianStepper {
         self.forcing.restart();
         self.update_forcing();
         let nominal = self.clock.nominal;
-        self.clock.previous = nominal;
         self.clock.tau = nominal;
         if self.clock.coupling.is_some() {
             self.h = self.derivative(false);
@@ -210,6 +273,8 @@ impl CartesianStepper {
         self.out_x = 1.0;
         self.out_tau = self.clock.tau;
         self.at_rest = false;
+        self.blocked = false;
+        self.over_limit = false;
         self.steps = 0;
         Ok(())
     }
@@ -218,6 +283,12 @@ impl CartesianStepper {
     /// goal's, so the sign a caller passes cannot turn the movement into the long way round.
     pub fn set_goal(&mut self, goal: &[f64]) -> Result<()> {
         let q = check_pose("goal", goal)?;
+        check_outside(
+            "goal",
+            "goal",
+            &[goal[0], goal[1], goal[2]],
+            &self.obstacles,
+        )?;
         self.target_p = [goal[0], goal[1], goal[2]];
         self.target_q = quaternion::same_hemisphere(&q, &self.target_q);
         if self.clock.goal_filter.is_none() {
@@ -233,11 +304,14 @@ impl CartesianStepper {
         self.clock.set_nominal(&self.cfg, tau)
     }
 
-    /// Replaces the obstacles (their number may change; this allocates, `step` does not).
+    /// Replaces the obstacles (their number may change; this allocates, `step` does not). A
+    /// sphere holding the goal or the current position is refused, the obstacles unchanged.
     pub fn set_obstacles(&mut self, obstacles: &[SphereObstacle]) -> Result<()> {
         for (i, o) in obstacles.iter().enumerate() {
             o.validate(i)?;
         }
+        check_outside("obstacles", "goal", &self.target_p, obstacles)?;
+        check_outside("obstacles", "current position", &self.p, obstacles)?;
         self.obstacles.clear();
         self.obstacles.extend_from_slice(obstacles);
         Ok(())
@@ -313,11 +387,13 @@ impl CartesianStepper {
         } else {
             self.clock.nominal * factor
         };
-        let tau = self.clock.period_tau(target);
+        // This period's scale was chosen by the last step; this step chooses the next one's.
+        let tau = self.clock.tau;
         let inv_tau = 1.0 / tau;
         self.h = self.derivative(coupled);
         let obstacle_rate = self.obstacle_rate();
         self.at_rest = self.rest();
+        self.blocked = !self.at_rest && self.stalled();
         self.out_x = self.x;
         self.out_tau = tau;
         self.out_pose = [
@@ -328,7 +404,7 @@ impl CartesianStepper {
         }
         let (z_k, h_k) = (self.z, self.h);
         self.integrate(inv_tau, coupled, obstacle_rate);
-        let taud = if self.clock.coupling.is_some() {
+        let next = if self.clock.coupling.is_some() {
             let limits_acceleration = self
                 .clock
                 .coupling
@@ -339,22 +415,32 @@ impl CartesianStepper {
             } else {
                 [0.0; N]
             };
+            let nominal = self.clock.nominal;
             let tc = self.clock.coupling.as_mut().expect("checked");
-            let (next, taud) =
-                tc.next_tau(tau, target, &z_k, &h_k, &self.z, &h_next, self.clock.dt);
-            self.clock.tau = next;
-            taud
+            tc.next_tau(
+                tau,
+                nominal,
+                target,
+                &z_k,
+                &h_k,
+                &self.z,
+                &h_next,
+                self.clock.dt,
+            )
         } else {
-            self.clock.backward_rate(tau)
+            target
         };
+        self.clock.tau = next;
+        let taud = self.clock.rate(tau, next);
+        let inv_next = 1.0 / next;
         for d in 0..N {
-            self.out_acceleration[d] = if taud == 0.0 {
-                h_k[d] * inv_tau * inv_tau
-            } else {
-                (h_k[d] - taud * z_k[d]) * inv_tau * inv_tau
-            };
+            self.out_acceleration[d] = acceleration_at(h_k[d], z_k[d], taud, inv_tau, inv_next);
         }
-        self.clock.previous = tau;
+        self.over_limit = self
+            .clock
+            .coupling
+            .as_ref()
+            .is_some_and(|tc| tc.exceeded(&self.out_acceleration));
         self.steps += 1;
         self.check_finite()?;
         Ok((&self.out_pose, &self.out_velocity, &self.out_acceleration))
@@ -366,11 +452,33 @@ impl CartesianStepper {
     fn obstacle_rate(&self) -> f64 {
         let mut rate = 0.0f64;
         let zp = [self.z[0], self.z[1], self.z[2]];
+        let bound = self.push_bound(&zp);
         let mut scratch = [0.0; 3];
         for o in &self.obstacles {
-            rate = rate.max(o.add_repulsion(&self.obstacle_gains, &self.p, &zp, &mut scratch));
+            rate = rate.max(o.add_repulsion(
+                &self.obstacle_gains,
+                &self.p,
+                &zp,
+                bound,
+                self.speed_up(),
+                &mut scratch,
+            ));
         }
         rate
+    }
+
+    /// The most by which the obstacles' field may lengthen `z` ([`OBSTACLE_SPEED_UP_MAX`]).
+    #[inline(always)]
+    fn speed_up(&self) -> f64 {
+        OBSTACLE_SPEED_UP_MAX * self.cfg.alpha_z
+    }
+
+    /// The bound on the obstacles' push at scaled velocity `zp` ([`OBSTACLE_PUSH_MAX`]).
+    #[inline(always)]
+    fn push_bound(&self, zp: &[f64; 3]) -> f64 {
+        OBSTACLE_PUSH_MAX
+            * self.cfg.alpha_z
+            * (zp[0] * zp[0] + zp[1] * zp[1] + zp[2] * zp[2]).sqrt()
     }
 
     /// Integrates one period at time scale `1 / inv_tau` from the current state, whose
@@ -490,9 +598,22 @@ impl CartesianStepper {
         }
         if !self.obstacles.is_empty() {
             let zp = [self.z[0], self.z[1], self.z[2]];
+            let bound = self.push_bound(&zp);
             let mut push = [0.0; 3];
             for o in &self.obstacles {
-                o.add_repulsion(&self.obstacle_gains, &self.p, &zp, &mut push);
+                o.add_repulsion(
+                    &self.obstacle_gains,
+                    &self.p,
+                    &zp,
+                    bound,
+                    self.speed_up(),
+                    &mut push,
+                );
+            }
+            // Each sphere's push is bounded; their sum is too, however many there are.
+            let size = (push[0] * push[0] + push[1] * push[1] + push[2] * push[2]).sqrt();
+            if size > bound {
+                push = push.map(|c| c * (bound / size));
             }
             for d in 0..3 {
                 h[d] += push[d];
@@ -527,6 +648,21 @@ impl CartesianStepper {
         })
     }
 
+    /// Whether the current state, whose `tau dz/dt` is `self.h`, has stopped for good without a
+    /// new goal, obstacles or coupling: the forcing term spent, the goal filter settled, every
+    /// scaled velocity within `rest_tol` and every net pull too small to move the rest point by
+    /// `rest_tol` (`|h| <= alpha_z beta_z rest_tol`; a turning point has a large one).
+    #[inline(always)]
+    fn stalled(&self) -> bool {
+        let cfg = &self.cfg;
+        let tol = self.rest_tol;
+        let spring = cfg.alpha_z * cfg.beta_z;
+        !self.goal_moving
+            && self.x * self.max_w / spring <= tol
+            && self.z.iter().all(|z| z.abs() <= tol)
+            && self.h.iter().all(|h| h.abs() <= spring * tol)
+    }
+
     #[inline(always)]
     fn check_finite(&self) -> Result<()> {
         let state = [&self.p[..], &self.q, &self.z, &self.out_acceleration];
@@ -548,6 +684,19 @@ impl CartesianStepper {
     /// its units, orientation in rad).
     pub fn done(&self) -> bool {
         self.at_rest
+    }
+    /// Whether the last command came to rest away from its goal: it stopped (every scaled
+    /// velocity within `rest_tol`, the net pull `|tau dz/dt|` within `alpha_z beta_z rest_tol`,
+    /// the forcing term spent, the goal filter settled) but is not
+    /// [`CartesianStepper::done`]. Something holds it (an obstacle it cannot go round, a position
+    /// limit, a coupling term): further steps repeat it until the goal, the obstacles or the
+    /// coupling change. False before the first step and while moving.
+    pub fn blocked(&self) -> bool {
+        self.blocked
+    }
+    /// As [`crate::stepper::Stepper::over_limit`].
+    pub fn over_limit(&self) -> bool {
+        self.over_limit
     }
     pub fn steps(&self) -> u64 {
         self.steps

@@ -187,6 +187,27 @@ impl Default for ObstacleGains {
 /// state that touched the surface.
 const CLEARANCE_FLOOR: f64 = 1e-6;
 
+/// The bound on the obstacles' push, relative to the DMP's damping: `|C| <= OBSTACLE_PUSH_MAX
+/// alpha_z |z|` in total, so the acceleration it adds is at most `OBSTACLE_PUSH_MAX alpha_z
+/// |yd| / tau`. Park et al.'s field grows as `1 / p^2` towards the surface and without bound in
+/// `lambda`: near a sphere, or with a large gain, it would command accelerations and velocities
+/// no robot takes. 16 is twice the largest push of the reaches past spheres that the default
+/// gains were chosen on (docs/method.md §2.5.5), which the bound leaves as they were.
+pub const OBSTACLE_PUSH_MAX: f64 = 16.0;
+/// The most by which the obstacles' field may lengthen `z`, relative to `alpha_z`: half the
+/// DMP's damping, so that it can never speed a movement up without bound.
+pub const OBSTACLE_SPEED_UP_MAX: f64 = 0.5;
+
+/// A heading whose part across the direction to a sphere's centre is below this fraction of the
+/// speed is steered as if it were this fraction: straight at the centre the steering term
+/// vanishes (a saddle of the field), and the movement would stop in front of the sphere instead
+/// of going round. Below the smallest crossing part of the reaches the gains were chosen on, so
+/// that those are unchanged.
+const HEAD_ON: f64 = 1e-4;
+/// A crossing part below this fraction of the speed is rounding, its direction noise: the side
+/// to pass on is then `SphereObstacle::side`'s, fixed.
+const HEAD_ON_NOISE: f64 = 1e-9;
+
 impl SphereObstacle {
     pub fn validate(&self, index: usize) -> Result<()> {
         if self.center.iter().any(|c| !c.is_finite()) {
@@ -217,9 +238,34 @@ impl SphereObstacle {
         (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() - self.radius
     }
 
-    /// Adds `-grad_p U` of Park et al.'s dynamic potential to `out` and returns the field's rate
-    /// `lambda (beta + 1) |cos theta|^(beta - 1) / p^2` (a bound on how fast it changes with `z`,
-    /// per unit of the scaled time: the stepper keeps its step below the inverse).
+    /// Whether `p` is inside the sphere or on its surface (where the field is not defined).
+    pub fn holds(&self, p: &[f64; 3]) -> bool {
+        // NaN (a position not a number) counts as inside.
+        self.clearance(p).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    }
+
+    /// The side on which a movement headed straight at the centre passes the sphere, from `n`,
+    /// the unit vector from the centre to the position: the world axis least aligned with `n`
+    /// (x before y before z on ties), made perpendicular to `n`. Fixed, so that the same
+    /// movement always goes round the same way.
+    fn side(n: &[f64; 3]) -> [f64; 3] {
+        let mut axis = 0;
+        for i in 1..3 {
+            if n[i].abs() < n[axis].abs() {
+                axis = i;
+            }
+        }
+        let mut e = [0, 1, 2].map(|i| -n[axis] * n[i]);
+        e[axis] += 1.0;
+        let norm = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        e.map(|c| c / norm)
+    }
+
+    /// Adds `-grad_p U` of Park et al.'s dynamic potential to `out`, at most `bound` long and
+    /// lengthening `z` at most by `speed_up z` (its part along `z` within `speed_up |z|`), and
+    /// returns the field's rate `lambda (beta + 1) |cos theta|^(beta - 1) / p^2` (a bound on how
+    /// fast it changes with `z`, per unit of the scaled time: the stepper keeps its step below
+    /// the inverse), at most `(beta + 1) bound / |z|`, the rate of the bounded field.
     ///
     /// With `r = p - c`, `d = |r|`, `n = r / d`, clearance `p = d - radius` and
     /// `cos theta = z . n / |z|`, the field is active only while approaching (`cos theta < 0`):
@@ -229,13 +275,18 @@ impl SphereObstacle {
     /// ```
     ///
     /// where `z_perp = z - (z . n) n`: the first term turns the velocity away from the obstacle,
-    /// the second pushes straight away from it, both growing as the clearance shrinks.
+    /// the second pushes straight away from it, both growing as the clearance shrinks. A
+    /// `z_perp` shorter than `HEAD_ON |z|` (1e-4) is taken at that length (in its own direction, or
+    /// the fixed side's if it is rounding), so that a heading straight at the centre
+    /// is turned.
     #[inline]
     pub fn add_repulsion(
         &self,
         gains: &ObstacleGains,
         pos: &[f64; 3],
         z: &[f64; 3],
+        bound: f64,
+        speed_up: f64,
         out: &mut [f64; 3],
     ) -> f64 {
         let r = [0, 1, 2].map(|i| pos[i] - self.center[i]);
@@ -255,10 +306,40 @@ impl SphereObstacle {
         let scale = gains.lambda * m.powf(gains.beta - 1.0);
         let turn = gains.beta / (d * p);
         let push = m * speed / (p * p);
-        for i in 0..3 {
-            out[i] += scale * (turn * (z[i] - along * n[i]) + push * n[i]);
+        let mut across = [0, 1, 2].map(|i| z[i] - along * n[i]);
+        let length = (across[0] * across[0] + across[1] * across[1] + across[2] * across[2]).sqrt();
+        let floor = HEAD_ON * speed;
+        if length < floor {
+            let dir = if length > HEAD_ON_NOISE * speed {
+                across.map(|c| c / length)
+            } else {
+                Self::side(&n)
+            };
+            across = dir.map(|c| c * floor);
         }
-        scale * (gains.beta + 1.0) / (p * p)
+        let mut field = [0, 1, 2].map(|i| turn * across[i] + push * n[i]);
+        // The steering term lengthens `z` (by `turn |z_perp|^2`) where the braking one is weaker,
+        // grazing a sphere: with a large gain or near the surface that speeds the movement up
+        // exponentially. Its part along `z` is kept within `speed_up` |z|, so that the field
+        // never undoes the DMP's damping (`speed_up < alpha_z`).
+        let gain = (field[0] * z[0] + field[1] * z[1] + field[2] * z[2]) / speed;
+        if gain > speed_up * speed / scale {
+            let k = (gain - speed_up * speed / scale) / speed;
+            field = [0, 1, 2].map(|i| field[i] - k * z[i]);
+        }
+        let size = (field[0] * field[0] + field[1] * field[1] + field[2] * field[2]).sqrt();
+        // `scale * size` may overflow for a huge gain: compared, never multiplied out then.
+        if size <= bound / scale {
+            for i in 0..3 {
+                out[i] += scale * field[i];
+            }
+        } else {
+            for i in 0..3 {
+                out[i] += field[i] * (bound / size);
+            }
+        }
+        let rate = scale * (gains.beta + 1.0) / (p * p);
+        rate.min((gains.beta + 1.0) * bound / speed)
     }
 }
 
@@ -346,7 +427,7 @@ mod tests {
             }
         };
         let mut out = [0.0; 3];
-        let rate = ob.add_repulsion(&g, &pos, &z, &mut out);
+        let rate = ob.add_repulsion(&g, &pos, &z, f64::INFINITY, f64::INFINITY, &mut out);
         assert!(rate > 0.0);
         for i in 0..3 {
             let e = 1e-7;
@@ -363,7 +444,17 @@ mod tests {
         }
         // Moving away: no force.
         let mut none = [0.0; 3];
-        assert_eq!(ob.add_repulsion(&g, &pos, &z.map(|c| -c), &mut none), 0.0);
+        assert_eq!(
+            ob.add_repulsion(
+                &g,
+                &pos,
+                &z.map(|c| -c),
+                f64::INFINITY,
+                f64::INFINITY,
+                &mut none
+            ),
+            0.0
+        );
         assert_eq!(none, [0.0; 3]);
     }
 }

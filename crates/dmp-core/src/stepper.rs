@@ -19,7 +19,10 @@
 //!
 //! The time scale `tau_eff` is constant over one control period and the state is integrated in
 //! the scaled time `ds = dt / tau_eff`, in which the DMP does not depend on `tau`: however the
-//! clock is slowed, the path is the DMP's (to the Euler discretization of a finer step).
+//! clock is slowed, the path is the DMP's (to the Euler discretization of a finer step). Each
+//! step chooses the scale of the next period (from its measurement, `set_tau`, the temporal
+//! coupling), so its acceleration `(h - taud z) / (tau tau_next)` is the change of its velocity
+//! to the next command's: with one sub-step `yd[k+1] = yd[k] + ydd[k] dt` to rounding.
 
 use crate::coupling::PositionLimits;
 use crate::dmp::{Dmp, DmpConfig};
@@ -278,10 +281,10 @@ pub(crate) struct Clock {
     pub substeps: usize,
     requested_substeps: Option<usize>,
     pub nominal: f64,
-    /// With temporal coupling: the time scale of the next period (chosen by the last step).
+    /// The time scale of the next period, chosen by the last step (module docs: a step knows
+    /// the scale of the period after its own, so that its acceleration is the change of its
+    /// velocity to the next command's).
     pub tau: f64,
-    /// The time scale of the last period (for `taud` without temporal coupling).
-    pub previous: f64,
     pub coupling: Option<TemporalCoupling>,
     /// `alpha_g`, if the goal is filtered.
     pub goal_filter: Option<f64>,
@@ -313,7 +316,6 @@ impl Clock {
             requested_substeps: opts.substeps,
             nominal: tau,
             tau,
-            previous: tau,
             coupling,
             goal_filter: opts.goal_filter,
             alpha_e: phase_stopping_gains(&opts.alpha_e, n)?,
@@ -353,24 +355,14 @@ impl Clock {
         Ok(1.0 + s)
     }
 
-    /// The time scale of this period given the phase-stopped target `nominal * factor`.
+    /// `taud` of a period at time scale `tau` followed by one at `next`: their forward
+    /// difference, exactly 0 while the scale does not change.
     #[inline]
-    pub fn period_tau(&self, target: f64) -> f64 {
-        if self.coupling.is_some() {
-            self.tau
-        } else {
-            target
-        }
-    }
-
-    /// `taud` of this period without temporal coupling: the backward difference of the time
-    /// scale (exactly 0 while it does not change).
-    #[inline]
-    pub fn backward_rate(&self, tau: f64) -> f64 {
-        if tau == self.previous {
+    pub fn rate(&self, tau: f64, next: f64) -> f64 {
+        if next == tau {
             0.0
         } else {
-            (tau - self.previous) / self.dt
+            (next - tau) / self.dt
         }
     }
 }
@@ -403,11 +395,11 @@ fn explicit_step(y: &mut f64, z: &mut f64, h: f64, inv_tau: f64, hs: f64) {
 
 /// One coordinate of [`acceleration`].
 #[inline(always)]
-fn acceleration_at(h: f64, z: f64, taud: f64, inv_tau: f64) -> f64 {
+pub(crate) fn acceleration_at(h: f64, z: f64, taud: f64, inv_tau: f64, inv_next: f64) -> f64 {
     if taud == 0.0 {
         h * inv_tau * inv_tau
     } else {
-        (h - taud * z) * inv_tau * inv_tau
+        (h - taud * z) * inv_tau * inv_next
     }
 }
 
@@ -471,15 +463,17 @@ fn euler_substep(
     }
 }
 
-/// `ydd = (tau dz/dt - taud z) / tau^2` of the command, with `h = tau dz/dt` and `z` of the
-/// state it was recorded from; the rollout's `dz / tau` with `dz = h / tau` when the clock is
-/// steady (`taud == 0`).
+/// `ydd = (tau dz/dt - taud z) / (tau tau_next)` of the command, with `h = tau dz/dt` and `z` of
+/// the state it was recorded from, `taud = (tau_next - tau) / dt`: with one sub-step exactly
+/// the change of the velocity `z / tau` to the next command's, `z_next / tau_next` with
+/// `z_next = z + h dt / tau` (module docs); the rollout's `dz / tau` with `dz = h / tau` when
+/// the clock is steady (`taud == 0`).
 #[inline(always)]
-fn acceleration(out: &mut [f64], h: &[f64], z: &[f64], taud: f64, inv_tau: f64) {
+fn acceleration(out: &mut [f64], h: &[f64], z: &[f64], taud: f64, inv_tau: f64, inv_next: f64) {
     let n = out.len();
     let (h, z) = (&h[..n], &z[..n]);
     for d in 0..n {
-        out[d] = acceleration_at(h[d], z[d], taud, inv_tau);
+        out[d] = acceleration_at(h[d], z[d], taud, inv_tau, inv_next);
     }
 }
 
@@ -524,6 +518,10 @@ pub struct Stepper {
     out_x: f64,
     out_tau: f64,
     at_rest: bool,
+    /// Whether the last command's acceleration exceeds a limit (see [`Stepper::over_limit`]).
+    over_limit: bool,
+    /// Whether the last command rests away from the goal (see [`Stepper::blocked`]).
+    blocked: bool,
     steps: u64,
 }
 
@@ -562,6 +560,8 @@ impl Stepper {
             out_x: 1.0,
             out_tau: dmp.tau(),
             at_rest: false,
+            over_limit: false,
+            blocked: false,
             steps: 0,
         };
         s.reset(None)?;
@@ -590,7 +590,6 @@ impl Stepper {
         self.forcing.restart();
         self.update_forcing();
         let nominal = self.clock.nominal;
-        self.clock.previous = nominal;
         self.clock.tau = nominal;
         if self.clock.coupling.is_some() {
             self.derivative(false);
@@ -603,6 +602,8 @@ impl Stepper {
         self.out_x = 1.0;
         self.out_tau = self.clock.tau;
         self.at_rest = false;
+        self.over_limit = false;
+        self.blocked = false;
         self.steps = 0;
         Ok(())
     }
@@ -680,7 +681,8 @@ impl Stepper {
         } else {
             self.clock.nominal * factor
         };
-        let tau = self.clock.period_tau(target);
+        // This period's scale was chosen by the last step; this step chooses the next one's.
+        let tau = self.clock.tau;
         let inv_tau = 1.0 / tau;
         if !coupled
             && self.limits.is_none()
@@ -688,11 +690,12 @@ impl Stepper {
             && self.clock.substeps == 1
             && !self.goal_moving
         {
-            self.plain_period::<AVX2>(tau, inv_tau)?;
+            self.plain_period::<AVX2>(tau, inv_tau, target)?;
             return Ok(self.output());
         }
         self.derivative(coupled);
         self.at_rest = self.rest();
+        self.blocked = !self.at_rest && self.stalled();
         self.out_x = self.x;
         self.out_tau = tau;
         let n = self.n;
@@ -705,14 +708,16 @@ impl Stepper {
             inv_tau,
         );
         self.integrate(inv_tau, coupled);
-        let taud = if self.clock.coupling.is_some() {
+        let next = if self.clock.coupling.is_some() {
             let mut h_next = std::mem::take(&mut self.h_next);
             if self.limits_acceleration() {
                 self.derivative_into(&mut h_next, coupled);
             }
+            let nominal = self.clock.nominal;
             let tc = self.clock.coupling.as_mut().expect("checked");
-            let (next, taud) = tc.next_tau(
+            let next = tc.next_tau(
                 tau,
+                nominal,
                 target,
                 &self.z_k,
                 &self.h[..n],
@@ -721,13 +726,21 @@ impl Stepper {
                 self.clock.dt,
             );
             self.h_next = h_next;
-            self.clock.tau = next;
-            taud
+            next
         } else {
-            self.clock.backward_rate(tau)
+            target
         };
-        acceleration(&mut self.out_ydd[..n], &self.h, &self.z_k, taud, inv_tau);
-        self.clock.previous = tau;
+        self.clock.tau = next;
+        let taud = self.clock.rate(tau, next);
+        acceleration(
+            &mut self.out_ydd[..n],
+            &self.h,
+            &self.z_k,
+            taud,
+            inv_tau,
+            1.0 / next,
+        );
+        self.over_limit = self.exceeds_limits();
         self.steps += 1;
         self.check_finite()?;
         Ok(self.output())
@@ -737,20 +750,21 @@ impl Stepper {
     /// moving goal, the common case: the same operations on every coordinate, in one pass over
     /// the coordinates instead of one per stage.
     #[inline(always)]
-    fn plain_period<const AVX2: bool>(&mut self, tau: f64, inv_tau: f64) -> Result<()> {
+    fn plain_period<const AVX2: bool>(&mut self, tau: f64, inv_tau: f64, next: f64) -> Result<()> {
         let cfg = *self.dmp.config();
         let hs = self.clock.dt;
-        let taud = self.clock.backward_rate(tau);
+        let taud = self.clock.rate(tau, next);
+        let inv_next = 1.0 / next;
         let tol = self.rest_tol;
         #[cfg(target_arch = "x86_64")]
         let (rests, finite) = if AVX2 {
             // SAFETY: with `AVX2` the CPU has AVX2 and FMA (`step_inner`).
-            unsafe { self.plain_pass_avx2(&cfg, inv_tau, hs, taud, tol) }
+            unsafe { self.plain_pass_avx2(&cfg, inv_tau, inv_next, hs, taud, tol) }
         } else {
-            self.plain_pass(&cfg, inv_tau, hs, taud, tol)
+            self.plain_pass(&cfg, inv_tau, inv_next, hs, taud, tol)
         };
         #[cfg(not(target_arch = "x86_64"))]
-        let (rests, finite) = self.plain_pass(&cfg, inv_tau, hs, taud, tol);
+        let (rests, finite) = self.plain_pass(&cfg, inv_tau, inv_next, hs, taud, tol);
         self.at_rest = rests && self.forcing_spent();
         self.out_x = self.x;
         self.out_tau = tau;
@@ -764,7 +778,10 @@ impl Stepper {
         }
         #[cfg(not(target_arch = "x86_64"))]
         self.update_forcing();
-        self.clock.previous = tau;
+        self.clock.tau = next;
+        self.over_limit = false;
+        // Without coupling terms or limits the spring always pulls on to the goal.
+        self.blocked = false;
         self.steps += 1;
         if finite && self.x.is_finite() {
             return Ok(());
@@ -779,6 +796,7 @@ impl Stepper {
         &mut self,
         cfg: &DmpConfig,
         inv_tau: f64,
+        inv_next: f64,
         hs: f64,
         taud: f64,
         tol: f64,
@@ -800,7 +818,7 @@ impl Stepper {
             out_y[d] = y0;
             out_yd[d] = z0 * inv_tau;
             explicit_step(&mut y[d], &mut z[d], h, inv_tau, hs);
-            out_ydd[d] = acceleration_at(h, z0, taud, inv_tau);
+            out_ydd[d] = acceleration_at(h, z0, taud, inv_tau, inv_next);
             finite &= y[d].is_finite() & z[d].is_finite() & out_ydd[d].is_finite();
         }
         (rests, finite)
@@ -815,6 +833,7 @@ impl Stepper {
         &mut self,
         cfg: &DmpConfig,
         inv_tau: f64,
+        inv_next: f64,
         hs: f64,
         taud: f64,
         tol: f64,
@@ -829,6 +848,7 @@ impl Stepper {
             c(taud),
             c(tol),
         );
+        let inv_next_v = c(inv_next);
         let (sign, inf) = (c(-0.0), c(f64::INFINITY));
         let mut rests = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
         let mut finite = rests;
@@ -870,12 +890,12 @@ impl Stepper {
             let y1 = _mm256_add_pd(y0, _mm256_mul_pd(yd, hs_v));
             let z1 = _mm256_add_pd(z0, _mm256_mul_pd(dz, hs_v));
             // acceleration_at
-            let rate = if taud == 0.0 {
-                h
+            let ydd = if taud == 0.0 {
+                _mm256_mul_pd(_mm256_mul_pd(h, inv_tau_v), inv_tau_v)
             } else {
-                _mm256_sub_pd(h, _mm256_mul_pd(taud_v, z0))
+                let rate = _mm256_sub_pd(h, _mm256_mul_pd(taud_v, z0));
+                _mm256_mul_pd(_mm256_mul_pd(rate, inv_tau_v), inv_next_v)
             };
-            let ydd = _mm256_mul_pd(_mm256_mul_pd(rate, inv_tau_v), inv_tau_v);
             let is_finite = |v| _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_andnot_pd(sign, v), inf);
             finite = _mm256_and_pd(finite, _mm256_and_pd(is_finite(y1), is_finite(z1)));
             finite = _mm256_and_pd(finite, is_finite(ydd));
@@ -928,6 +948,14 @@ impl Stepper {
         }
         self.h_sub = h_sub;
         self.update_forcing();
+    }
+
+    /// Whether the last command's acceleration exceeds its limit (by more than rounding).
+    fn exceeds_limits(&self) -> bool {
+        self.clock
+            .coupling
+            .as_ref()
+            .is_some_and(|tc| tc.exceeded(&self.out_ydd[..self.n]))
     }
 
     fn limits_acceleration(&self) -> bool {
@@ -1003,6 +1031,20 @@ impl Stepper {
             && (0..self.n).all(|d| rests_at(self.g_target[d], self.y[d], self.z[d], tol))
     }
 
+    /// Whether the current state, whose `tau dz/dt` is `self.h`, has stopped for good without a
+    /// new goal or coupling: the forcing term spent, the goal filter settled, every scaled
+    /// velocity within `rest_tol` and every net pull too small to move the rest point by
+    /// `rest_tol` (`|h| <= alpha_z beta_z rest_tol`; a turning point has a large one).
+    #[inline(always)]
+    fn stalled(&self) -> bool {
+        let cfg = self.dmp.config();
+        let (n, tol) = (self.n, self.rest_tol);
+        let spring = cfg.alpha_z * cfg.beta_z;
+        self.forcing_spent()
+            && self.z[..n].iter().all(|z| z.abs() <= tol)
+            && self.h[..n].iter().all(|h| h.abs() <= spring * tol)
+    }
+
     /// Whether the forcing term can no longer move the state by more than `rest_tol`, the goal
     /// filter settled (the part of [`Stepper::rest`] that is not per coordinate).
     #[inline(always)]
@@ -1034,6 +1076,22 @@ impl Stepper {
     /// it by more than `rest_tol`) with the goal filter settled. False before the first step.
     pub fn done(&self) -> bool {
         self.at_rest
+    }
+    /// Whether the last command's acceleration exceeds `acceleration_max` (by more than 1e-12
+    /// relative). Temporal coupling meets the limits whenever the next command's lower bounds on
+    /// the time scale leave room (docs/method.md §2.5.4); where they do not (the paper's
+    /// feasibility condition fails, or `step` was given a coupling term that jumps), the
+    /// velocity limits win and this says so. False without acceleration limits.
+    pub fn over_limit(&self) -> bool {
+        self.over_limit
+    }
+    /// Whether the last command came to rest away from its goal: it stopped (every scaled
+    /// velocity within `rest_tol`, the net pull `|tau dz/dt|` within `alpha_z beta_z rest_tol`,
+    /// the forcing term spent, the goal filter settled) but is not [`Stepper::done`]. Something
+    /// holds it (a position limit before the goal, a coupling term): further steps repeat it
+    /// until the goal or the coupling change. False before the first step and while moving.
+    pub fn blocked(&self) -> bool {
+        self.blocked
     }
     /// Calls of `step` since the start or the last reset; the last command is at
     /// `t = (steps - 1) dt` of the stepper's clock.

@@ -147,32 +147,45 @@ impl TemporalCoupling {
         tau_min.max(tau2.sqrt())
     }
 
-    /// The time scale of the next control period, `tau_{k+1} = tau + taud dt`, and `taud`.
+    /// The time scale of the next control period, `tau_{k+1} = tau + taud dt`.
     ///
     /// `z`, `h` are the scaled velocity and `tau dz/dt` at sample k (whose acceleration is
-    /// `(h - taud z) / tau^2`), `z_next`, `h_next` those at sample k+1 (`h_next` is read only
-    /// when accelerations are limited).
+    /// `(h - taud z) / (tau tau_{k+1})`, the change of its velocity `z / tau` to the next one's),
+    /// `z_next`, `h_next` those at sample k+1 (`h_next` is read only when accelerations are
+    /// limited). `target` is the scale the clock should run at (the nominal tau, or phase
+    /// stopping's `nominal (1 + ...)`): without acceleration limits a floor, met at once; with
+    /// them approached as fast as the accelerations allow, the floor being `nominal`, so that a
+    /// measurement that jumps cannot jump the command.
     #[allow(clippy::too_many_arguments)]
     pub fn next_tau(
         &mut self,
         tau: f64,
-        tau_min: f64,
+        nominal: f64,
+        target: f64,
         z: &[f64],
         h: &[f64],
         z_next: &[f64],
         h_next: &[f64],
         dt: f64,
-    ) -> (f64, f64) {
+    ) -> f64 {
         let tau2 = tau * tau;
         // Lower bounds on tau_{k+1}: the nominal (or phase-stopped) scale and the velocities.
-        let mut tau_floor = tau_min;
+        let mut tau_floor = if self.has_acceleration {
+            nominal
+        } else {
+            target
+        };
         for (&z, &v) in z_next.iter().zip(&self.velocity_max) {
             // |z| / inf = 0 leaves an unlimited coordinate out.
             tau_floor = tau_floor.max(z.abs() / v);
         }
-        let mut taud = self.gains.nominal * (tau_min - tau);
+        let mut taud = self.gains.nominal * (target - tau);
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
         if self.has_acceleration {
+            if target > tau {
+                // Phase stopping slows the clock at once where the accelerations allow it.
+                taud = (target - tau) / dt;
+            }
             let g = &self.gains;
             let mut sigma = 0.0;
             for d in 0..z.len() {
@@ -185,10 +198,20 @@ impl TemporalCoupling {
                 if g.potential > 0.0 {
                     sigma += r * r / (1.0 - r * r).max(g.potential * g.eps);
                 }
-                if z[d] != 0.0 {
-                    let (p, q) = (h[d] / z[d], a * tau2 / z[d].abs());
-                    lo = lo.max(p - q);
-                    hi = hi.min(p + q);
+                // |h - taud z| <= a tau (tau + taud dt), linear in taud on each side:
+                // taud (z + c) >= h - a tau^2 and taud (z - c) <= h + a tau^2, c = a tau dt.
+                let c = a * tau * dt;
+                let (k, v) = (z[d] + c, h[d] - a * tau2);
+                if k > 0.0 {
+                    lo = lo.max(v / k);
+                } else if k < 0.0 {
+                    hi = hi.min(v / k);
+                }
+                let (k, v) = (z[d] - c, h[d] + a * tau2);
+                if k > 0.0 {
+                    hi = hi.min(v / k);
+                } else if k < 0.0 {
+                    lo = lo.max(v / k);
                 }
             }
             if g.potential > 0.0 {
@@ -199,8 +222,14 @@ impl TemporalCoupling {
         // The acceleration's upper bound first, then every lower bound (they win).
         taud = taud.min(hi).max(lo).max((tau_floor - tau) / dt);
         // Rounding in `(tau_floor - tau) / dt * dt` must not leave tau_{k+1} a hair below a floor.
-        let next = (tau + taud * dt).max(tau_floor);
-        (next, taud)
+        (tau + taud * dt).max(tau_floor)
+    }
+
+    /// Whether accelerations `ydd` exceed their limits by more than rounding (1e-12 relative).
+    pub fn exceeded(&self, ydd: &[f64]) -> bool {
+        ydd.iter()
+            .zip(&self.acceleration_max)
+            .any(|(y, a)| y.abs() > a * (1.0 + 1e-12))
     }
 
     /// The smallest `tau` at which the acceleration bounds of a state `(z, h)` have a common
@@ -252,7 +281,9 @@ mod tests {
     fn the_next_velocity_is_within_its_limit() {
         let mut tc = coupling(&[1.0, 2.0], None);
         let z_next = [3.0, -10.0];
-        let (tau, _) = tc.next_tau(1.0, 1.0, &[0.0; 2], &[0.0; 2], &z_next, &[0.0; 2], 1e-3);
+        let tau = tc.next_tau(
+            1.0, 1.0, 1.0, &[0.0; 2], &[0.0; 2], &z_next, &[0.0; 2], 1e-3,
+        );
         assert!((tau - 5.0).abs() < 1e-12);
         assert!(z_next[1].abs() / tau <= 2.0 * (1.0 + 1e-15));
     }
@@ -263,9 +294,10 @@ mod tests {
         let mut tc = coupling(&[f64::INFINITY; 2], Some(&a));
         let (z, h) = ([0.5, -0.2], [4.0, 1.0]);
         let tau = 1.2;
-        let (_, taud) = tc.next_tau(tau, 1.0, &z, &h, &z, &h, 1e-3);
+        let next = tc.next_tau(tau, 1.0, 1.0, &z, &h, &z, &h, 1e-3);
+        let taud = (next - tau) / 1e-3;
         for d in 0..2 {
-            let acc = (h[d] - taud * z[d]) / (tau * tau);
+            let acc = (h[d] - taud * z[d]) / (tau * next);
             assert!(acc.abs() <= a[d] * (1.0 + 1e-12), "{d}: {acc}");
         }
     }

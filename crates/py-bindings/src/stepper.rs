@@ -189,14 +189,24 @@ impl PyStepper {
         defaults(py)
     }
 
+    /// `Stepper(dmp, dt, options)`; `Stepper.__new__(cls, stepper)` is a copy of `stepper` as a
+    /// `cls` (what `copy.copy` and `copy.deepcopy` call, so that a subclass stays one).
     #[new]
-    #[pyo3(signature = (dmp, dt, options))]
+    #[pyo3(signature = (dmp, dt=None, options=None))]
     fn new(
         py: Python<'_>,
-        dmp: PyRef<'_, PyDmp>,
-        dt: f64,
-        options: SharedOptions,
+        dmp: &Bound<'_, PyAny>,
+        dt: Option<f64>,
+        options: Option<SharedOptions>,
     ) -> PyResult<Self> {
+        let (dt, options) = match (dt, options) {
+            (Some(dt), Some(options)) => (dt, options),
+            (None, None) if dmp.is_instance_of::<Self>() => {
+                return dmp.cast::<Self>()?.borrow().duplicate(py);
+            }
+            _ => return Err(invalid_input("Stepper takes a DMP, dt and the options")),
+        };
+        let dmp: PyRef<'_, PyDmp> = dmp.extract()?;
         let opts = options.at(dt);
         let inner = Stepper::new(&dmp.inner, &opts).py_err()?;
         let n = inner.n_dof();
@@ -217,6 +227,20 @@ impl PyStepper {
 }
 
 impl PyStepper {
+    /// An independent stepper in this one's state, with its own output arrays (holding this
+    /// one's last command): its steps are this one's, bit for bit.
+    fn duplicate(&self, py: Python<'_>) -> PyResult<Self> {
+        let n = self.inner.n_dof();
+        let s = Self {
+            inner: self.inner.clone(),
+            out: Outputs::new(py, [n; 3])?,
+            measured: Vec::with_capacity(n),
+            coupling: Vec::with_capacity(n),
+        };
+        s.publish(py)?;
+        Ok(s)
+    }
+
     fn publish(&self, py: Python<'_>) -> PyResult<()> {
         let (y, yd, ydd) = self.inner.output();
         self.out.write(py, 0, y)?;
@@ -256,17 +280,32 @@ fn spheres(obstacles: Option<PyReadonlyArray2<'_, f64>>) -> PyResult<Vec<SphereO
 
 #[pymethods]
 impl PyCartesianStepper {
+    /// As [`PyStepper::new`]: `CartesianStepper.__new__(cls, stepper)` is a copy.
     #[new]
-    #[pyo3(signature = (dmp, dt, options, obstacles, obstacle_gain, obstacle_beta))]
+    #[pyo3(signature = (dmp, dt=None, options=None, obstacles=None, obstacle_gain=None, obstacle_beta=None))]
     fn new(
         py: Python<'_>,
-        dmp: PyRef<'_, PyCartesianDmp>,
-        dt: f64,
-        options: SharedOptions,
+        dmp: &Bound<'_, PyAny>,
+        dt: Option<f64>,
+        options: Option<SharedOptions>,
         obstacles: Option<PyReadonlyArray2<'_, f64>>,
-        obstacle_gain: f64,
-        obstacle_beta: f64,
+        obstacle_gain: Option<f64>,
+        obstacle_beta: Option<f64>,
     ) -> PyResult<Self> {
+        let (dt, options, obstacle_gain, obstacle_beta) =
+            match (dt, options, obstacle_gain, obstacle_beta) {
+                (Some(dt), Some(options), Some(gain), Some(beta)) => (dt, options, gain, beta),
+                (None, None, None, None) if obstacles.is_none() && dmp.is_instance_of::<Self>() => {
+                    return dmp.cast::<Self>()?.borrow().duplicate(py);
+                }
+                _ => {
+                    return Err(invalid_input(
+                        "CartesianStepper takes a CartesianDMP, dt, the options, obstacles and \
+                         the obstacle gains",
+                    ));
+                }
+            };
+        let dmp: PyRef<'_, PyCartesianDmp> = dmp.extract()?;
         let opts = CartesianStepperOptions {
             base: options.at(dt),
             obstacles: spheres(obstacles)?,
@@ -304,6 +343,18 @@ impl PyCartesianStepper {
 }
 
 impl PyCartesianStepper {
+    /// As [`PyStepper::duplicate`].
+    fn duplicate(&self, py: Python<'_>) -> PyResult<Self> {
+        let s = Self {
+            inner: self.inner.clone(),
+            out: Outputs::new(py, [7, 6, 6])?,
+            measured: Vec::with_capacity(7),
+            coupling: Vec::with_capacity(6),
+        };
+        s.publish(py)?;
+        Ok(s)
+    }
+
     fn publish(&self, py: Python<'_>) -> PyResult<()> {
         let (pose, v, a) = self.inner.output();
         self.out.write(py, 0, pose)?;
@@ -340,6 +391,26 @@ macro_rules! stepper_methods {
                     .py_err()?;
                 self.publish(py)?;
                 Ok(self.out.tuple(py))
+            }
+
+            /// An independent copy in this stepper's state (the core stepper is plain data,
+            /// so a shallow copy is a deep one): its next steps equal this one's bit for bit.
+            fn __copy__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+                // The base class's constructor with the caller's class: a JointStepper's copy
+                // is a JointStepper, without its Python constructor's arguments.
+                slf.py()
+                    .get_type::<Self>()
+                    .getattr("__new__")?
+                    .call1((slf.get_type(), slf))
+            }
+
+            fn __deepcopy__<'py>(
+                slf: &Bound<'py, Self>,
+                memo: &Bound<'py, PyAny>,
+            ) -> PyResult<Bound<'py, PyAny>> {
+                // Nothing inside refers to another Python object: `memo` has nothing to share.
+                let _ = memo;
+                Self::__copy__(slf)
             }
 
             #[pyo3(signature = (start=None))]
@@ -382,6 +453,17 @@ macro_rules! stepper_methods {
             }
             fn done(&self) -> bool {
                 self.inner.done()
+            }
+            /// Whether the last command's acceleration exceeds `acceleration_max` (where the
+            /// temporal coupling's feasibility condition fails; docs/method.md §2.5.4).
+            fn over_limit(&self) -> bool {
+                self.inner.over_limit()
+            }
+            /// Whether the last command came to rest away from its goal (an obstacle, a limit
+            /// or a coupling holds it): further steps repeat it until the goal, the obstacles
+            /// or the coupling change.
+            fn blocked(&self) -> bool {
+                self.inner.blocked()
             }
             #[getter]
             fn steps(&self) -> u64 {
