@@ -34,6 +34,7 @@ pub mod quaternion;
 pub mod rollout;
 pub mod stepper;
 pub mod temporal_coupling;
+pub mod via_points;
 
 pub use basis::Basis;
 pub use cartesian::{
@@ -52,3 +53,4 @@ pub use periodic::{PeriodicConfig, PeriodicDmp, rollout_batch_periodic};
 pub use periodic_cartesian::{PeriodicCartesianDmp, rollout_batch_periodic_cartesian};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};
 pub use stepper::{Stepper, StepperOptions};
+pub use via_points::through_via_points;
