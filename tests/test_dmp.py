@@ -152,3 +152,50 @@ def test_integer_inputs_are_converted(demo):
     y = (t**2).astype(np.int32)
     dmp = dmprs.DMP.fit(t, y, 10)
     assert dmp.tau == 100.0 and dmp.goal[0] == 10000.0
+
+
+# --- via-points ----------------------------------------------------------------------------------
+
+def _least_norm_via_points(dmp, times, positions, dt):
+    """The least-norm weight change by numpy, from rollouts through the public API: the rollout
+    is linear in the weights, so each weight's impulse response is a rollout of that weight alone.
+    """
+    k = np.rint(np.asarray(times) / dt).astype(int)
+    duration = k.max() * dt
+    base = dmp.rollout(dt, duration).y[k]
+    jac = np.empty((len(k), dmp.n_basis))
+    for i in range(dmp.n_basis):
+        unit = dmprs.DMP(np.eye(dmp.n_basis)[i : i + 1], [0.0], [0.0], dmp.tau)
+        jac[:, i] = unit.rollout(dt, duration).y[k, 0]
+    dw, *_ = np.linalg.lstsq(jac, np.asarray(positions) - base, rcond=None)  # least norm
+    return dmp.weights + dw.T
+
+
+def test_via_points_are_met_with_the_least_change_of_the_weights(demo):
+    t, y = demo
+    dmp = dmprs.DMP.fit(t, y, n_basis=25)
+    times = [0.25, 0.6]
+    positions = dmp.rollout(0.001).y[[250, 600]] + np.array([[0.05, -0.1, 0.0, 0.2, 0.1, 0.0, -0.05][: dmp.n_dof],
+                                                                [-0.1, 0.0, 0.1, 0.0, 0.05, 0.1, 0.0][: dmp.n_dof]])
+    moved = dmp.with_via_points(times, positions)
+    tr = moved.rollout(0.001)
+    np.testing.assert_allclose(tr.y[[250, 600]], positions, atol=1e-9)
+    np.testing.assert_allclose(moved.weights, _least_norm_via_points(dmp, times, positions, 0.001),
+                               rtol=1e-8, atol=1e-8 * np.abs(moved.weights).max())
+    # at a finer step the via-points are met to the integrator's order
+    fine = moved.rollout(0.0001)
+    assert np.abs(fine.y[[2500, 6000]] - positions).max() < 0.01 * np.ptp(y)
+    # a via-point on the rollout itself leaves the weights as they are, bit for bit
+    assert dmp.with_via_points([0.4], dmp.rollout(0.001).y[[400]]) == dmp
+
+
+def test_via_points_that_cannot_be_met_are_refused_by_name():
+    dmp = dmprs.DMP(np.ones((1, 10)), [1.0], [0.0], 1.0)
+    with pytest.raises(dmprs.InvalidInputError, match="times"):
+        dmp.with_via_points([0.0], [0.5])
+    with pytest.raises(dmprs.InvalidInputError, match="times"):
+        dmp.with_via_points([0.5, 0.5001], [0.5, 0.6])
+    with pytest.raises(dmprs.InvalidInputError, match="positions"):
+        dmp.with_via_points([0.5], [[0.5, 0.6]])
+    with pytest.raises(dmprs.InvalidInputError, match="positions"):
+        dmp.with_via_points([0.5], [np.nan])

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs import _core
-from dmprs._arrays import as_count, as_float_array
+from dmprs._arrays import as_count, as_float_array, as_scalar
 from dmprs.errors import InvalidInputError
 from dmprs.primitive import DiscretePrimitive, Parameters, constants, rollout_options
 from dmprs.stepper import JointStepper
@@ -147,3 +147,25 @@ class DMP(DiscretePrimitive):
     def with_start(self, start: ArrayLike) -> DMP:
         """The same movement from a new start position."""
         return DMP._wrap(self._core.with_start(np.atleast_1d(as_float_array(start, "start", (0, 1)))))
+
+    def with_via_points(self, times: ArrayLike, positions: ArrayLike, dt: float = 0.001) -> DMP:
+        """The same movement made to pass ``positions`` at ``times`` (s), with its weights changed
+        as little as possible (least norm per DOF; docs/method.md §2.7).
+
+        The rollout is linear in the weights, so the via-points are met exactly (to rounding) by
+        ``rollout(dt)`` at the samples nearest ``times``, and to the integrator's order at another
+        ``dt``. A via-point already on the rollout changes nothing.
+
+        Args:
+            times: ``(V,)`` times after the start (s), on different samples of the rollout at
+                ``dt``, early enough that the forcing term still acts.
+            positions: ``(V, D)`` positions, or ``(V,)`` for a one-DOF DMP.
+            dt: the rollout step the via-points are met at.
+        """
+        tt = np.atleast_1d(as_float_array(times, "times", (0, 1)))
+        pp = as_float_array(positions, "positions", (1, 2))
+        pp = pp.reshape(-1, 1) if pp.ndim == 1 and self.n_dof == 1 else np.atleast_2d(pp)
+        if pp.shape != (tt.shape[0], self.n_dof):
+            raise InvalidInputError(f"positions has shape {pp.shape}, expected ({tt.shape[0]}, {self.n_dof}): "
+                                    "one row per time, one column per DOF")
+        return DMP._wrap(self._core.with_via_points(tt, pp, as_scalar(dt, "dt", positive=True)))

@@ -1,7 +1,7 @@
 //! `dmprs._core.Dmp` and `rollout_batch`: numpy in, numpy out. `dmprs.DMP` (Python) wraps these
 //! and documents them; the arrays reaching here are already float64 and of the right rank.
 
-use dmp_core::{Demonstration, Dmp, RolloutOptions, Trajectory, rollout_batch};
+use dmp_core::{Demonstration, Dmp, RolloutOptions, Trajectory, rollout_batch, through_via_points};
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
@@ -137,6 +137,20 @@ impl PyDmp {
     fn with_goal(&self, goal: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
         Ok(Self {
             inner: self.inner.with_goal(vector("goal", &goal)?).py_err()?,
+        })
+    }
+
+    /// `positions` `(V, D)` at `times` `(V,)`, for rollouts at `dt`.
+    fn with_via_points(
+        &self,
+        times: PyReadonlyArray1<'_, f64>,
+        positions: PyReadonlyArray2<'_, f64>,
+        dt: f64,
+    ) -> PyResult<Self> {
+        let times = contiguous("times", &times)?;
+        let positions = time_major("positions", &positions)?;
+        Ok(Self {
+            inner: through_via_points(&self.inner, times, &positions, dt).py_err()?,
         })
     }
 
