@@ -150,7 +150,7 @@ class DMP(DiscretePrimitive):
 
     def with_via_points(self, times: ArrayLike, positions: ArrayLike, dt: float = 0.001) -> DMP:
         """The same movement made to pass ``positions`` at ``times`` (s), with its weights changed
-        as little as possible (least norm per DOF; docs/method.md §2.7).
+        as little as possible (least norm per DOF; docs/method.md §2.6).
 
         The rollout is linear in the weights, so the via-points are met exactly (to rounding) by
         ``rollout(dt)`` at the samples nearest ``times``, and to the integrator's order at another

@@ -1,5 +1,5 @@
 //! Via-points: the least change of a DMP's weights that makes its rollout pass given positions
-//! at given times (docs/method.md §2.7).
+//! at given times (docs/method.md §2.6).
 //!
 //! A rollout is linear in the weights: eqs. 1-3 are linear in `(g, y0, w)` and explicit Euler
 //! keeps them so, so the sample `k` of DOF `d` is `y_k,d(w) = y_k,d(w_0) + sum_i J_ki dw_i,d`,
