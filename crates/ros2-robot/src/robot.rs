@@ -102,7 +102,8 @@ pub struct RobotConfig {
     pub cartesian_controller: String,
     /// Named signal topics the simulation publishes.
     pub signals: Vec<(String, SignalKind)>,
-    /// Advertise and use the loopback interface only (127.0.0.1).
+    /// Advertise, discover and send on the loopback interface only (127.0.0.1). RustDDS still
+    /// binds its receiving sockets to 0.0.0.0 (it offers no way to bind them to an interface).
     pub loopback_only: bool,
 }
 
