@@ -281,6 +281,21 @@ def test_two_action_clients_of_one_node_share_its_topics(robot: RobotNode, node:
         first.send_goal(m.JointTrajectory(), WAIT)
 
 
+def test_a_topic_trajectory_carries_its_start_stamp_to_the_robot(robot: RobotNode, node: Node) -> None:
+    # joint_trajectory_controller starts a trajectory at its header stamp (zero: as it arrives)
+    topic = node.create_publisher(m.JointTrajectory, f"/{CONTROLLER}/joint_trajectory")
+    assert topic.wait_for_subscribers(1, WAIT)
+    time.sleep(0.2)
+    sent = trajectory(JOINTS, [0.5], np.array([[0.1, 0.2, 0.3]]))
+    sent.header = m.Header(stamp=m.Time(sec=1234, nanosec=500_000_000), frame_id="")
+    topic.publish(sent)
+    deadline, received = time.monotonic() + WAIT, []
+    while not received and time.monotonic() < deadline:
+        received = robot.poll_trajectories()
+        time.sleep(0.01)
+    assert [r.stamp for r in received] == [1234.5]
+
+
 def test_arguments_of_the_wrong_kind_or_size_are_dmprs_errors_naming_them(robot: RobotNode) -> None:
     # a huge or non-integer id or code, integer arrays: the argument named, never Python's
     # OverflowError or TypeError

@@ -60,6 +60,13 @@ pub struct PyRobotTrajectory {
 
 #[pymethods]
 impl PyRobotTrajectory {
+    /// The header stamp (s) on the robot's clock: when the trajectory starts, 0.0 meaning as
+    /// soon as it arrives (as joint_trajectory_controller reads it).
+    #[getter]
+    fn stamp(&self) -> f64 {
+        self.arrays.stamp
+    }
+
     /// Each point's time_from_start (s).
     #[getter]
     fn times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {

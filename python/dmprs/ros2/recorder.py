@@ -133,6 +133,12 @@ class JointStateRecorder:
         self._last = (t, arrival)
         self._rows.append((t, q, v))
 
+    @property
+    def latest_stamp(self) -> float | None:
+        """The stamp of the last sample kept (the robot's clock as last seen), None before one."""
+        last = self._last
+        return None if last is None else last[0]
+
     def _reject(self, count: int = 1) -> None:
         self.skipped += count
         self.implausible += count
