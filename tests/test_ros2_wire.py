@@ -13,7 +13,7 @@ import time
 import numpy as np
 import pytest
 
-from dmprs._core import RobotNode, Ros2JointStateListener
+from dmprs._core import RobotNode, Ros2GoalClient, Ros2JointStateListener
 from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import (
     CLOCK,
@@ -30,6 +30,7 @@ CONTROLLER = "joint_trajectory_controller"
 ACTION = f"/{CONTROLLER}/follow_joint_trajectory"
 FJT = "control_msgs/action/FollowJointTrajectory"
 WAIT = 5.0  # seconds; discovery on loopback takes well under one
+MAX_UNFINISHED_GOALS = 64  # the robot node's bound (ros2_robot::goals::MAX_UNFINISHED_GOALS)
 
 @pytest.fixture
 def robot(domain_id: int):
@@ -316,6 +317,60 @@ def test_arguments_of_the_wrong_kind_or_size_are_dmprs_errors_naming_them(robot:
         robot.publish_feedback(bytes(16), 0.0, np.arange(3), [0, 0, 0])
     with pytest.raises(InvalidInputError, match="actual"):
         robot.publish_feedback(bytes(16), 0.0, np.zeros(3), "abc")
+
+
+def test_goals_beyond_the_unfinished_limit_are_rejected_on_the_wire(robot: RobotNode, domain_id: int) -> None:
+    client = Ros2GoalClient(domain_id, ACTION)
+    assert client.wait_for_server(WAIT)
+    # (a request sent as the server is matched may go unanswered: None, not accepted)
+    answers = [client.send_goal(JOINTS, np.array([0.5]), np.zeros((1, 3)), WAIT) for _ in range(MAX_UNFINISHED_GOALS + 8)]
+    assert answers.count(True) == MAX_UNFINISHED_GOALS and answers[-6:] == [False] * 6, answers
+
+
+ROBOT = """
+import sys
+from dmprs._core import RobotNode
+robot = RobotNode(int(sys.argv[1]), "jtc", ["a"])
+print("ready", flush=True)
+finished = 0
+while True:
+    goal = robot.poll_goal(1.0)
+    if goal is None:
+        continue
+    robot.finish_goal(goal.id, 4)
+    finished += 1
+    if finished % 200 == 0:
+        rss = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmRSS"))
+        print(finished, rss, flush=True)
+"""
+#: s: longer than RustDDS's writers take to drop the samples they need not keep (6 s)
+CACHE_CLEANING = 8.0
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads the robot's memory from /proc")
+def test_the_robot_nodes_memory_does_not_grow_with_finished_goals(domain_id: int) -> None:
+    # a client that does not subscribe to the status topic, so nothing acknowledges the status
+    # arrays of its transient-local writer: batches of goals, each after the writer has dropped
+    # what it need not keep, take no more memory than the first
+    robot = subprocess.Popen([sys.executable, "-c", ROBOT, str(domain_id)], stdout=subprocess.PIPE, text=True)
+    rss: dict[int, int] = {}
+    try:
+        assert robot.stdout is not None and robot.stdout.readline().startswith("ready")
+        client = Ros2GoalClient(domain_id, "/jtc/follow_joint_trajectory")
+        assert client.wait_for_server(WAIT)
+        for goals in (800, 800, 810):  # (the first request may go unanswered)
+            for _ in range(goals):
+                client.send_goal(["a"], np.array([0.1]), np.zeros((1, 1)), WAIT)
+            time.sleep(CACHE_CLEANING)
+        while 2400 not in rss:
+            finished, kilobytes = map(int, robot.stdout.readline().split())
+            rss[finished] = kilobytes
+    finally:
+        robot.kill()
+        robot.wait()
+    # the third batch: several kilobytes a goal while every status array was kept, now what the
+    # arrays of the batches before left free
+    assert rss[2400] - rss[1600] < 1024, rss
 
 
 SOCKETS = """
