@@ -18,6 +18,7 @@ from dmprs.errors import InvalidInputError
 from dmprs.ros2 import Node
 from dmprs.ros2 import messages as m
 from dmprs.ros2.adapter import Ros2TrajectoryAdapter, SignalTopic, signal_specs
+from dmprs.ros2.recorder import JointStateRecorder
 from dmprs.trajectory import Trajectory
 from tests.ros2_helpers import ControllerThread
 
@@ -357,3 +358,26 @@ def test_one_signal_topic_cannot_be_of_two_types(domain_id):
     with pytest.raises(InvalidInputError, match="given twice"):
         RobotNode(domain_id, CONTROLLER.strip("/"), ROBOT_JOINTS, float_signals=["/scale/reading"],
                   point_signals=["/scale/reading"])
+
+
+@pytest.mark.parametrize("stray_stamp", [2**31 - 1, 1.0])
+def test_a_stray_joint_state_before_the_robots_first_is_skipped_and_counted(robot, domain_id, stray_stamp):
+    # another publisher's sample, stamped decades ahead of the robot's clock or long before it,
+    # arrives before the robot's first: the recording is the robot's alone
+    with Node("recording", domain_id) as node, Node("stray_states", domain_id) as other:
+        stray = other.create_publisher(m.JointState, "/joint_states")
+        recorder = JointStateRecorder(node, list(JOINTS)).start()
+        assert stray.wait_for_subscribers(1, 5.0)
+        sec, nanosec = divmod(int(stray_stamp * 1e9), 1_000_000_000)
+        stray.publish(m.JointState(header=m.Header(stamp=m.Time(sec=sec, nanosec=nanosec), frame_id=""),
+                                   name=ROBOT_JOINTS, position=[0.1, 0.1, 0.1], velocity=[], effort=[]))
+        time.sleep(0.3)
+        for k in range(100):
+            robot.publish_joint_state(CLOCK0 + k / RATE, [0.0, 0.0, k / 100])
+            time.sleep(1 / RATE)
+        time.sleep(0.2)
+        recording = recorder.stop()
+    assert recorder.implausible == 1
+    assert len(recording.times) >= 50
+    assert CLOCK0 <= recording.times.min() and recording.times.max() < CLOCK0 + 100 / RATE
+    assert np.all(np.diff(recording.times) > 0)

@@ -13,6 +13,7 @@ import threading
 import time
 from typing import Self
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -20,8 +21,12 @@ from dmprs.adapters import Status
 from dmprs.cli import main
 from dmprs.experiments import arm_pouring, arm_throwing
 from dmprs.loop import learn
-from dmprs.ros2.served import serve
+from dmprs.ros2 import Node, messages
+from dmprs.ros2.action import ActionClient
+from dmprs.ros2.adapter import FOLLOW_JOINT_TRAJECTORY, joint_trajectory
+from dmprs.ros2.served import serve, throwing_adapter
 from dmprs.runlog import RunLog
+from dmprs.tasks.arm_throwing import DEMOS, ArmThrowingAdapter, throw_trajectory
 
 TARGET = (1.05, 0.12)  # m: between the demonstrations' landings
 SPEED = 10.0  # the served robot plays each motion back at 10 x real time
@@ -147,3 +152,56 @@ def test_dmprs_learn_with_robot_ros2(domain_id):
                                            "--domain-id", str(domain_id), "--max-trials", "3"])
     assert result.exit_code == 0, result.output
     assert "success in trial 1" in result.output
+
+
+def throw():
+    return throw_trajectory(*DEMOS[2])
+
+
+def test_the_served_arm_moves_through_the_joint_trajectory_topic_as_through_the_action(domain_id):
+    with Served(domain_id):
+        with throwing_adapter(domain_id, mode="topic") as by_topic:
+            topic = by_topic.execute(throw(), timeout_s=60.0)
+        with throwing_adapter(domain_id) as by_action:
+            action = by_action.execute(throw(), timeout_s=60.0)
+    assert action.status is Status.OK, action.message
+    assert topic.status is Status.OK, topic.message
+    # the same times reach the scene either way: the same throw, bit for bit
+    assert (topic.signals["landing_x"], topic.signals["landing_y"]) == (
+        action.signals["landing_x"], action.signals["landing_y"])
+    # the recording covers the motion to its end (the action's also has the wait before it)
+    assert topic.executed is not None and action.executed is not None
+    assert topic.executed.duration >= throw().duration - 0.05
+    np.testing.assert_allclose(topic.executed.y[-1], action.executed.y[-1], atol=0.01)
+
+
+def test_a_trajectory_on_the_topic_replaces_the_running_goal(domain_id):
+    outcomes = {}
+    with (Served(domain_id, speed=1.0), throwing_adapter(domain_id) as by_action,
+          throwing_adapter(domain_id, mode="topic") as by_topic):
+        first = threading.Thread(target=lambda: outcomes.setdefault("goal", by_action.execute(throw(), timeout_s=60.0)))
+        first.start()
+        time.sleep(0.5)  # the goal is simulated or played back at real time by now
+        outcomes["topic"] = by_topic.execute(throw(), timeout_s=60.0)
+        first.join(60.0)
+    assert outcomes["goal"].status is Status.ERROR
+    assert "replaced by a trajectory on /joint_trajectory_controller/joint_trajectory" in outcomes["goal"].message
+    assert outcomes["topic"].status is Status.OK, outcomes["topic"].message
+
+
+def test_a_goal_canceled_while_it_waits_never_runs(domain_id):
+    joints = ArmThrowingAdapter().spec.dof_names
+    goal = messages.FollowJointTrajectory_Goal(trajectory=joint_trajectory(joints, throw()))
+    with Served(domain_id, speed=1.0), Node("client", domain_id) as node:
+        client = ActionClient(node, FOLLOW_JOINT_TRAJECTORY, "/joint_trajectory_controller/follow_joint_trajectory")
+        running = client.send_goal(goal, 10.0)
+        waiting = client.send_goal(goal, 10.0)
+        assert running.accepted and waiting.accepted
+        answer = client.cancel(waiting, 10.0)
+        assert answer.return_code == 0  # accepted for canceling
+        assert client.result(running, 60.0)[0] == messages.GoalStatus.STATUS_SUCCEEDED
+        ran = time.monotonic()
+        status, _ = client.result(waiting, 60.0)
+        # canceled when its turn came, at once: not after a throw played back at real time
+        assert status == messages.GoalStatus.STATUS_CANCELED
+        assert time.monotonic() - ran < 0.5

@@ -4,13 +4,16 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import threading
 import time
 
 import numpy as np
 import pytest
 
-from dmprs._core import RobotNode
+from dmprs._core import RobotNode, Ros2GoalClient, Ros2JointStateListener
 from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import (
     CLOCK,
@@ -27,6 +30,7 @@ CONTROLLER = "joint_trajectory_controller"
 ACTION = f"/{CONTROLLER}/follow_joint_trajectory"
 FJT = "control_msgs/action/FollowJointTrajectory"
 WAIT = 5.0  # seconds; discovery on loopback takes well under one
+MAX_UNFINISHED_GOALS = 64  # the robot node's bound (ros2_robot::goals::MAX_UNFINISHED_GOALS)
 
 @pytest.fixture
 def robot(domain_id: int):
@@ -276,3 +280,149 @@ def test_two_action_clients_of_one_node_share_its_topics(robot: RobotNode, node:
         assert client.result(handle, WAIT)[0] == m.GoalStatus.STATUS_SUCCEEDED
     with pytest.raises(InvalidInputError, match="takes FollowJointTrajectory_Goal"):
         first.send_goal(m.JointTrajectory(), WAIT)
+
+
+def test_a_topic_trajectory_carries_its_start_stamp_to_the_robot(robot: RobotNode, node: Node) -> None:
+    # joint_trajectory_controller starts a trajectory at its header stamp (zero: as it arrives)
+    topic = node.create_publisher(m.JointTrajectory, f"/{CONTROLLER}/joint_trajectory")
+    assert topic.wait_for_subscribers(1, WAIT)
+    time.sleep(0.2)
+    sent = trajectory(JOINTS, [0.5], np.array([[0.1, 0.2, 0.3]]))
+    sent.header = m.Header(stamp=m.Time(sec=1234, nanosec=500_000_000), frame_id="")
+    topic.publish(sent)
+    deadline, received = time.monotonic() + WAIT, []
+    while not received and time.monotonic() < deadline:
+        received = robot.poll_trajectories()
+        time.sleep(0.01)
+    assert [r.stamp for r in received] == [1234.5]
+
+
+def test_arguments_of_the_wrong_kind_or_size_are_dmprs_errors_naming_them(robot: RobotNode) -> None:
+    # a huge or non-integer id or code, integer arrays: the argument named, never Python's
+    # OverflowError or TypeError
+    for bad in (2**70, 1.5, True):
+        with pytest.raises(InvalidInputError, match="domain_id"):
+            RobotNode(bad, CONTROLLER, JOINTS)
+    with pytest.raises(InvalidInputError, match="status"):
+        robot.finish_goal(bytes(16), 2**70)
+    with pytest.raises(InvalidInputError, match="error_code"):
+        robot.finish_goal(bytes(16), m.GoalStatus.STATUS_SUCCEEDED, 2**70)
+    with pytest.raises(InvalidInputError, match="depth"):
+        Ros2JointStateListener(0, depth=-1)
+    robot.publish_pose(0.0, np.array([0, 0, 0, 1, 0, 0, 0]))  # integers are coordinates
+    robot.publish_pose(0.0, [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
+    with pytest.raises(InvalidInputError, match="pose"):
+        robot.publish_pose(0.0, np.zeros(7, dtype=complex))
+    with pytest.raises(AdapterError, match="not known"):  # the arrays were read: the goal is what is wrong
+        robot.publish_feedback(bytes(16), 0.0, np.arange(3), [0, 0, 0])
+    with pytest.raises(InvalidInputError, match="actual"):
+        robot.publish_feedback(bytes(16), 0.0, np.zeros(3), "abc")
+
+
+def test_goals_beyond_the_unfinished_limit_are_rejected_on_the_wire(robot: RobotNode, domain_id: int) -> None:
+    client = Ros2GoalClient(domain_id, ACTION)
+    assert client.wait_for_server(WAIT)
+    # (a request sent as the server is matched may go unanswered: None, not accepted)
+    answers = [client.send_goal(JOINTS, np.array([0.5]), np.zeros((1, 3)), WAIT) for _ in range(MAX_UNFINISHED_GOALS + 8)]
+    assert answers.count(True) == MAX_UNFINISHED_GOALS and answers[-6:] == [False] * 6, answers
+
+
+ROBOT = """
+import sys
+from dmprs._core import RobotNode
+robot = RobotNode(int(sys.argv[1]), "jtc", ["a"])
+print("ready", flush=True)
+finished = 0
+while True:
+    goal = robot.poll_goal(1.0)
+    if goal is None:
+        continue
+    robot.finish_goal(goal.id, 4)
+    finished += 1
+    if finished % 200 == 0:
+        rss = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmRSS"))
+        print(finished, rss, flush=True)
+"""
+#: s: longer than RustDDS's writers take to drop the samples they need not keep (6 s)
+CACHE_CLEANING = 8.0
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads the robot's memory from /proc")
+def test_the_robot_nodes_memory_does_not_grow_with_finished_goals(domain_id: int) -> None:
+    # a client that does not subscribe to the status topic, so nothing acknowledges the status
+    # arrays of its transient-local writer: batches of goals, each after the writer has dropped
+    # what it need not keep, take no more memory than the first
+    robot = subprocess.Popen([sys.executable, "-c", ROBOT, str(domain_id)], stdout=subprocess.PIPE, text=True)
+    rss: dict[int, int] = {}
+    try:
+        assert robot.stdout is not None and robot.stdout.readline().startswith("ready")
+        client = Ros2GoalClient(domain_id, "/jtc/follow_joint_trajectory")
+        assert client.wait_for_server(WAIT)
+        for goals in (800, 800, 810):  # (the first request may go unanswered)
+            for _ in range(goals):
+                client.send_goal(["a"], np.array([0.1]), np.zeros((1, 1)), WAIT)
+            time.sleep(CACHE_CLEANING)
+        while 2400 not in rss:
+            finished, kilobytes = map(int, robot.stdout.readline().split())
+            rss[finished] = kilobytes
+    finally:
+        robot.kill()
+        robot.wait()
+    # the third batch: several kilobytes a goal while every status array was kept, now what the
+    # arrays of the batches before left free
+    assert rss[2400] - rss[1600] < 1024, rss
+
+
+SOCKETS = """
+import os, socket, struct, sys, time
+from dmprs._core import RobotNode
+from dmprs.ros2 import LOOPBACK_CONFIG, Node
+if sys.argv[1] == "robot":
+    entity = RobotNode(int(sys.argv[2]), "jtc", ["a"], loopback_only=True)
+else:
+    entity = Node("sockets", int(sys.argv[2]), config=LOOPBACK_CONFIG)
+time.sleep(0.5)
+inodes = set()
+for fd in os.listdir("/proc/self/fd"):
+    try:
+        target = os.readlink(f"/proc/self/fd/{fd}")
+    except OSError:
+        continue
+    if target.startswith("socket:["):
+        inodes.add(target[8:-1])
+for table in ("/proc/net/udp", "/proc/net/udp6"):
+    with open(table) as f:
+        next(f)
+        for line in f:
+            fields = line.split()
+            if fields[9] in inodes:
+                address, port = fields[1].split(":")
+                if len(address) == 8:
+                    address = socket.inet_ntoa(struct.pack("<I", int(address, 16)))
+                print(address, int(port, 16))
+"""
+
+
+def udp_sockets(side: str, domain_id: int) -> list[str]:
+    """The local addresses of the UDP sockets a process opens for ``side`` (the Rust robot node or
+    a Cyclone node) on loopback: what the kernel shows, not what the stack announces.
+    """
+    done = subprocess.run([sys.executable, "-c", SOCKETS, side, str(domain_id)], capture_output=True, text=True,
+                          timeout=60, check=True)
+    return [line.split()[0] for line in done.stdout.splitlines()]
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/net/udp"), reason="reads the sockets from /proc")
+@pytest.mark.xfail(strict=True, reason="RustDDS 0.15 binds every listener and its unicast sender to 0.0.0.0; "
+                   "with_only_networks filters only what is advertised (no API binds them to 127.0.0.1)")
+def test_every_socket_of_a_loopback_robot_node_is_on_127_0_0_1(domain_id: int) -> None:
+    addresses = udp_sockets("robot", domain_id)
+    assert addresses and set(addresses) == {"127.0.0.1"}, addresses
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/net/udp"), reason="reads the sockets from /proc")
+@pytest.mark.xfail(strict=True, reason="Cyclone DDS 11.0.1 binds its unicast receive sockets to the wildcard "
+                   "address whatever its configuration; only the transmit socket follows NetworkInterface")
+def test_every_socket_of_a_loopback_cyclone_node_is_on_127_0_0_1(domain_id: int) -> None:
+    addresses = udp_sockets("cyclone", domain_id)
+    assert addresses and set(addresses) == {"127.0.0.1"}, addresses

@@ -334,7 +334,8 @@ def robot_group() -> None:
               help="arm-pouring: the liquid in the robot's bottle, in litres")
 @click.option("--liquid-seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="arm-pouring: the seed that draws the liquid's particles")
-@click.option("--loopback-only", is_flag=True, help="speak on 127.0.0.1 only")
+@click.option("--loopback-only", is_flag=True,
+              help="advertise and send on 127.0.0.1 only (the DDS sockets still bind to 0.0.0.0)")
 def serve_cmd(task: str, domain_id: int, speed: float, volume: float, liquid_seed: int, loopback_only: bool) -> None:
     """Serve TASK's simulated arm as a ROS 2 robot (a joint_trajectory_controller, /joint_states,
     /clock and the task's sensor: the landing camera or the glass's scale) until interrupted.

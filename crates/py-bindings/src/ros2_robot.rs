@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
+use pyo3::types::{PyBool, PyBytes};
 use ros2_robot::msgs::{Duration as RosDuration, JointTrajectoryPoint};
 use ros2_robot::validate::{TrajectoryArrays, controller_order};
 use ros2_robot::{GoalId, GoalStatus, RobotConfig, RobotError, SignalKind};
@@ -60,6 +60,13 @@ pub struct PyRobotTrajectory {
 
 #[pymethods]
 impl PyRobotTrajectory {
+    /// The header stamp (s) on the robot's clock: when the trajectory starts, 0.0 meaning as
+    /// soon as it arrives (as joint_trajectory_controller reads it).
+    #[getter]
+    fn stamp(&self) -> f64 {
+        self.arrays.stamp
+    }
+
     /// Each point's time_from_start (s).
     #[getter]
     fn times<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -154,25 +161,81 @@ fn point(
     }
 }
 
-/// A ROS 2 domain id as Python gives it, checked against the range every dmprs entry point takes
-/// (RTPS port arithmetic leaves 0..232), not wrapped into a `u16`.
-fn domain(domain_id: i64) -> PyResult<u16> {
-    if (0..=232).contains(&domain_id) {
-        Ok(domain_id as u16)
-    } else {
-        Err(invalid_input(format!(
-            "domain_id = {domain_id} must be an integer in 0..232"
-        )))
+/// An integer argument as Python gives it (a Python or numpy integer) within `range`, else a dmprs
+/// error naming it: not Python's TypeError for a float or OverflowError for a huge integer, and a
+/// bool is no count.
+fn integer(
+    name: &str,
+    value: &Bound<'_, PyAny>,
+    range: std::ops::RangeInclusive<i64>,
+) -> PyResult<i64> {
+    let refused = || {
+        let shown = value
+            .repr()
+            .map(|r| r.to_string())
+            .unwrap_or_else(|_| "?".into());
+        invalid_input(format!(
+            "{name} = {shown} must be an integer in {}..{}",
+            range.start(),
+            range.end()
+        ))
+    };
+    if value.is_instance_of::<PyBool>() {
+        return Err(refused());
+    }
+    match value.extract::<i64>() {
+        Ok(n) if range.contains(&n) => Ok(n),
+        _ => Err(refused()),
     }
 }
 
-fn vector(name: &str, a: Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option<Vec<f64>>> {
-    a.map(|a| {
-        a.as_slice()
-            .map(<[f64]>::to_vec)
-            .map_err(|_| invalid_input(format!("{name} must be contiguous")))
-    })
-    .transpose()
+/// A ROS 2 domain id as Python gives it, checked against the range every dmprs entry point takes
+/// (RTPS port arithmetic leaves 0..232), not wrapped into a `u16`.
+fn domain(domain_id: &Bound<'_, PyAny>) -> PyResult<u16> {
+    Ok(integer("domain_id", domain_id, 0..=232)? as u16)
+}
+
+/// control_msgs' error code: a 32-bit integer on the wire.
+fn error_code(value: &Bound<'_, PyAny>) -> PyResult<i32> {
+    Ok(integer(
+        "error_code",
+        value,
+        i64::from(i32::MIN)..=i64::from(i32::MAX),
+    )? as i32)
+}
+
+/// action_msgs' terminal goal status: STATUS_SUCCEEDED (4), STATUS_CANCELED (5), STATUS_ABORTED (6).
+fn terminal_status(value: &Bound<'_, PyAny>) -> PyResult<GoalStatus> {
+    integer("status", value, 4..=6)
+        .ok()
+        .and_then(|code| i8::try_from(code).ok())
+        .and_then(GoalStatus::from_code)
+        .filter(|s| s.is_terminal())
+        .ok_or_else(|| {
+            invalid_input(format!(
+                "status = {} is not a terminal goal status (4, 5 or 6)",
+                value
+                    .repr()
+                    .map(|r| r.to_string())
+                    .unwrap_or_else(|_| "?".into())
+            ))
+        })
+}
+
+/// A probe's history depth: at least one sample.
+fn depth(value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    Ok(integer("depth", value, 1..=i64::from(i32::MAX))? as usize)
+}
+
+/// A 1-D array argument of real numbers (any float or integer dtype), refused by name otherwise.
+fn reals(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    let mut values = Vec::new();
+    read_vector(name, value, &mut values)?;
+    Ok(values)
+}
+
+fn vector(name: &str, a: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<f64>>> {
+    a.map(|a| reals(name, a)).transpose()
 }
 
 /// Target poses as Python receives them: stamps (s), `[x, y, z, qw, qx, qy, qz]` rows, frame ids.
@@ -198,7 +261,7 @@ impl PyRobotNode {
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        domain_id: i64,
+        #[pyo3(from_py_with = domain)] domain_id: u16,
         controller: &str,
         joint_names: Vec<String>,
         node_name: &str,
@@ -209,7 +272,7 @@ impl PyRobotNode {
         point_signals: Vec<String>,
         loopback_only: bool,
     ) -> PyResult<Self> {
-        let mut config = RobotConfig::new(domain(domain_id)?, controller, joint_names);
+        let mut config = RobotConfig::new(domain_id, controller, joint_names);
         config.node_name = node_name.into();
         config.namespace = namespace.into();
         config.command_topic = command_topic.into();
@@ -311,10 +374,10 @@ impl PyRobotNode {
         &self,
         py: Python<'_>,
         stamp: f64,
-        pose: PyReadonlyArray1<'_, f64>,
+        pose: &Bound<'_, PyAny>,
         frame_id: &str,
     ) -> PyResult<()> {
-        let pose = vector("pose", Some(pose))?.unwrap_or_default();
+        let pose = reals("pose", pose)?;
         py.detach(|| self.inner.publish_pose(stamp, frame_id, &pose))
             .py_err()
     }
@@ -345,10 +408,10 @@ impl PyRobotNode {
         py: Python<'_>,
         goal_id: &[u8],
         stamp: f64,
-        desired: PyReadonlyArray1<'_, f64>,
-        actual: PyReadonlyArray1<'_, f64>,
-        desired_velocity: Option<PyReadonlyArray1<'_, f64>>,
-        actual_velocity: Option<PyReadonlyArray1<'_, f64>>,
+        desired: &Bound<'_, PyAny>,
+        actual: &Bound<'_, PyAny>,
+        desired_velocity: Option<&Bound<'_, PyAny>>,
+        actual_velocity: Option<&Bound<'_, PyAny>>,
         time_from_start: f64,
     ) -> PyResult<()> {
         let id = self::goal_id(goal_id)?;
@@ -356,12 +419,12 @@ impl PyRobotNode {
             return Err(invalid_input("time_from_start must be finite"));
         }
         let desired = point(
-            vector("desired", Some(desired))?.unwrap_or_default(),
+            reals("desired", desired)?,
             vector("desired_velocity", desired_velocity)?,
             time_from_start,
         );
         let actual = point(
-            vector("actual", Some(actual))?.unwrap_or_default(),
+            reals("actual", actual)?,
             vector("actual_velocity", actual_velocity)?,
             time_from_start,
         );
@@ -376,25 +439,11 @@ impl PyRobotNode {
         &self,
         py: Python<'_>,
         goal_id: &[u8],
-        status: i64,
-        error_code: i64,
+        #[pyo3(from_py_with = terminal_status)] status: GoalStatus,
+        #[pyo3(from_py_with = self::error_code)] error_code: i32,
         error_string: &str,
     ) -> PyResult<()> {
         let id = self::goal_id(goal_id)?;
-        let error_code = i32::try_from(error_code).map_err(|_| {
-            invalid_input(format!(
-                "error_code = {error_code} must fit a 32-bit integer"
-            ))
-        })?;
-        let status = i8::try_from(status)
-            .ok()
-            .and_then(GoalStatus::from_code)
-            .filter(|s| s.is_terminal())
-            .ok_or_else(|| {
-                invalid_input(format!(
-                    "status {status} is not a terminal goal status (4, 5 or 6)"
-                ))
-            })?;
         py.detach(|| {
             self.inner
                 .finish_goal(&id, status, error_code, error_string)
@@ -440,8 +489,12 @@ pub struct PyRos2GoalClient {
 impl PyRos2GoalClient {
     #[new]
     #[pyo3(signature = (domain_id, action, loopback_only=true))]
-    fn new(py: Python<'_>, domain_id: i64, action: &str, loopback_only: bool) -> PyResult<Self> {
-        let domain_id = domain(domain_id)?;
+    fn new(
+        py: Python<'_>,
+        #[pyo3(from_py_with = domain)] domain_id: u16,
+        action: &str,
+        loopback_only: bool,
+    ) -> PyResult<Self> {
         let inner = py
             .detach(|| ros2_robot::probe::GoalClient::new(domain_id, action, loopback_only))
             .py_err()?;
@@ -503,12 +556,11 @@ impl PyRos2JointStateListener {
     #[pyo3(signature = (domain_id, topic="/joint_states", depth=1000, loopback_only=true))]
     fn new(
         py: Python<'_>,
-        domain_id: i64,
+        #[pyo3(from_py_with = domain)] domain_id: u16,
         topic: &str,
-        depth: usize,
+        #[pyo3(from_py_with = self::depth)] depth: usize,
         loopback_only: bool,
     ) -> PyResult<Self> {
-        let domain_id = domain(domain_id)?;
         let inner = py
             .detach(|| {
                 ros2_robot::probe::JointStateListener::start(domain_id, topic, depth, loopback_only)

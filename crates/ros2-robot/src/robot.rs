@@ -22,7 +22,9 @@ use ros2_client::action_msgs::{
     CancelGoalRequest, CancelGoalResponse, CancelGoalResponseEnum, GoalInfo as RosGoalInfo,
     GoalStatus as RosGoalStatus, GoalStatusArray, GoalStatusEnum,
 };
-use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::dds::rustdds::{
+    self as rustdds, DomainParticipantBuilder, QosPolicyBuilder, TopicKind, policy,
+};
 
 use ros2_client::dds::rustdds::mio1::{Events, Interest, Poll, Token, Waker};
 use ros2_client::dds::{Context, Node, Publisher, ServiceMapping, Subscription};
@@ -63,6 +65,14 @@ fn bounded(text: &str) -> String {
     format!("{}... (cut)", &text[..end])
 }
 
+/// The status arrays the action's status writer keeps for readers that have not acknowledged
+/// them. Its durability is transient local (as rcl_action's), and RustDDS keeps every sample of
+/// such a writer that no reader has acknowledged, up to 8192 by default: all of them while no
+/// client subscribes to the status topic, or once the last one has left, each array a few
+/// kilobytes (at most `MAX_UNFINISHED_GOALS + KEEP_FINISHED_GOALS` goals). With this bound
+/// RustDDS drops the older ones each time it cleans its writers' histories (every few seconds).
+const STATUS_HISTORY: i32 = 8;
+
 /// The node thread drains every reader at this period even without an event, so an edge lost
 /// between registration and the first poll delays nothing for longer.
 const IDLE_DRAIN: StdDuration = StdDuration::from_millis(100);
@@ -102,7 +112,8 @@ pub struct RobotConfig {
     pub cartesian_controller: String,
     /// Named signal topics the simulation publishes.
     pub signals: Vec<(String, SignalKind)>,
-    /// Advertise and use the loopback interface only (127.0.0.1).
+    /// Advertise, discover and send on the loopback interface only (127.0.0.1). RustDDS still
+    /// binds its receiving sockets to 0.0.0.0 (it offers no way to bind them to an interface).
     pub loopback_only: bool,
 }
 
@@ -154,6 +165,8 @@ type Server = ActionServer<
 
 struct ActionSide {
     server: Server,
+    /// The status topic's writer: the action server's own cannot be given resource limits.
+    status: rustdds::no_key::DataWriterCdr<GoalStatusArray>,
     table: GoalTable<RmwRequestId>,
 }
 
@@ -239,6 +252,7 @@ impl RobotNode {
             builder = builder.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]);
         }
         let participant = create(builder.build(), "DDS participant")?;
+        let dds = participant.clone();
         let context = create(
             Context::from_domain_participant(participant),
             "ROS 2 context",
@@ -271,6 +285,7 @@ impl RobotNode {
             ),
             "follow_joint_trajectory action server",
         )?;
+        let status = status_writer(&dds, &action_name)?;
 
         let mut trajectory_sub: Subscription<JointTrajectory> = subscription(
             &mut node,
@@ -372,6 +387,7 @@ impl RobotNode {
         };
         let action = Arc::new(Mutex::new(ActionSide {
             server,
+            status,
             table: GoalTable::new(KEEP_FINISHED_GOALS),
         }));
         let stop = Arc::new(AtomicBool::new(false));
@@ -758,10 +774,46 @@ fn publish_statuses(side: &ActionSide) -> Result<(), RobotError> {
             status: ros_status(status),
         })
         .collect();
-    wire(
-        side.server
-            .send_goal_statuses(GoalStatusArray { status_list }),
-        "goal status",
+    match side.status.write(GoalStatusArray { status_list }, None) {
+        // a reader that has not acknowledged the last STATUS_HISTORY arrays gets the next one
+        // that fits: each array supersedes the ones before it
+        Err(rustdds::dds::WriteError::WouldBlock { .. }) => Ok(()),
+        other => wire(other, "goal status"),
+    }
+}
+
+/// The writer of `<action>/_action/status`, with rcl_action's QoS (reliable, transient local,
+/// keep last 1) and a bounded history ([`STATUS_HISTORY`]).
+fn status_writer(
+    participant: &rustdds::DomainParticipant,
+    action: &Name,
+) -> Result<rustdds::no_key::DataWriterCdr<GoalStatusArray>, RobotError> {
+    let qos = QosPolicyBuilder::new()
+        // a full history fails the write at once rather than stalling the goal's thread
+        .reliable(rustdds::Duration::ZERO)
+        .durability(policy::Durability::TransientLocal)
+        .history(policy::History::KeepLast { depth: 1 })
+        .resource_limits(policy::ResourceLimits {
+            max_samples: STATUS_HISTORY,
+            max_instances: 1,
+            max_samples_per_instance: STATUS_HISTORY,
+        })
+        .build();
+    let what = "the action's status writer";
+    // the name and type as ros2-client and rmw map them to DDS (rt<name>, <package>::msg::dds_::<type>_)
+    let topic = create(
+        participant.create_topic(
+            format!("rt{action}/_action/status"),
+            MessageTypeName::new("action_msgs", "GoalStatusArray").dds_msg_type(),
+            &qos,
+            TopicKind::NoKey,
+        ),
+        what,
+    )?;
+    let publisher = create(participant.create_publisher(&qos), what)?;
+    create(
+        publisher.create_datawriter_no_key_cdr::<GoalStatusArray>(&topic, Some(qos)),
+        what,
     )
 }
 

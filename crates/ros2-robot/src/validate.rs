@@ -77,6 +77,8 @@ pub fn check_trajectory(trajectory: &JointTrajectory, joints: &[String]) -> Resu
 /// A checked trajectory as arrays in the controller's joint order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrajectoryArrays {
+    /// The header stamp (s): when the trajectory starts; 0 means as soon as it arrives.
+    pub stamp: f64,
     /// Each point's time_from_start in seconds.
     pub times: Vec<f64>,
     /// One row per point, one column per controller joint.
@@ -114,6 +116,7 @@ pub fn controller_order(trajectory: &JointTrajectory, joints: &[String]) -> Traj
             })
     };
     TrajectoryArrays {
+        stamp: trajectory.header.stamp.seconds(),
         times: trajectory
             .points
             .iter()

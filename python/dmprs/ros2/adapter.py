@@ -194,8 +194,9 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
 
     ``spec`` declares the joints (``dof_names``, matched by name with the robot's), limits and
     signals, as for any adapter. ``mode`` is ``"action"``
-    (``<controller>/follow_joint_trajectory``) or ``"topic"`` (``<controller>/joint_trajectory``:
-    no answer comes, the motion is taken as ended when the trajectory's duration has passed).
+    (``<controller>/follow_joint_trajectory``) or ``"topic"`` (``<controller>/joint_trajectory``,
+    starting as it arrives: no answer comes, the motion is taken as ended when the robot's clock,
+    as its ``/joint_states`` stamps show, has passed the trajectory's duration since it was sent).
     ``path_tolerance`` and ``goal_tolerance`` (rad, per joint) go into the goal;
     ``goal_time_tolerance`` (s) too. ``answer_timeout`` bounds each wait for the robot
     (discovery, the goal's acceptance, ``/joint_states``, a signal); ``signals``, ``settle`` and
@@ -257,7 +258,7 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
         recorder = JointStateRecorder(self._node, list(joints), self.joint_states).start()
         try:
             status, message = (self._follow(trajectory, recorder) if self.mode == "action"
-                               else self._publish(trajectory))
+                               else self._publish(trajectory, recorder, robot_start))
             # the motion's end on this machine's clock, for signals without a header stamp
             ended = time.time()
         finally:
@@ -308,18 +309,35 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
         assert self._client is not None
         self._client.cancel(handle, self.answer_timeout)
 
-    def _publish(self, trajectory: Trajectory) -> tuple[Status, str]:
-        """The trajectory on the controller's topic; the motion ends with its duration."""
+    def _publish(self, trajectory: Trajectory, recorder: JointStateRecorder, robot_start: float) -> tuple[Status, str]:
+        """The trajectory on the controller's topic; the motion ends when the robot's clock has
+        passed its duration since the trajectory was sent. Not this machine's clock: a simulated
+        robot's runs at its own pace, and stands still while its physics computes.
+        """
         if not self._publisher.wait_for_subscribers(1, self.answer_timeout):
             return Status.ERROR, f"nothing subscribes to {self.controller}/joint_trajectory"
+        # the robot's clock as last seen just before sending: the wait above may have been long
+        # on a clock that runs faster than this machine's
+        latest = recorder.latest_stamp
+        sent = robot_start if latest is None else max(robot_start, latest)
         self._publisher.publish(joint_trajectory(self.spec.dof_names, trajectory))
-        end = time.monotonic() + float(trajectory.t[-1] - trajectory.t[0])
-        while time.monotonic() < end:
+        end = sent + float(trajectory.t[-1] - trajectory.t[0])
+        seen, since = recorder.latest_stamp, time.monotonic()
+        while True:
+            latest = recorder.latest_stamp
+            if latest is not None and latest >= end:
+                return Status.OK, ""
             if self._interrupted():
                 outcome = self._interrupted_outcome()
                 return outcome.status, outcome.message
-            time.sleep(min(_POLL, max(0.0, end - time.monotonic())))
-        return Status.OK, ""
+            if latest != seen:
+                seen, since = latest, time.monotonic()
+            elif time.monotonic() - since > self.answer_timeout:
+                if latest is None:  # nothing usable came: the recording says why
+                    return Status.OK, ""
+                return Status.ERROR, (f"the robot's clock stopped at {latest:.3f} s, before the trajectory's end at "
+                                      f"{end:.3f} s: no new {self.joint_states} stamp for {self.answer_timeout:g} s")
+            time.sleep(_POLL)
 
 
 def _ended(goal_status: int, result: Any) -> tuple[Status, str]:

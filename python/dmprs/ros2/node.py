@@ -35,7 +35,9 @@ M = TypeVar("M")
 MAX_DOMAIN_ID = names.MAX_DOMAIN_ID
 
 #: A Cyclone configuration that keeps a node on the loopback interface, discovering peers by
-#: unicast there (loopback carries no multicast on Linux).
+#: unicast there (loopback carries no multicast on Linux): it advertises and sends on 127.0.0.1
+#: only. Cyclone still binds its unicast receive sockets to the wildcard address (no setting of
+#: its configuration binds them to an interface).
 LOOPBACK_CONFIG = (
     "<CycloneDDS><Domain id='any'><General><Interfaces><NetworkInterface address='127.0.0.1'/>"
     "</Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery>"

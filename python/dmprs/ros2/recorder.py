@@ -33,6 +33,9 @@ MAX_VALUE = 1e6
 #: A sample stamped this far (s) ahead of the last kept one, beyond the time that passed here
 #: between their arrivals, cannot be the same robot's (a stray publisher's clock): skipped.
 STAMP_JUMP = 1.0
+#: Samples held, before the recording has its first two, while none of them agrees with
+#: another: past this many the oldest is taken for another publisher's.
+MAX_UNCONFIRMED = 8
 #: Name lists whose joint columns are remembered: a stream of ever new lists (a publisher
 #: renaming its joints) must not grow the cache without bound.
 MAX_CACHED_NAME_LISTS = 64
@@ -86,6 +89,12 @@ class JointStateRecorder:
     samples that cannot be the robot's (counted in `implausible` as well): a position or
     velocity that is not finite or beyond :data:`MAX_VALUE`, or a stamp that jumps ahead of the
     last kept one by more than :data:`STAMP_JUMP` beyond the time that passed here.
+
+    The first sample has no kept one to be judged against, and a stray one taken as the
+    robot's would make every real sample look implausible (or stamped before it). So the
+    recording starts only once two samples agree (stamps within :data:`STAMP_JUMP` of each
+    other beyond the time that passed here): the samples before that agree with none are
+    another publisher's, skipped and counted.
     """
 
     def __init__(self, node: Node, joint_names: list[str], topic: str = "/joint_states", depth: int = 1000):
@@ -97,6 +106,8 @@ class JointStateRecorder:
         self.skipped = 0
         self.implausible = 0
         self._last: tuple[float, float] | None = None  # (stamp, arrival) of the last kept sample
+        # before the first two samples that agree: (stamp, arrival, row) of those not yet judged
+        self._unconfirmed: list[tuple[float, float, tuple[float, list[float], list[float]]]] = []
         self._rows: list[tuple[float, list[float], list[float]]] = []
         self._columns: dict[tuple[str, ...], list[int] | None] = {}
         self._stop = threading.Event()
@@ -114,11 +125,43 @@ class JointStateRecorder:
         v = [float(message.velocity[c]) for c in columns] if len(message.velocity) == len(message.name) else []
         jumped = self._last is not None and t - self._last[0] > arrival - self._last[1] + STAMP_JUMP
         if not (plausible(q) and plausible(v) and math.isfinite(t)) or jumped:
-            self.skipped += 1
-            self.implausible += 1
+            self._reject()
+            return
+        if self._last is None:
+            self._confirm((t, arrival, (t, q, v)))
             return
         self._last = (t, arrival)
         self._rows.append((t, q, v))
+
+    @property
+    def latest_stamp(self) -> float | None:
+        """The stamp of the last sample kept (the robot's clock as last seen), None before one."""
+        last = self._last
+        return None if last is None else last[0]
+
+    def _reject(self, count: int = 1) -> None:
+        self.skipped += count
+        self.implausible += count
+
+    def _confirm(self, sample: tuple[float, float, tuple[float, list[float], list[float]]]) -> None:
+        """Starts the recording with the newest held sample that agrees with ``sample`` (the
+        older ones held are another publisher's), or holds ``sample`` until one agrees with it.
+        """
+        t, arrival, row = sample
+        for i in range(len(self._unconfirmed) - 1, -1, -1):
+            t0, arrival0, row0 = self._unconfirmed[i]
+            # as for a kept sample: not far ahead of the time that passed here, nor behind (a clock
+            # may stand still while a simulation computes, never run backwards)
+            if -STAMP_JUMP < t - t0 <= arrival - arrival0 + STAMP_JUMP:
+                self._reject(len(self._unconfirmed) - 1)
+                self._unconfirmed = []
+                self._rows += [row0, row]
+                self._last = (t, arrival)
+                return
+        self._unconfirmed.append(sample)
+        if len(self._unconfirmed) > MAX_UNCONFIRMED:
+            self._unconfirmed.pop(0)
+            self._reject()
 
     def _run(self) -> None:
         while not self._stop.is_set():
@@ -152,6 +195,10 @@ class JointStateRecorder:
         self.subscription.interrupt()
         self._thread.join()
         self._thread = None
+        if self._unconfirmed:  # no two samples agreed: only the newest can still be the robot's
+            self._reject(len(self._unconfirmed) - 1)
+            self._rows.append(self._unconfirmed[-1][2])
+            self._unconfirmed = []
         n, width = len(self._rows), len(self.joint_names)
         positions = np.array([row[1] for row in self._rows], dtype=float).reshape(n, width)
         velocities = np.full((n, width), np.nan)

@@ -8,11 +8,18 @@ topic, ``/joint_states`` and ``/clock`` on the simulation's clock, and the task'
 camera's landing point (``geometry_msgs/PointStamped`` on :data:`LANDING_TOPIC`) or a scale under
 the glass (``std_msgs/Float64`` in l on :data:`SCALE_TOPIC`, published continuously).
 
-Each goal is simulated first and then played back at ``speed`` times real time. While the
-physics computes, the robot's clock stands still, as a simulator's ``/clock`` does when it runs
-slower than real time, and ``/joint_states`` repeats the standing pose at that stamp. After each
-goal the arm is back home (and for pouring the glass emptied and the bottle refilled) for the
-next one, as the in-process adapters are.
+Each goal, and each ``trajectory_msgs/JointTrajectory`` on the controller's ``joint_trajectory``
+topic, is simulated first and then played back at ``speed`` times real time. While the physics
+computes, the robot's clock stands still, as a simulator's ``/clock`` does when it runs slower
+than real time, and ``/joint_states`` repeats the standing pose at that stamp. After each motion
+the arm is back home (and for pouring the glass emptied and the bottle refilled) for the next
+one, as the in-process adapters are.
+
+As ``joint_trajectory_controller`` does, a trajectory on the topic starts at its header stamp
+on the robot's clock (a zero stamp: as it arrives), and from then on replaces what runs: the
+motion being played back stops there (a goal it cuts short ends aborted, saying so) and the new
+one runs; of several waiting for their start, the newest wins. Goals wait in the order they
+came; one canceled while it waits ends canceled when its turn comes, without moving.
 
 :func:`throwing_adapter` and :func:`pouring_adapter` are the client side: a
 :class:`~dmprs.ros2.Ros2TrajectoryAdapter` with the in-process adapter's joints and limits,
@@ -99,6 +106,33 @@ class _Clock:
         self.now += seconds
         self.node.publish_clock(self.now)
         return self.now
+
+
+class _Incoming:
+    """What the controller has received besides goals: the cancel requests (kept until their goal
+    ends, so that a goal canceled while it waits never runs) and the newest topic trajectory
+    waiting for its start on the robot's clock.
+    """
+
+    def __init__(self, node: RobotNode) -> None:
+        self.node = node
+        self.canceled: set[bytes] = set()
+        self.waiting: tuple[float, Any] | None = None  # (start on the robot's clock, trajectory)
+
+    def poll(self, now: float) -> None:
+        self.canceled.update(self.node.poll_cancels())
+        for trajectory in self.node.poll_trajectories():
+            # a zero stamp starts as it arrives; a later trajectory replaces one still waiting
+            self.waiting = (trajectory.stamp if trajectory.stamp > 0.0 else now, trajectory)
+
+    def due(self, now: float) -> bool:
+        """Whether a topic trajectory's start has come: it replaces what runs."""
+        return self.waiting is not None and now >= self.waiting[0]
+
+    def take(self) -> Any:
+        assert self.waiting is not None
+        trajectory, self.waiting = self.waiting[1], None
+        return trajectory
 
 
 class _Robot:
@@ -197,8 +231,8 @@ def serve(task: str, domain_id: int | None = None, *, speed: float = 1.0, stop: 
           bottle_volume: float = 0.5, liquid_seed: int = 0) -> int:
     """Serves ``task``'s arm (one of :data:`TASKS`) on ``domain_id`` (default: ``ROS_DOMAIN_ID``'s,
     else 0) until ``stop`` is set;
-    returns the goals served. ``bottle_volume`` (l) and ``liquid_seed`` are the pouring robot's
-    bottle and liquid (the in-process adapter's options).
+    returns the goals and topic trajectories served. ``bottle_volume`` (l) and ``liquid_seed`` are
+    the pouring robot's bottle and liquid (the in-process adapter's options).
 
     A goal the scene refuses (its start away from home, a limit broken) ends as INVALID_GOAL with
     the scene's reason; a thrown ball that never lands ends as succeeded without a landing point
@@ -215,6 +249,7 @@ def serve(task: str, domain_id: int | None = None, *, speed: float = 1.0, stop: 
                      float_signals=list(robot.float_topics), point_signals=list(robot.point_topics),
                      loopback_only=loopback_only)
     clock, period = _Clock(node), 1.0 / STATE_RATE
+    incoming = _Incoming(node)
     served = 0
     try:
         with robot.scene:
@@ -224,45 +259,84 @@ def serve(task: str, domain_id: int | None = None, *, speed: float = 1.0, stop: 
                 now = clock.tick(period)
                 node.publish_joint_state(now, robot.home)
                 robot.sense(node, now, None)
+                incoming.poll(now)
+                if incoming.due(now):
+                    served += 1
+                    _run(node, clock, robot, incoming.take(), None, speed, stop, incoming)
+                    continue
                 goal = node.poll_goal(period / speed)
                 if goal is None:
                     continue
                 served += 1
-                _run_goal(node, clock, robot, goal, speed, stop)
+                try:
+                    _run(node, clock, robot, goal.trajectory, goal.id, speed, stop, incoming)
+                finally:
+                    incoming.canceled.discard(goal.id)
     finally:
         node.shutdown()
     return served
 
 
-def _simulate(node: RobotNode, clock: _Clock, robot: _Robot, command: Trajectory, goal_id: bytes,
-              stop: threading.Event) -> Outcome | None:
+#: why a goal's motion stopped before its end (besides ``stop``)
+_CANCELED, _REPLACED = "canceled", "replaced"
+_REPLACED_TEXT = f"replaced by a trajectory on {CONTROLLER}/joint_trajectory"
+
+
+def _interrupted(incoming: _Incoming, clock: _Clock, goal_id: bytes | None, stop: threading.Event) -> str | None:
+    """Why the motion being simulated or played back must stop now, or None."""
+    incoming.poll(clock.now)
+    if stop.is_set() or (goal_id is not None and goal_id in incoming.canceled):
+        return _CANCELED
+    return _REPLACED if incoming.due(clock.now) else None
+
+
+def _simulate(node: RobotNode, clock: _Clock, robot: _Robot, command: Trajectory, goal_id: bytes | None,
+              stop: threading.Event, incoming: _Incoming) -> Outcome | str:
     """The scene's outcome of ``command``, computed in a worker while ``/joint_states`` repeats
-    the standing pose at the stopped clock; None if the goal was canceled meanwhile.
+    the standing pose at the stopped clock; why it stopped if it was canceled or replaced meanwhile.
     """
     result: list[Outcome] = []
     worker = threading.Thread(target=lambda: result.append(robot.scene.execute(command)), daemon=True)
     worker.start()
-    canceled = False
+    why = None
     while worker.is_alive():
         node.publish_joint_state(clock.now, robot.home)
-        if not canceled and (stop.is_set() or goal_id in node.poll_cancels()):
-            canceled = True
-            robot.scene.stop()
+        if why is None:
+            why = _interrupted(incoming, clock, goal_id, stop)
+            if why is not None:
+                robot.scene.stop()
         worker.join(1.0 / STATE_RATE)
-    return None if canceled else result[0]
+    return why if why is not None else result[0]
 
 
-def _run_goal(node: RobotNode, clock: _Clock, robot: _Robot, goal: Any, speed: float,
-              stop: threading.Event) -> None:
-    """Simulates one goal and plays it back: joint states, the sensors, the result."""
-    tr = goal.trajectory
+def _end(node: RobotNode, goal_id: bytes | None, why: str) -> None:
+    """Ends a goal whose motion stopped early (a topic trajectory has no one to tell)."""
+    if goal_id is None:
+        return
+    if why == _CANCELED:
+        node.finish_goal(goal_id, messages.GoalStatus.STATUS_CANCELED)
+    else:
+        node.finish_goal(goal_id, messages.GoalStatus.STATUS_ABORTED, _RESULT.SUCCESSFUL, _REPLACED_TEXT)
+
+
+def _run(node: RobotNode, clock: _Clock, robot: _Robot, tr: Any, goal_id: bytes | None, speed: float,
+         stop: threading.Event, incoming: _Incoming) -> None:
+    """Simulates one goal (``goal_id``) or topic trajectory (None) and plays it back: joint
+    states, the sensors, the goal's result.
+    """
+    incoming.poll(clock.now)
+    if goal_id is not None and goal_id in incoming.canceled:
+        # canceled while it waited for the goal before it: it never moves
+        node.finish_goal(goal_id, messages.GoalStatus.STATUS_CANCELED)
+        return
     robot.new_goal()
-    out = _simulate(node, clock, robot, Trajectory(tr.times, tr.positions, tr.velocities), goal.id, stop)
-    if out is None:
-        node.finish_goal(goal.id, messages.GoalStatus.STATUS_CANCELED)
+    out = _simulate(node, clock, robot, Trajectory(tr.times, tr.positions, tr.velocities), goal_id, stop, incoming)
+    if isinstance(out, str):
+        _end(node, goal_id, out)
         return
     if out.status is Status.REJECTED:
-        node.finish_goal(goal.id, messages.GoalStatus.STATUS_ABORTED, _RESULT.INVALID_GOAL, out.message)
+        if goal_id is not None:
+            node.finish_goal(goal_id, messages.GoalStatus.STATUS_ABORTED, _RESULT.INVALID_GOAL, out.message)
         return
     if out.ok:
         robot.started(out)
@@ -272,8 +346,9 @@ def _run_goal(node: RobotNode, clock: _Clock, robot: _Robot, goal: Any, speed: f
         start = time.monotonic()
         t0 = clock.now
         for k in range(0, len(executed.t), step):
-            if stop.is_set() or goal.id in node.poll_cancels():
-                node.finish_goal(goal.id, messages.GoalStatus.STATUS_CANCELED)
+            why = _interrupted(incoming, clock, goal_id, stop)
+            if why is not None:
+                _end(node, goal_id, why)
                 return
             t = float(executed.t[k] - executed.t[0])
             clock.now = t0 + t
@@ -282,6 +357,7 @@ def _run_goal(node: RobotNode, clock: _Clock, robot: _Robot, goal: Any, speed: f
             robot.sense(node, clock.now, t)
             # paced at speed x real time, so that the client sees a motion, not a burst
             time.sleep(max(0.0, start + t / speed - time.monotonic()))
-    node.finish_goal(goal.id, messages.GoalStatus.STATUS_SUCCEEDED)
+    if goal_id is not None:
+        node.finish_goal(goal_id, messages.GoalStatus.STATUS_SUCCEEDED)
     if out.ok:
         robot.measured(node, clock, out, speed, stop)
