@@ -16,7 +16,21 @@ from dmprs.primitive import DiscretePrimitive, Parameters, constants, rollout_op
 from dmprs.stepper import JointStepper
 from dmprs.trajectory import Trajectory
 
-__all__ = ["DMP"]
+__all__ = ["DMP", "demonstration_arrays"]
+
+
+def demonstration_arrays(
+    t: ArrayLike, y: ArrayLike, yd: ArrayLike | None, ydd: ArrayLike | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None]:
+    """A joint demonstration validated as the core's fits take it: ``t`` (T,), then ``y``, ``yd``
+    and ``ydd`` as (T, D) columns (a (T,) array is one DOF; a derivative may be None).
+    """
+    def columns(value: ArrayLike, name: str) -> NDArray[np.float64]:
+        arr = as_float_array(value, name, (1, 2))
+        return arr.reshape(-1, 1) if arr.ndim == 1 else arr
+
+    return (as_float_array(t, "t", 1), columns(y, "y"), None if yd is None else columns(yd, "yd"),
+            None if ydd is None else columns(ydd, "ydd"))
 
 
 class DMP(DiscretePrimitive):
@@ -99,16 +113,7 @@ class DMP(DiscretePrimitive):
                 the basis functions and the fit is refused.
             width_factor: kernel width relative to the spacing of the kernel centres.
         """
-        tt = as_float_array(t, "t", 1)
-        yy = as_float_array(y, "y", (1, 2))
-        yy = yy.reshape(-1, 1) if yy.ndim == 1 else yy
-        derivs: list[NDArray[np.float64] | None] = []
-        for name, value in (("yd", yd), ("ydd", ydd)):
-            if value is None:
-                derivs.append(None)
-                continue
-            arr = as_float_array(value, name, (1, 2))
-            derivs.append(arr.reshape(-1, 1) if arr.ndim == 1 else arr)
+        tt, yy, *derivs = demonstration_arrays(t, y, yd, ydd)
         core = _core.Dmp.fit(tt, yy, derivs[0], derivs[1], as_count(n_basis, "n_basis", 2),
                              constants(alpha_z, beta_z, alpha_x, width_factor))
         return cls._wrap(core)

@@ -13,6 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs import _core
 from dmprs._arrays import as_count, as_float_array, as_scalar
 from dmprs.cartesian import derivative_array, pose_array
+from dmprs.dmp import demonstration_arrays
 from dmprs.errors import InvalidInputError
 from dmprs.primitive import Primitive, spring
 from dmprs.trajectory import CartesianTrajectory, Trajectory
@@ -162,16 +163,7 @@ class PeriodicDMP(_Rhythm):
             beta_z: its damping, ``alpha_z / 4`` (critical damping) when None.
             width_factor: the kernels' width relative to their spacing (§12.1).
         """
-        tt = as_float_array(t, "t", 1)
-        yy = as_float_array(y, "y", (1, 2))
-        yy = yy.reshape(-1, 1) if yy.ndim == 1 else yy
-        derivs: list[NDArray[np.float64] | None] = []
-        for name, value in (("yd", yd), ("ydd", ydd)):
-            if value is None:
-                derivs.append(None)
-                continue
-            arr = as_float_array(value, name, (1, 2))
-            derivs.append(arr.reshape(-1, 1) if arr.ndim == 1 else arr)
+        tt, yy, *derivs = demonstration_arrays(t, y, yd, ydd)
         p = None if period is None else as_scalar(period, "period", positive=True)
         core = _core.PeriodicDmp.fit(tt, yy, derivs[0], derivs[1], p, as_count(n_basis, "n_basis", 3),
                                      spring(alpha_z, beta_z, width_factor))

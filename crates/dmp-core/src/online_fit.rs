@@ -19,7 +19,7 @@
 use nalgebra::DMatrix;
 
 use crate::error::{Error, Result, check_scalar, fmt_g};
-use crate::periodic::{Activations, PeriodicBasis, PeriodicConfig};
+use crate::periodic::{Activations, PeriodicBasis, PeriodicConfig, check_per_dof};
 
 /// Learns the weights of a periodic DMP from a stream of samples.
 #[derive(Debug, Clone)]
@@ -116,20 +116,7 @@ impl OnlineFit {
             ("goal", goal),
             ("amplitude", amplitude),
         ] {
-            if v.len() != n_dof {
-                return Err(Error::Shape {
-                    name,
-                    expected: format!("({n_dof},)"),
-                    got: format!("({},)", v.len()),
-                });
-            }
-            if let Some((i, &x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-                return Err(Error::NonFinite {
-                    name,
-                    location: format!("[{i}]"),
-                    value: x,
-                });
-            }
+            check_per_dof(name, v, n_dof)?;
         }
         if let Some((i, &r)) = amplitude.iter().enumerate().find(|(_, r)| **r == 0.0) {
             return Err(Error::InvalidParameter {

@@ -300,20 +300,7 @@ impl PeriodicDmp {
         }
         let n_dof = weights.ncols();
         for (name, v) in [("goal", &goal), ("amplitude", &amplitude), ("start", &y0)] {
-            if v.len() != n_dof {
-                return Err(Error::Shape {
-                    name,
-                    expected: format!("({n_dof},), one entry per DOF of the weights"),
-                    got: format!("({},)", v.len()),
-                });
-            }
-            if let Some((i, &x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-                return Err(Error::NonFinite {
-                    name,
-                    location: format!("[{i}]"),
-                    value: x,
-                });
-            }
+            check_per_dof(name, v.as_slice(), n_dof)?;
         }
         check_scalar("tau", tau, true)?;
         if let Some((i, &w)) = weights.iter().enumerate().find(|(_, w)| !w.is_finite()) {
@@ -623,6 +610,25 @@ impl PeriodicDmp {
         }
         Ok(k as usize)
     }
+}
+
+/// One finite value per DOF, or an error naming `name`.
+pub(crate) fn check_per_dof(name: &'static str, v: &[f64], n_dof: usize) -> Result<()> {
+    if v.len() != n_dof {
+        return Err(Error::Shape {
+            name,
+            expected: format!("({n_dof},), one entry per DOF"),
+            got: format!("({},)", v.len()),
+        });
+    }
+    if let Some((i, &x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(Error::NonFinite {
+            name,
+            location: format!("[{i}]"),
+            value: x,
+        });
+    }
+    Ok(())
 }
 
 /// `(min + max) / 2` and `(max - min) / 2` of every DOF of a demonstration (1 where it is 0).
