@@ -350,27 +350,30 @@ CACHE_CLEANING = 8.0
 @pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads the robot's memory from /proc")
 def test_the_robot_nodes_memory_does_not_grow_with_finished_goals(domain_id: int) -> None:
     # a client that does not subscribe to the status topic, so nothing acknowledges the status
-    # arrays of its transient-local writer: batches of goals, each after the writer has dropped
-    # what it need not keep, take no more memory than the first
+    # arrays of its transient-local writer: batches of goals, each followed by a pause in which the
+    # writer drops what it need not keep
     robot = subprocess.Popen([sys.executable, "-c", ROBOT, str(domain_id)], stdout=subprocess.PIPE, text=True)
     rss: dict[int, int] = {}
     try:
         assert robot.stdout is not None and robot.stdout.readline().startswith("ready")
         client = Ros2GoalClient(domain_id, "/jtc/follow_joint_trajectory")
         assert client.wait_for_server(WAIT)
-        for goals in (800, 800, 810):  # (the first request may go unanswered)
+        for goals in (800, 800, 800, 810):  # (the first request may go unanswered)
             for _ in range(goals):
                 client.send_goal(["a"], np.array([0.1]), np.zeros((1, 1)), WAIT)
             time.sleep(CACHE_CLEANING)
-        while 2400 not in rss:
+        while 3200 not in rss:
             finished, kilobytes = map(int, robot.stdout.readline().split())
             rss[finished] = kilobytes
     finally:
         robot.kill()
         robot.wait()
-    # the third batch: several kilobytes a goal while every status array was kept, now what the
-    # arrays of the batches before left free
-    assert rss[2400] - rss[1600] < 1024, rss
+    # While every status array was kept, each goal took several kilobytes, megabytes a batch, in
+    # every batch. Bounded, the batches after the first reuse what it left free; the allocator's
+    # high-water mark may still rise once, when a batch happens to finish more goals between two
+    # of the writer's cleanings than any before it, but not batch after batch.
+    growth = [rss[b + 800] - rss[b] for b in (800, 1600, 2400)]
+    assert min(growth) < 1024 and sum(growth) < 6144, (growth, rss)
 
 
 SOCKETS = """
