@@ -21,12 +21,14 @@ from dmprs.errors import (
 from dmprs.generalize import Generalizer
 from dmprs.gp import GaussianProcess
 from dmprs.loop import LearningResult, learn
+from dmprs.oscillator import AdaptiveOscillator, RhythmLearner
 from dmprs.periodic import PeriodicCartesianDMP, PeriodicDMP, PeriodicOnlineFit
 from dmprs.stepper import CartesianStepper, JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
 __all__ = [
     "DMP",
+    "AdaptiveOscillator",
     "CartesianDMP",
     "CartesianStepper",
     "CartesianTrajectory",
@@ -45,6 +47,7 @@ __all__ = [
     "PeriodicCartesianDMP",
     "PeriodicDMP",
     "PeriodicOnlineFit",
+    "RhythmLearner",
     "Trajectory",
     "__version__",
     "adapters",

@@ -10,6 +10,7 @@ __all__ = [
     "MIN_GP_NEIGHBOURS",
     "PI2",
     "UNIT_TOLERANCE",
+    "AdaptiveOscillator",
     "CartesianDmp",
     "CartesianGeneralizer",
     "CartesianStepper",
@@ -334,6 +335,30 @@ class PeriodicOnlineFit:
     def weights(self) -> NDArray[np.float64]: ...
     @property
     def samples(self) -> int: ...
+
+@final
+class AdaptiveOscillator:
+    def __new__(
+        cls,
+        frequency: float,
+        n_dof: int,
+        harmonics: int,
+        drive: int,
+        frequency_range: tuple[float, float],
+        gains: tuple[float, float, float],
+    ) -> AdaptiveOscillator: ...
+    def update(self, dt: float, y: NDArray[np.float64]) -> None: ...
+    def estimate(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]: ...
+    def coefficients(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+    def copy(self) -> AdaptiveOscillator: ...
+    @property
+    def phase(self) -> float: ...
+    @property
+    def omega(self) -> float: ...
+    @property
+    def samples(self) -> int: ...
+    @property
+    def n_dof(self) -> int: ...
 
 # The online steppers of crates/dmp-core (stepper.rs, cartesian_stepper.rs); subclassed, validated
 # and documented by dmprs.stepper. step() returns one cached tuple of read-only arrays that the

@@ -8,6 +8,7 @@ mod generalize;
 mod gp;
 mod learners;
 mod matchbox;
+mod oscillator;
 mod periodic;
 mod portable;
 mod primitive;
@@ -36,6 +37,8 @@ mod _core {
     use super::matchbox::{
         PyMatchboxConfig, matchbox_check, matchbox_simulate, matchbox_simulate_batch,
     };
+    #[pymodule_export]
+    use super::oscillator::PyAdaptiveOscillator;
     #[pymodule_export]
     use super::periodic::{
         PyPeriodicCartesianDmp, PyPeriodicDmp, PyPeriodicOnlineFit, py_rollout_batch_periodic,
