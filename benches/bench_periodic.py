@@ -3,7 +3,8 @@ own discrete DMP of the same size, in one process.
 
 Workload: 7 DOF, 50 kernels, a rhythm of period 2 pi s (tau = 1, pydmps' fixed run time)
 rolled out at dt = 1 ms from Python; the batch fit of one period (6,283 samples); and the
-online fit (one recursive-least-squares update per sample, from Python). Then the adaptive
+online fit (one recursive-least-squares update per sample, from Python); one open-loop step() of
+the periodic stepper against the discrete JointStepper's of the same size. Then the adaptive
 oscillator (§12.5): its update and the whole rhythm learner's per sample, from Python, and after
 how many periods it follows a 0.5-3 Hz sine with 5 % noise to within 1 % (no other library to
 compare with: pydmps and movement_primitives have no frequency adaptation).
@@ -81,6 +82,27 @@ def bench_online(t, y):
     return per / n
 
 
+def bench_steps(t, y):
+    """One open-loop ``step()`` from Python of the periodic stepper and of the discrete
+    ``JointStepper`` of the same size (7 DOF, 50 kernels, 1 ms), both without phase stopping.
+    """
+    n = 5000
+    periodic = dmprs.PeriodicDMP.fit(t, y, n_basis=N_BASIS)
+    discrete = dmprs.DMP.fit(t, y, N_BASIS)
+
+    def run(make):
+        def go():
+            stepper = make()
+            step = stepper.step
+            for _ in range(n):
+                step()
+        return timed(go, 7)[0] / n
+
+    p = run(lambda: periodic.stepper(DT, ramp=0.0, alpha_e=0.0))
+    d = run(lambda: discrete.stepper(DT, alpha_e=0.0, goal_filter=None))
+    return p, d
+
+
 def bench_oscillator(y):
     n = 2000
 
@@ -135,6 +157,10 @@ def main() -> None:
         print(f"pydmps not installed ({exc}); pip install '.[bench]'")
     print(f"| dmprs DMP (discrete, same size) | | {discrete * 1e6:.3f} | | {discrete / roll:.2f}x |")
     print(f"\nPeriodicOnlineFit.update from Python (7 DOF, 50 kernels): {bench_online(t, y) * 1e6:.1f} µs per sample")
+    periodic_step, discrete_step = bench_steps(t, y)
+    print(f"one step() from Python, 7 DOF, 50 kernels: PeriodicStepper {periodic_step * 1e6:.2f} µs, "
+          f"JointStepper {discrete_step * 1e6:.2f} µs: periodic / discrete {periodic_step / discrete_step:.2f}x "
+          f"(floor 1.2x)")
     follow, learn = bench_oscillator(y)
     print(f"AdaptiveOscillator.update from Python (7 DOF, 10 harmonics): {follow * 1e6:.1f} µs per sample; "
           f"RhythmLearner.update (oscillator + online fit): {learn * 1e6:.1f} µs per sample")

@@ -23,6 +23,7 @@ from dmprs.gp import GaussianProcess
 from dmprs.loop import LearningResult, learn
 from dmprs.oscillator import AdaptiveOscillator, RhythmLearner
 from dmprs.periodic import PeriodicCartesianDMP, PeriodicDMP, PeriodicOnlineFit
+from dmprs.periodic_stepper import PeriodicStepper
 from dmprs.stepper import CartesianStepper, JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -47,6 +48,7 @@ __all__ = [
     "PeriodicCartesianDMP",
     "PeriodicDMP",
     "PeriodicOnlineFit",
+    "PeriodicStepper",
     "RhythmLearner",
     "Trajectory",
     "__version__",

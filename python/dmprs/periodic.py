@@ -15,6 +15,7 @@ from dmprs._arrays import as_count, as_float_array, as_scalar
 from dmprs.cartesian import derivative_array, pose_array
 from dmprs.dmp import demonstration_arrays
 from dmprs.errors import InvalidInputError
+from dmprs.periodic_stepper import PeriodicStepper
 from dmprs.primitive import Primitive, spring
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -180,6 +181,15 @@ class PeriodicDMP(_Rhythm):
         ``8 tau / alpha_z`` into the steady rhythm.
         """
         return Trajectory._trusted(*self._rollout(dt, duration, phase))
+
+    def stepper(self, dt: float = 0.001, **options: Any) -> PeriodicStepper:
+        """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
+        period, fading in and (after ``stop()``) out, with filtered changes of baseline,
+        amplitude and frequency, phase stopping and limits; ``options`` as
+        :class:`dmprs.periodic_stepper.PeriodicStepper` (``phase``, ``ramp``, ``change_filter``,
+        ``alpha_e``, ``velocity_max``, ``acceleration_max``, ...).
+        """
+        return PeriodicStepper(self, dt, **options)
 
     def with_goal(self, goal: ArrayLike) -> PeriodicDMP:
         """The same rhythm about a new baseline g."""

@@ -300,16 +300,12 @@ impl Clock {
         }
         let substeps = substeps_for(cfg, tau, opts.dt, opts.substeps)?;
         check_goal_filter(opts.goal_filter, opts.dt, substeps, tau)?;
-        let coupling = if opts.velocity_max.is_some() || opts.acceleration_max.is_some() {
-            Some(TemporalCoupling::new(
-                n,
-                opts.velocity_max.as_deref(),
-                opts.acceleration_max.as_deref(),
-                opts.temporal_coupling,
-            )?)
-        } else {
-            None
-        };
+        let coupling = TemporalCoupling::if_limited(
+            n,
+            opts.velocity_max.as_deref(),
+            opts.acceleration_max.as_deref(),
+            opts.temporal_coupling,
+        )?;
         Ok(Self {
             dt: opts.dt,
             substeps,
@@ -337,22 +333,7 @@ impl Clock {
     /// use (before anything changes, so the stepper stays usable).
     #[inline]
     pub fn stop_factor(&self, errors: impl Iterator<Item = f64>) -> Result<f64> {
-        let mut s = 0.0;
-        for (a, e) in self.alpha_e.iter().zip(errors) {
-            s += a * e * e;
-        }
-        if !s.is_finite() {
-            return Err(Error::InvalidParameter {
-                name: "measured",
-                value: format!(
-                    "(phase stopping's 1 + sum alpha_e e^2 = {})",
-                    fmt_g(1.0 + s)
-                ),
-                requirement: "must be near the last command: this far off, the phase-stopping \
-                              factor overflows (the stepper's state is unchanged)",
-            });
-        }
-        Ok(1.0 + s)
+        phase_stop_factor(&self.alpha_e, errors)
     }
 
     /// `taud` of a period at time scale `tau` followed by one at `next`: their forward
@@ -365,6 +346,28 @@ impl Clock {
             (next - tau) / self.dt
         }
     }
+}
+
+/// Phase stopping's slow-down `1 + sum_d alpha_e,d e_d^2` of the errors `e` between the measured
+/// and the commanded positions (Ijspeert et al. 2013), refused, naming `measured`, if it
+/// overflows.
+pub(crate) fn phase_stop_factor(alpha_e: &[f64], errors: impl Iterator<Item = f64>) -> Result<f64> {
+    let mut s = 0.0;
+    for (a, e) in alpha_e.iter().zip(errors) {
+        s += a * e * e;
+    }
+    if !s.is_finite() {
+        return Err(Error::InvalidParameter {
+            name: "measured",
+            value: format!(
+                "(phase stopping's 1 + sum alpha_e e^2 = {})",
+                fmt_g(1.0 + s)
+            ),
+            requirement: "must be near the last command: this far off, the phase-stopping \
+                          factor overflows (the stepper's state is unchanged)",
+        });
+    }
+    Ok(1.0 + s)
 }
 
 /// `tau dz/dt` of eq. 1 without coupling terms, `alpha_z (beta_z (g - y) - z) + f`, into `out`.

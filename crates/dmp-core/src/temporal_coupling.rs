@@ -124,6 +124,19 @@ impl TemporalCoupling {
         })
     }
 
+    /// The coupling of these limits, or none when neither is given.
+    pub fn if_limited(
+        n: usize,
+        velocity_max: Option<&[f64]>,
+        acceleration_max: Option<&[f64]>,
+        gains: TemporalCouplingGains,
+    ) -> Result<Option<Self>> {
+        if velocity_max.is_none() && acceleration_max.is_none() {
+            return Ok(None);
+        }
+        Self::new(n, velocity_max, acceleration_max, gains).map(Some)
+    }
+
     pub fn velocity_max(&self) -> &[f64] {
         &self.velocity_max
     }

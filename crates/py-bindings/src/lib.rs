@@ -10,6 +10,7 @@ mod learners;
 mod matchbox;
 mod oscillator;
 mod periodic;
+mod periodic_stepper;
 mod portable;
 mod primitive;
 mod ros2_robot;
@@ -44,6 +45,8 @@ mod _core {
         PyPeriodicCartesianDmp, PyPeriodicDmp, PyPeriodicOnlineFit, py_rollout_batch_periodic,
         py_rollout_batch_periodic_cartesian,
     };
+    #[pymodule_export]
+    use super::periodic_stepper::PyPeriodicStepper;
     #[pymodule_export]
     use super::portable::{dls_step, portable_binary, portable_norm, portable_unary};
     #[pymodule_export]

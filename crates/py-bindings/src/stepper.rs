@@ -18,13 +18,13 @@ use crate::dmp::{PyDmp, contiguous};
 use crate::errors::{IntoPyResult, invalid_input};
 
 /// Three read-only float64 arrays that `step` overwrites, and the tuple that holds them.
-struct Outputs {
+pub(crate) struct Outputs {
     arrays: [Py<PyArray1<f64>>; 3],
     tuple: Py<PyTuple>,
 }
 
 impl Outputs {
-    fn new(py: Python<'_>, lengths: [usize; 3]) -> PyResult<Self> {
+    pub(crate) fn new(py: Python<'_>, lengths: [usize; 3]) -> PyResult<Self> {
         let arrays = lengths.map(|n| {
             let a = PyArray1::<f64>::zeros(py, n, false);
             // SAFETY: `a` is a live array this function owns; clearing a flag bit is what
@@ -41,7 +41,7 @@ impl Outputs {
     /// Copies `values` into output `i`. The arrays' data pointers are read
     /// on every call, so a caller who resized one (`resize(refcheck=False)`) gets an error, not a
     /// write to freed memory.
-    fn write(&self, py: Python<'_>, i: usize, values: &[f64]) -> PyResult<()> {
+    pub(crate) fn write(&self, py: Python<'_>, i: usize, values: &[f64]) -> PyResult<()> {
         let a = self.arrays[i].bind(py);
         if a.len() != values.len() || !a.is_contiguous() {
             return Err(invalid_input(
@@ -58,7 +58,7 @@ impl Outputs {
         Ok(())
     }
 
-    fn tuple(&self, py: Python<'_>) -> Py<PyTuple> {
+    pub(crate) fn tuple(&self, py: Python<'_>) -> Py<PyTuple> {
         self.tuple.clone_ref(py)
     }
 }

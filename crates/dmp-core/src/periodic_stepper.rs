@@ -1,0 +1,624 @@
+//! A periodic DMP executed online, one control period at a time (docs/method.md §12.6): the
+//! rollout's integrator (`PeriodicDmp::acceleration` and `advance`) with what a robot needs
+//! around it.
+//!
+//! - **Start and stop at rest.** The forcing term is multiplied by an envelope `m` in `[0, 1]`
+//!   that rises over `ramp` periods of the phase after the start and falls over as many after
+//!   [`PeriodicStepper::stop`], by the smoothstep `3 s^2 - 2 s^3` of its progress `s`, while the
+//!   baseline moves from the start to `g` (and to the rest position on stopping) through the
+//!   change filter. With `m = 0` the spring is critically damped: one period after the ramp
+//!   ends the residue is `exp(-alpha_z pi)` of the motion, and the stepper is done.
+//! - **Filtered changes.** A new baseline, amplitude or frequency is approached by the filter
+//!   `tau dv/dt = alpha_c (v* - v)` (for the frequency `1/tau`), so a change never jumps the
+//!   command.
+//! - **Phase stopping.** Given the measured position, the time scale is the nominal times
+//!   `1 + sum_d alpha_e,d e_d^2` (Ijspeert et al. 2013), so the rhythm waits for a held robot.
+//! - **Limits by temporal coupling.** Velocity and acceleration limits slow the clock
+//!   (`crate::temporal_coupling`, Dahlin and Karayiannidis 2021) instead of clipping.
+//!
+//! Each step returns sample k and chooses the time scale of period k+1 first, so that the
+//! returned acceleration is the change of the returned velocity to the next command's,
+//! `yd_{k+1} = yd_k + dt ydd_k`, and the position follows the semi-implicit scheme,
+//! `y_{k+1} = y_k + dt yd_{k+1}`. With no option in play (no ramp, no change, no measurement,
+//! no limits) a step is the rollout's step, bit for bit.
+
+use std::f64::consts::TAU as TWO_PI;
+
+use crate::error::{Error, Result, check_scalar, fmt_g};
+use crate::periodic::{PeriodicDmp, PeriodicState, Workspace, check_per_dof};
+use crate::rollout::spring_stable_step;
+use crate::stepper::{DEFAULT_ALPHA_E, check_state, phase_stop_factor, phase_stopping_gains};
+use crate::temporal_coupling::{TemporalCoupling, TemporalCouplingGains};
+
+/// The change filter's default `alpha_c`: a change settles to 1 % in about 4.6 rad of phase,
+/// three quarters of a period.
+pub const DEFAULT_CHANGE_FILTER: f64 = 1.0;
+
+/// How a periodic stepper runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeriodicStepperOptions {
+    /// The control period (s).
+    pub dt: f64,
+    /// The phase to start at (rad).
+    pub phase: f64,
+    /// Periods over which the rhythm fades in after the start and out after `stop`; 0: it
+    /// starts at full amplitude (the rollout) and stops by the spring alone.
+    pub ramp: f64,
+    /// `alpha_c` of the change filter.
+    pub change_filter: f64,
+    /// Phase-stopping gains, one or one per coordinate; all 0: off.
+    pub alpha_e: Vec<f64>,
+    pub velocity_max: Option<Vec<f64>>,
+    pub acceleration_max: Option<Vec<f64>>,
+    pub temporal_coupling: TemporalCouplingGains,
+}
+
+impl PeriodicStepperOptions {
+    pub fn new(dt: f64) -> Self {
+        Self {
+            dt,
+            phase: 0.0,
+            ramp: 1.0,
+            change_filter: DEFAULT_CHANGE_FILTER,
+            alpha_e: vec![DEFAULT_ALPHA_E],
+            velocity_max: None,
+            acceleration_max: None,
+            temporal_coupling: TemporalCouplingGains::default(),
+        }
+    }
+}
+
+/// Where the envelope is going.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Envelope {
+    Rising,
+    Running,
+    Falling,
+    /// Stopped: the time (s) the spring has had since the envelope reached 0.
+    Settling(f64),
+}
+
+/// What a step saves before it changes anything, to put back if it fails.
+#[derive(Debug, Clone)]
+struct Saved {
+    state: PeriodicState,
+    goal: Filtered,
+    amplitude: Filtered,
+    frequency: Filtered,
+}
+
+/// A periodic DMP stepped online.
+#[derive(Debug, Clone)]
+pub struct PeriodicStepper {
+    dmp: PeriodicDmp,
+    opts: PeriodicStepperOptions,
+    alpha_e: Vec<f64>,
+    coupling: Option<TemporalCoupling>,
+    state: PeriodicState,
+    ws: Workspace,
+    /// The envelope's progress `s` in `[0, 1]` and its direction.
+    progress: f64,
+    envelope: Envelope,
+    goal: Filtered,
+    amplitude: Filtered,
+    /// The nominal frequency `1/tau`.
+    frequency: Filtered,
+    /// The time scale of the coming period.
+    tau: f64,
+    over_limit: bool,
+    steps: u64,
+    dz: Vec<f64>,
+    dz_next: Vec<f64>,
+    z_k: Vec<f64>,
+    scratch: PeriodicState,
+    saved: Saved,
+    effective: Vec<f64>,
+    out_y: Vec<f64>,
+    out_yd: Vec<f64>,
+    out_ydd: Vec<f64>,
+}
+
+fn smoothstep(s: f64) -> f64 {
+    s * s * (3.0 - 2.0 * s)
+}
+
+impl PeriodicStepper {
+    pub fn new(dmp: &PeriodicDmp, opts: &PeriodicStepperOptions) -> Result<Self> {
+        check_scalar("dt", opts.dt, true)?;
+        check_scalar("phase", opts.phase, false)?;
+        check_scalar("ramp", opts.ramp, false)?;
+        if opts.ramp < 0.0 {
+            return Err(Error::InvalidParameter {
+                name: "ramp",
+                value: fmt_g(opts.ramp),
+                requirement: "must be >= 0 (periods; 0: no fade in or out)",
+            });
+        }
+        check_scalar("change_filter", opts.change_filter, true)?;
+        let n = dmp.n_dof();
+        let alpha_e = phase_stopping_gains(&opts.alpha_e, n)?;
+        let coupling = TemporalCoupling::if_limited(
+            n,
+            opts.velocity_max.as_deref(),
+            opts.acceleration_max.as_deref(),
+            opts.temporal_coupling,
+        )?;
+        let tau = dmp.tau();
+        check_time_scale(dmp, opts, tau, "dt")?;
+        let y0 = dmp.y0().as_slice().to_vec();
+        let ramped = opts.ramp > 0.0;
+        let mut stepper = Self {
+            alpha_e,
+            coupling,
+            state: dmp.initial_state(opts.phase),
+            ws: dmp.workspace(),
+            progress: if ramped { 0.0 } else { 1.0 },
+            envelope: if ramped {
+                Envelope::Rising
+            } else {
+                Envelope::Running
+            },
+            // faded in, the baseline moves from the start (the rollout's runs about g at once)
+            goal: Filtered::new(
+                if ramped { &y0 } else { dmp.goal().as_slice() },
+                dmp.goal().as_slice(),
+            ),
+            amplitude: Filtered::at(dmp.amplitude().as_slice()),
+            frequency: Filtered::at(&[1.0 / tau]),
+            tau,
+            over_limit: false,
+            steps: 0,
+            dz: vec![0.0; n],
+            dz_next: vec![0.0; n],
+            z_k: vec![0.0; n],
+            scratch: dmp.initial_state(opts.phase),
+            saved: Saved {
+                state: dmp.initial_state(opts.phase),
+                goal: Filtered::at(&vec![0.0; n]),
+                amplitude: Filtered::at(&vec![0.0; n]),
+                frequency: Filtered::at(&[0.0]),
+            },
+            effective: vec![0.0; n],
+            out_y: y0.clone(),
+            out_yd: vec![0.0; n],
+            out_ydd: vec![0.0; n],
+            dmp: dmp.clone(),
+            opts: opts.clone(),
+        };
+        if stepper.coupling.is_some() {
+            // start slow enough that the first command's accelerations are within the limits
+            stepper.effective_amplitude();
+            stepper.dmp.acceleration(
+                &stepper.state,
+                &stepper.goal.value,
+                &stepper.effective,
+                &mut stepper.ws,
+                &mut stepper.dz,
+            );
+            let tc = stepper.coupling.as_ref().expect("checked");
+            stepper.tau = tc.tau_at_rest(tau, &stepper.dz);
+        }
+        Ok(stepper)
+    }
+
+    /// The envelope times the amplitude, into `effective`.
+    fn effective_amplitude(&mut self) {
+        let m = smoothstep(self.progress);
+        for (e, a) in self.effective.iter_mut().zip(&self.amplitude.value) {
+            *e = m * a;
+        }
+    }
+
+    /// One control period: returns the command `(y, yd, ydd)` of sample k and advances to k+1.
+    /// `measured` (the robot's position, one per coordinate) slows the clock by phase stopping.
+    /// A measurement that is not finite or too far off is refused with the state unchanged;
+    /// a state that would become non-finite is an error and nothing is returned.
+    pub fn step(&mut self, measured: Option<&[f64]>) -> Result<(&[f64], &[f64], &[f64])> {
+        let n = self.dmp.n_dof();
+        let stop = match measured {
+            Some(m) => {
+                check_per_dof("measured", m, n)?;
+                phase_stop_factor(
+                    &self.alpha_e,
+                    m.iter().zip(&self.state.y).map(|(a, b)| a - b),
+                )?
+            }
+            None => 1.0,
+        };
+        // what a failed step must leave as it was, saved into buffers of the same sizes (no
+        // allocation); `tau`, `steps` and `over_limit` are only written once the state is finite
+        let saved = &mut self.saved;
+        saved.state.phi = self.state.phi;
+        saved.state.y.copy_from_slice(&self.state.y);
+        saved.state.z.copy_from_slice(&self.state.z);
+        saved.goal.copy_from(&self.goal);
+        saved.amplitude.copy_from(&self.amplitude);
+        saved.frequency.copy_from(&self.frequency);
+        let (progress, envelope) = (self.progress, self.envelope);
+        match self.advance(stop) {
+            Ok(()) => Ok((&self.out_y, &self.out_yd, &self.out_ydd)),
+            Err(e) => {
+                let saved = &mut self.saved;
+                std::mem::swap(&mut self.state, &mut saved.state);
+                std::mem::swap(&mut self.goal, &mut saved.goal);
+                std::mem::swap(&mut self.amplitude, &mut saved.amplitude);
+                std::mem::swap(&mut self.frequency, &mut saved.frequency);
+                (self.progress, self.envelope) = (progress, envelope);
+                Err(e)
+            }
+        }
+    }
+
+    fn advance(&mut self, stop: f64) -> Result<()> {
+        let dt = self.opts.dt;
+        let tau = self.tau;
+        self.effective_amplitude();
+        self.dmp.acceleration(
+            &self.state,
+            &self.goal.value,
+            &self.effective,
+            &mut self.ws,
+            &mut self.dz,
+        );
+        let inv_tau = 1.0 / tau;
+        for ((oy, oyd), (y, z)) in self
+            .out_y
+            .iter_mut()
+            .zip(self.out_yd.iter_mut())
+            .zip(self.state.y.iter().zip(&self.state.z))
+        {
+            *oy = *y;
+            *oyd = z * inv_tau;
+        }
+        self.z_k.copy_from_slice(&self.state.z);
+        PeriodicDmp::advance(&mut self.state, &self.dz, tau, dt);
+        // the phase advanced by dt / tau: the envelope and the filters move with it
+        let dphase = dt / tau;
+        self.move_envelope(dphase);
+        let alpha = self.opts.change_filter;
+        self.goal.advance(alpha, dphase);
+        self.amplitude.advance(alpha, dphase);
+        self.frequency.advance(alpha, dphase);
+        let nominal = 1.0 / self.frequency.value[0];
+        let target = stop * nominal;
+        let next = match self.coupling.as_mut() {
+            None => target,
+            Some(tc) => {
+                if tc.limits_acceleration() {
+                    self.scratch.clone_from(&self.state);
+                    let m = smoothstep(self.progress);
+                    for (e, a) in self.effective.iter_mut().zip(&self.amplitude.value) {
+                        *e = m * a;
+                    }
+                    // (the next position at this period's scale: the coupling's bound for the
+                    // next sample is approximate by that one position step)
+                    self.dmp.acceleration(
+                        &self.scratch,
+                        &self.goal.value,
+                        &self.effective,
+                        &mut self.ws,
+                        &mut self.dz_next,
+                    );
+                }
+                tc.next_tau(
+                    tau,
+                    nominal,
+                    target,
+                    &self.z_k,
+                    &self.dz,
+                    &self.state.z,
+                    &self.dz_next,
+                    dt,
+                )
+            }
+        };
+        // the semi-implicit position step at the next period's scale: y_{k+1} = y_k + dt yd_{k+1}
+        // (adds exactly 0 while the scale does not change)
+        let change = 1.0 / next - inv_tau;
+        let inv_tau2 = 1.0 / (tau * tau);
+        for (((y, z), dz), ydd) in self
+            .state
+            .y
+            .iter_mut()
+            .zip(&self.state.z)
+            .zip(&self.dz)
+            .zip(self.out_ydd.iter_mut())
+        {
+            *y += z * dt * change;
+            *ydd = dz * inv_tau2 + z * change / dt;
+        }
+        check_state(
+            "periodic stepper",
+            self.state.phi,
+            &[
+                &self.state.y,
+                &self.state.z,
+                &self.out_ydd,
+                std::slice::from_ref(&next),
+            ],
+            self.steps,
+        )?;
+        self.over_limit = match &self.coupling {
+            Some(tc) if tc.limits_acceleration() => self
+                .out_ydd
+                .iter()
+                .zip(tc.acceleration_max())
+                .any(|(a, m)| a.abs() > m * (1.0 + 1e-12)),
+            _ => false,
+        };
+        self.tau = next;
+        if let Envelope::Settling(t) = &mut self.envelope {
+            *t += dt;
+        }
+        self.steps += 1;
+        Ok(())
+    }
+
+    fn move_envelope(&mut self, dphase: f64) {
+        let ramp = self.opts.ramp;
+        let ds = if ramp > 0.0 {
+            dphase / (TWO_PI * ramp)
+        } else {
+            1.0
+        };
+        match self.envelope {
+            Envelope::Rising => {
+                self.progress = (self.progress + ds).min(1.0);
+                if self.progress == 1.0 {
+                    self.envelope = Envelope::Running;
+                }
+            }
+            Envelope::Falling => {
+                self.progress = (self.progress - ds).max(0.0);
+                if self.progress == 0.0 {
+                    self.envelope = Envelope::Settling(0.0);
+                }
+            }
+            Envelope::Running | Envelope::Settling(_) => {}
+        }
+    }
+
+    /// Fades the rhythm out over `ramp` periods (at once with `ramp = 0`) and brings it to rest
+    /// at `rest` (by default the baseline) through the change filter.
+    pub fn stop(&mut self, rest: Option<&[f64]>) -> Result<()> {
+        if let Some(r) = rest {
+            check_per_dof("rest", r, self.dmp.n_dof())?;
+            self.goal.target.copy_from_slice(r);
+        }
+        if self.opts.ramp == 0.0 {
+            self.progress = 0.0;
+            self.envelope = Envelope::Settling(0.0);
+        } else if !matches!(self.envelope, Envelope::Settling(_)) {
+            self.envelope = Envelope::Falling;
+        }
+        Ok(())
+    }
+
+    /// A new baseline, approached through the change filter.
+    pub fn set_goal(&mut self, goal: &[f64]) -> Result<()> {
+        check_per_dof("goal", goal, self.dmp.n_dof())?;
+        self.goal.target.copy_from_slice(goal);
+        Ok(())
+    }
+
+    /// A new amplitude per coordinate, approached through the change filter.
+    pub fn set_amplitude(&mut self, amplitude: &[f64]) -> Result<()> {
+        check_per_dof("amplitude", amplitude, self.dmp.n_dof())?;
+        self.amplitude.target.copy_from_slice(amplitude);
+        Ok(())
+    }
+
+    /// A new nominal time constant (the period over 2 pi), its frequency approached through the
+    /// change filter; refused if the spring would be unstable at it or the filter at `dt`.
+    pub fn set_tau(&mut self, tau: f64) -> Result<()> {
+        check_scalar("tau", tau, true)?;
+        check_time_scale(&self.dmp, &self.opts, tau, "tau")?;
+        self.frequency.target[0] = 1.0 / tau;
+        Ok(())
+    }
+
+    /// Whether the rhythm has stopped: faded out and one period of the spring since, at rest at
+    /// its rest position to `exp(-alpha_z pi)` of the motion.
+    pub fn done(&self) -> bool {
+        match self.envelope {
+            Envelope::Settling(t) => t >= TWO_PI / self.frequency.target[0] && self.goal.settled(),
+            _ => false,
+        }
+    }
+    /// Whether the last command's acceleration exceeds `acceleration_max` (the coupling's
+    /// feasibility condition failed); false without acceleration limits.
+    pub fn over_limit(&self) -> bool {
+        self.over_limit
+    }
+    /// The phase of the coming sample (rad).
+    pub fn phase(&self) -> f64 {
+        self.state.phi
+    }
+    /// The time scale of the coming period.
+    pub fn tau(&self) -> f64 {
+        self.tau
+    }
+    /// The nominal time scale the frequency filter is at.
+    pub fn nominal_tau(&self) -> f64 {
+        1.0 / self.frequency.value[0]
+    }
+    /// The envelope `m` in `[0, 1]` of the coming sample.
+    pub fn envelope(&self) -> f64 {
+        smoothstep(self.progress)
+    }
+    pub fn goal(&self) -> &[f64] {
+        &self.goal.value
+    }
+    pub fn amplitude(&self) -> &[f64] {
+        &self.amplitude.value
+    }
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+    pub fn dt(&self) -> f64 {
+        self.opts.dt
+    }
+    pub fn n_dof(&self) -> usize {
+        self.dmp.n_dof()
+    }
+    pub fn dmp(&self) -> &PeriodicDmp {
+        &self.dmp
+    }
+}
+
+/// Values moved to their targets by a critically damped second-order filter in the phase,
+/// `v'' = alpha^2 (v* - v) - 2 alpha v'` (`'` per radian): a change starts and ends with zero
+/// rate, so it never jumps the command's velocity.
+#[derive(Debug, Clone, PartialEq)]
+struct Filtered {
+    value: Vec<f64>,
+    rate: Vec<f64>,
+    target: Vec<f64>,
+}
+
+impl Filtered {
+    fn new(value: &[f64], target: &[f64]) -> Self {
+        Self {
+            value: value.to_vec(),
+            rate: vec![0.0; value.len()],
+            target: target.to_vec(),
+        }
+    }
+    fn at(value: &[f64]) -> Self {
+        Self::new(value, value)
+    }
+    fn copy_from(&mut self, other: &Self) {
+        self.value.copy_from_slice(&other.value);
+        self.rate.copy_from_slice(&other.rate);
+        self.target.copy_from_slice(&other.target);
+    }
+    fn settled_at(&self, d: usize) -> bool {
+        self.value[d] == self.target[d] && self.rate[d] == 0.0
+    }
+    fn settled(&self) -> bool {
+        (0..self.value.len()).all(|d| self.settled_at(d))
+    }
+    /// One semi-implicit Euler step over `dphase` radians; values within 1e-12 (relative to
+    /// max(1, |target|)) of their targets, at a rate as small, are set to them.
+    fn advance(&mut self, alpha: f64, dphase: f64) {
+        for d in 0..self.value.len() {
+            if self.settled_at(d) {
+                continue;
+            }
+            let (v, r, t) = (&mut self.value[d], &mut self.rate[d], self.target[d]);
+            *r += (alpha * alpha * (t - *v) - 2.0 * alpha * *r) * dphase;
+            *v += *r * dphase;
+            let tol = 1e-12 * t.abs().max(1.0);
+            if (*v - t).abs() <= tol && r.abs() <= tol {
+                *v = t;
+                *r = 0.0;
+            }
+        }
+    }
+}
+
+/// The stepper has no sub-steps: `dt` must keep the spring and the change filter stable at the
+/// time scale `tau` (the nominal; phase stopping and the coupling only lengthen it).
+fn check_time_scale(
+    dmp: &PeriodicDmp,
+    opts: &PeriodicStepperOptions,
+    tau: f64,
+    name: &'static str,
+) -> Result<()> {
+    let cfg = dmp.config();
+    let spring = spring_stable_step(cfg.alpha_z, cfg.beta_z) * tau;
+    let filter = tau / opts.change_filter;
+    if opts.dt > spring.min(filter) {
+        return Err(Error::InvalidParameter {
+            name,
+            value: if name == "dt" {
+                fmt_g(opts.dt)
+            } else {
+                fmt_g(tau)
+            },
+            requirement: "must keep one Euler step per control period stable: dt <= \
+                          min(the spring's stable step, 1 / change_filter) * tau",
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{DMatrix, DVector};
+
+    use super::*;
+    use crate::periodic::PeriodicConfig;
+
+    fn rhythm() -> PeriodicDmp {
+        let cfg = PeriodicConfig {
+            n_basis: 20,
+            alpha_z: 48.0,
+            beta_z: 12.0,
+            width_factor: 2.0,
+        };
+        let w = DMatrix::from_fn(20, 2, |i, d| ((i * 7 + d * 3) % 11) as f64 - 5.0);
+        PeriodicDmp::new(
+            cfg,
+            w,
+            DVector::from_vec(vec![0.5, -0.2]),
+            DVector::from_vec(vec![0.1, 0.3]),
+            DVector::from_vec(vec![0.4, 0.0]),
+            0.2,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn without_options_a_step_is_the_rollouts_step_bit_for_bit() {
+        let dmp = rhythm();
+        let mut opts = PeriodicStepperOptions::new(1e-3);
+        opts.ramp = 0.0;
+        opts.phase = 0.7;
+        let tr = dmp.rollout(1e-3, Some(3.0), 0.7).unwrap();
+        let mut st = PeriodicStepper::new(&dmp, &opts).unwrap();
+        for k in 0..tr.t.len() {
+            let (y, yd, ydd) = st.step(None).unwrap();
+            assert_eq!(y, &tr.y[2 * k..2 * k + 2]);
+            assert_eq!(yd, &tr.yd[2 * k..2 * k + 2]);
+            assert_eq!(ydd, &tr.ydd[2 * k..2 * k + 2]);
+        }
+    }
+
+    #[test]
+    fn commands_stay_consistent_through_changes_stopping_and_a_held_robot() {
+        let dmp = rhythm();
+        let dt = 1e-3;
+        let mut st = PeriodicStepper::new(&dmp, &PeriodicStepperOptions::new(dt)).unwrap();
+        let mut last: Option<(Vec<f64>, Vec<f64>, Vec<f64>)> = None;
+        for k in 0..9000 {
+            match k {
+                1500 => st.set_tau(0.12).unwrap(),
+                2000 => st.set_goal(&[0.0, 0.3]).unwrap(),
+                2500 => st.set_amplitude(&[0.2, 0.1]).unwrap(),
+                4000 => st.stop(Some(&[0.1, 0.1])).unwrap(),
+                _ => {}
+            }
+            // held between 3000 and 3300
+            let held = (3000..3300).contains(&k);
+            let measured = last.as_ref().map(|(y, _, _)| y.clone());
+            let m = if held { measured.as_deref() } else { None };
+            let (y, yd, ydd) = st.step(m).unwrap();
+            if let Some((py, pyd, pydd)) = &last {
+                for d in 0..2 {
+                    assert!((yd[d] - (pyd[d] + dt * pydd[d])).abs() < 1e-9 * (1.0 + yd[d].abs()));
+                    assert!((y[d] - (py[d] + dt * yd[d])).abs() < 1e-12);
+                }
+            }
+            last = Some((y.to_vec(), yd.to_vec(), ydd.to_vec()));
+        }
+        assert!(st.done());
+        let (y, yd, _) = last.unwrap();
+        for d in 0..2 {
+            assert!(
+                (y[d] - 0.1).abs() < 1e-9 && yd[d].abs() < 1e-9,
+                "{y:?} {yd:?}"
+            );
+        }
+    }
+}
