@@ -62,8 +62,8 @@ class PeriodicStepper(_core.PeriodicStepper):
 
     Args:
         dmp: the periodic DMP.
-        dt: the control period (s); one Euler step per period, so ``dt`` must keep the spring
-            and the change filter stable at the DMP's tau (refused, naming it, otherwise).
+        dt: the control period (s); too coarse for the spring, it is integrated in the
+            rollout's sub-steps; ``dt * change_filter`` must not exceed tau (refused, naming it).
         phase: the phase to start at (rad).
         ramp: periods over which the rhythm fades in and, after ``stop()``, out (0: it starts
             at full amplitude, as the rollout, and stops by the spring alone).

@@ -588,7 +588,12 @@ impl PeriodicDmp {
 
     /// Sub-steps per sample that keep the spring stable (1 when `dt` already is).
     fn substeps(&self, dt: f64) -> Result<usize> {
-        let limit = spring_stable_step(self.config.alpha_z, self.config.beta_z) * self.tau;
+        self.substeps_at(dt, self.tau)
+    }
+
+    /// Sub-steps per sample of `dt` that keep the spring stable at time constant `tau`.
+    pub(crate) fn substeps_at(&self, dt: f64, tau: f64) -> Result<usize> {
+        let limit = spring_stable_step(self.config.alpha_z, self.config.beta_z) * tau;
         if dt <= limit {
             return Ok(1);
         }
@@ -601,7 +606,7 @@ impl PeriodicDmp {
                      sub-steps per sample, at most {MAX_SUBSTEPS} are taken; use a smaller dt or \
                      a larger tau",
                     fmt_g(dt),
-                    fmt_g(self.tau),
+                    fmt_g(tau),
                     fmt_g(self.config.alpha_z),
                     fmt_g(self.config.beta_z),
                     fmt_g(k)
