@@ -120,3 +120,45 @@ def test_joint_states_no_robot_could_send_are_skipped_and_counted(robot, node, d
     assert result.skipped == 2
     assert np.isfinite(result.measured[1:]).all()
     np.testing.assert_allclose(result.commands[-1], dmp.goal, atol=1e-3)
+
+
+def test_a_periodic_stepper_streams_with_a_frequency_change_mid_run_and_stops_at_rest(robot, node):
+    # a rhythm faded in, sped up 1.25x after 0.6 s, stopped after 2 s: the robot receives, in
+    # order, exactly the commands of the same stepper run offline with the same calls at the same
+    # periods, and the stream ends when the rhythm is at rest
+    t = np.arange(0.0, 2.0, DT)
+    w = 2 * np.pi
+    y = np.column_stack([0.2 * np.sin(w * t), 0.1 * np.cos(w * t), 0.3 + 0.05 * np.sin(2 * w * t)])
+    rhythm = dmprs.PeriodicDMP.fit(t, y, period=1.0, n_basis=25)
+    events = {150: lambda s: s.set_tau(rhythm.tau / 1.25), 500: lambda s: s.stop()}
+
+    def driven(stepper):
+        calls = [0]
+
+        def should_stop() -> bool:  # called once before each period's step
+            if calls[0] in events:
+                events[calls[0]](stepper)
+            calls[0] += 1
+            return False
+
+        return should_stop
+
+    streamed = rhythm.stepper(DT)
+    with PositionController(robot) as controller:
+        result = stream(streamed, node, JOINTS, controller_joints=ROBOT_JOINTS, phase_stopping=False,
+                        should_stop=driven(streamed))
+        time.sleep(0.2)
+    assert result.done and not result.error
+    offline = rhythm.stepper(DT)
+    should_stop, expected = driven(offline), []
+    while not offline.done():
+        should_stop()
+        expected.append(offline.step()[0].copy())
+    np.testing.assert_array_equal(result.commands, np.array(expected))
+    order = [JOINTS.index(j) for j in ROBOT_JOINTS]
+    np.testing.assert_array_equal(np.array(controller.received), result.commands[:, order])
+    # the phase ran 1.25x faster once the change had settled, and the rhythm ended at its baseline
+    rate = np.diff(np.unwrap(result.phases)) / DT
+    assert rate[100] == pytest.approx(1 / rhythm.tau, rel=1e-9)
+    assert rate[450] == pytest.approx(1.25 / rhythm.tau, rel=1e-3)
+    np.testing.assert_allclose(result.commands[-1], rhythm.goal, atol=1e-9)

@@ -1,7 +1,8 @@
-"""A joint stepper streamed to a ROS 2 robot at the control rate (docs/method.md §2.5).
+"""A joint or periodic stepper streamed to a ROS 2 robot at the control rate (docs/method.md
+§2.5, §12.6).
 
-:func:`stream` runs a :class:`~dmprs.JointStepper` online against a robot's
-``forward_position_controller``: every control period it takes the newest ``/joint_states``
+:func:`stream` runs a :class:`~dmprs.JointStepper` or :class:`~dmprs.PeriodicStepper` online
+against a robot's ``forward_position_controller``: every control period it takes the newest ``/joint_states``
 sample (joints matched by name), steps the DMP with it (phase stopping closes on the measured
 positions: a held robot holds the phase), and publishes the command as a
 ``std_msgs/Float64MultiArray`` in the controller's joint order. The loop keeps its period against
