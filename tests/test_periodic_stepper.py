@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import dmprs
 from dmprs import DmprsError
@@ -164,3 +166,36 @@ def test_bad_options_and_measurements_are_named_and_change_nothing() -> None:
         with pytest.raises(DmprsError, match=name):
             getattr(stepper, call)(arg)
     assert (stepper.phase, stepper.steps) == (phase, steps)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 5), st.floats(-1e3, 1e3, allow_nan=False)), max_size=12),
+       st.floats(1e-4, 2e-2), st.booleans())
+def test_whatever_it_is_told_it_sends_finite_commands_within_its_velocity_limit_or_refuses(
+    calls: list[tuple[int, float]], dt: float, measuring: bool
+) -> None:
+    # hostile calls between steps (baselines and amplitudes up to 1e3, any tau, measurements up
+    # to 1e3 off): each either is refused with a dmprs error, changing nothing, or taken; every
+    # command sent is finite and within the velocity limit
+    dmp = rhythm()
+    stepper = dmp.stepper(dt, velocity_max=2.0)
+    actions = [
+        lambda v: stepper.set_goal([v, -v]),
+        lambda v: stepper.set_amplitude([abs(v), 1.0]),
+        lambda v: stepper.set_tau(abs(v) * 1e-3),
+        lambda v: stepper.stop([v, 0.0]),
+        lambda v: stepper.step([v, v]),
+        lambda v: None,
+    ]
+    for action, value in calls:
+        try:
+            actions[action](value)
+        except DmprsError:
+            pass
+        for _ in range(50):
+            try:
+                y, yd, ydd = stepper.step(stepper.step()[0] + 0.01 if measuring else None)
+            except DmprsError:
+                break
+            assert np.isfinite(y).all() and np.isfinite(yd).all() and np.isfinite(ydd).all()
+            assert (np.abs(yd) <= 2.0 * (1 + 1e-12)).all()
