@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import dmprs
-from dmprs import _core
+from dmprs import _core, portable
 from dmprs.errors import ExtrapolationError, InvalidInputError
 from dmprs.generalize import MAX_GP_DEMOS
 
@@ -18,7 +18,11 @@ OPTIONS = {"kernel": "tricube", "bandwidth": 1.5, "ridge": 1e-8, "interpolate": 
 
 
 def min_jerk(s):
-    return 10 * s**3 - 15 * s**4 + 6 * s**5
+    # products, not numpy's power, and dmprs.portable's sin below: the machine fingerprint
+    # (tests/machine_fingerprint.py) builds its demos here, and numpy's AVX-512 power and sin
+    # differ from its other loops in the last bit
+    s3 = s * s * s
+    return 10 * s3 - 15 * s3 * s + 6 * s3 * s * s
 
 
 def trajectory(q, n_dof=2, samples=400, derivatives=False):
@@ -29,7 +33,8 @@ def trajectory(q, n_dof=2, samples=400, derivatives=False):
     tau = 1.0 + 0.3 * q[0] + (0.1 * q[1] if q.size > 1 else 0.0)
     t = np.linspace(0.0, tau, samples)
     s = t / tau
-    cols = [(1.0 + q.sum() + 0.2 * d) * min_jerk(s) + 0.1 * d * q[0] * np.sin(np.pi * s) ** 2 for d in range(n_dof)]
+    cols = [(1.0 + q.sum() + 0.2 * d) * min_jerk(s) + 0.1 * d * q[0] * portable.sin(np.pi * s) ** 2
+            for d in range(n_dof)]
     y = np.stack(cols, axis=1)
     if not derivatives:
         return dmprs.Trajectory(t, y)
