@@ -20,7 +20,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::basis::Basis;
-use crate::design_matrix::{PreparedDemo, normal_equations, solve_ridge};
+use crate::design_matrix::{NormalEquations, PreparedDemo, normal_equations, solve_ridge};
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
 use crate::error::{Error, Result, check_scalar};
 use crate::lwr::{Lwr, LwrOptions};
@@ -88,9 +88,6 @@ impl Method {
     }
 }
 
-/// `(weights N x D, tau, goal, y0)`.
-type Parameters = (DMatrix<f64>, f64, DVector<f64>, DVector<f64>);
-
 #[derive(Debug, Clone)]
 enum Model {
     Linear(Linear),
@@ -103,27 +100,27 @@ enum Model {
 struct Linear {
     /// `(M-1) x n`.
     pinv: DMatrix<f64>,
-    /// Flattened parameters of each demo.
+    /// Flattened parameters of each demo: its weights, then its scalars.
     thetas: Vec<DVector<f64>>,
 }
 
 #[derive(Debug, Clone)]
 struct LwrGp {
     lwr: Lwr,
-    /// The GPs of tau, then each goal coordinate, then each start coordinate.
+    /// One GP per scalar parameter, in the order the scalars were given.
     gps: OutputGps,
 }
 
-/// A generalizer over M demonstrations.
+/// What every generalizer shares once each demonstration is fitted: the map from a query to the
+/// shape weights (`N x D`) and to the scalar parameters of the primitive (tau, goals, starts,
+/// ...), affinely ([`Method::Linear`]) or by LWR on the demos' normal equations and one GP per
+/// scalar ([`Method::LwrGp`]). The kind of primitive only decides which scalars there are.
 #[derive(Debug, Clone)]
-pub struct Generalizer {
-    config: DmpConfig,
+pub(crate) struct ParameterMap {
     method: &'static str,
-    n_dim: usize,
+    n_basis: usize,
     n_dof: usize,
     queries: Vec<Vec<f64>>,
-    demo_dmps: Vec<Dmp>,
-    tau_valid: (f64, f64),
     model: Model,
 }
 
@@ -132,132 +129,115 @@ fn format_query(q: &[f64]) -> String {
     format!("[{}]", parts.join(", "))
 }
 
-/// Flattened parameters `[w (D x N, DOF-major), tau, g (D), y0 (D)]`.
-fn flatten(dmp: &Dmp) -> DVector<f64> {
+/// Flattened parameters `[w (D x N, DOF-major), scalars]`.
+fn flatten(weights: &DMatrix<f64>, scalars: &[f64]) -> DVector<f64> {
     // The weights are N x D column-major, i.e. already DOF-major.
-    let w = dmp.weights().as_slice();
-    let mut v = Vec::with_capacity(w.len() + 1 + 2 * dmp.n_dof());
+    let w = weights.as_slice();
+    let mut v = Vec::with_capacity(w.len() + scalars.len());
     v.extend_from_slice(w);
-    v.push(dmp.tau());
-    v.extend(dmp.goal().iter());
-    v.extend(dmp.y0().iter());
+    v.extend_from_slice(scalars);
     DVector::from_vec(v)
 }
 
-impl Generalizer {
-    /// Fits one DMP per demonstration (docs/method.md §2.3, each on its own tau and goal) and
-    /// precomputes what `method` needs for fast queries.
-    pub fn new(
+/// A DMP's scalar parameters `[tau, g (D), y0 (D)]`.
+fn dmp_scalars(dmp: &Dmp) -> Vec<f64> {
+    let mut v = vec![dmp.tau()];
+    v.extend(dmp.goal().iter());
+    v.extend(dmp.y0().iter());
+    v
+}
+
+/// Checks the demonstration queries (one per demo, at least 2, all of one length >= 1, finite,
+/// distinct) and returns their dimension.
+pub(crate) fn check_queries(queries: &[Vec<f64>], m: usize, method: &'static str) -> Result<usize> {
+    if queries.len() != m {
+        return Err(Error::Shape {
+            name: "queries",
+            expected: format!("one per demonstration ({m})"),
+            got: queries.len().to_string(),
+        });
+    }
+    if m < 2 {
+        return Err(Error::DemoCount {
+            method,
+            got: m,
+            requirement: "needs at least 2 demonstrations".into(),
+        });
+    }
+    let n_dim = queries[0].len();
+    if n_dim == 0 {
+        return Err(Error::Shape {
+            name: "queries",
+            expected: "(M, n) with n >= 1".into(),
+            got: format!("({m}, 0)"),
+        });
+    }
+    for (k, q) in queries.iter().enumerate() {
+        if q.len() != n_dim {
+            return Err(Error::Shape {
+                name: "queries",
+                expected: format!("query {k} of length {n_dim} like query 0"),
+                got: q.len().to_string(),
+            });
+        }
+        if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                name: "queries",
+                location: format!("[{k}, {d}]"),
+                value: v,
+            });
+        }
+        if let Some(j) = queries[..k].iter().position(|p| p == q) {
+            return Err(Error::DuplicateQuery {
+                first: j,
+                second: k,
+                query: format_query(q),
+            });
+        }
+    }
+    Ok(n_dim)
+}
+
+/// The interval tau(q) must lie strictly inside, from the demos' taus (docs/method.md §3.3).
+pub(crate) fn tau_range(taus: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = taus.fold((f64::INFINITY, 0.0_f64), |(lo, hi), t| {
+        (lo.min(t), hi.max(t))
+    });
+    (TAU_LOW * lo, TAU_HIGH * hi)
+}
+
+impl ParameterMap {
+    /// `queries` checked by [`check_queries`]; per demo its normal equations (for LWR), its
+    /// fitted weights `N x D` and its scalars; `names` the scalars' names (for the GPs' errors).
+    pub(crate) fn new(
         queries: &[Vec<f64>],
-        demos: &[Demonstration<'_>],
-        config: DmpConfig,
-        method: Method,
+        normal: Vec<NormalEquations>,
+        weights: &[&DMatrix<f64>],
+        scalars: &[Vec<f64>],
+        names: &[String],
+        method: &Method,
     ) -> Result<Self> {
-        config.validate_for_fit()?;
-        let name = method.name();
-        let m = demos.len();
-        if queries.len() != m {
-            return Err(Error::Shape {
-                name: "queries",
-                expected: format!("one per demonstration ({m})"),
-                got: queries.len().to_string(),
-            });
-        }
-        if m < 2 {
-            return Err(Error::DemoCount {
-                method: name,
-                got: m,
-                requirement: "needs at least 2 demonstrations".into(),
-            });
-        }
-        let n_dim = queries[0].len();
-        if n_dim == 0 {
-            return Err(Error::Shape {
-                name: "queries",
-                expected: "(M, n) with n >= 1".into(),
-                got: format!("({m}, 0)"),
-            });
-        }
-        for (k, q) in queries.iter().enumerate() {
-            if q.len() != n_dim {
-                return Err(Error::Shape {
-                    name: "queries",
-                    expected: format!("query {k} of length {n_dim} like query 0"),
-                    got: q.len().to_string(),
-                });
-            }
-            if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                return Err(Error::NonFinite {
-                    name: "queries",
-                    location: format!("[{k}, {d}]"),
-                    value: v,
-                });
-            }
-            if let Some(j) = queries[..k].iter().position(|p| p == q) {
-                return Err(Error::DuplicateQuery {
-                    first: j,
-                    second: k,
-                    query: format_query(q),
-                });
-            }
-        }
-        let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
-        let mut normal = Vec::with_capacity(m);
-        let mut demo_dmps = Vec::with_capacity(m);
-        let mut n_dof = 0;
-        for (k, demo) in demos.iter().enumerate() {
-            let in_demo = |e: Error| Error::InDemo {
-                index: k,
-                source: Box::new(e),
-            };
-            let prepared = PreparedDemo::new(demo).map_err(in_demo)?;
-            if k == 0 {
-                n_dof = prepared.n_dof();
-            } else if prepared.n_dof() != n_dof {
-                return Err(Error::DofMismatch {
-                    index: k,
-                    got: prepared.n_dof(),
-                    expected: n_dof,
-                });
-            }
-            let ne = normal_equations(&prepared, &basis, &config);
-            // Exactly what Dmp::fit computes: the demo's own DMP, bit for bit.
-            let w = solve_ridge(ne.ata.clone(), &ne.atf, FIT_RIDGE, "DMP fit").map_err(in_demo)?;
-            demo_dmps.push(
-                Dmp::new(
-                    config,
-                    w,
-                    prepared.goal.clone(),
-                    prepared.y0.clone(),
-                    prepared.tau,
-                )
-                .map_err(in_demo)?,
-            );
-            normal.push(ne);
-        }
-        let taus: Vec<f64> = demo_dmps.iter().map(|d| d.tau()).collect();
-        let tau_min = taus.iter().cloned().fold(f64::INFINITY, f64::min);
-        let tau_max = taus.iter().cloned().fold(0.0, f64::max);
-        let tau_valid = (TAU_LOW * tau_min, TAU_HIGH * tau_max);
+        let (n_basis, n_dof) = weights[0].shape();
         let model = match method {
-            Method::Linear => Model::Linear(Self::linear_model(queries, &demo_dmps)?),
+            Method::Linear => Model::Linear(Self::linear_model(queries, weights, scalars)?),
             Method::LwrGp(opts) => Model::LwrGp(Box::new(Self::lwr_gp_model(
-                queries, normal, &demo_dmps, &opts,
+                queries, normal, scalars, names, opts,
             )?)),
         };
         Ok(Self {
-            config,
-            method: name,
-            n_dim,
+            method: method.name(),
+            n_basis,
             n_dof,
             queries: queries.to_vec(),
-            demo_dmps,
-            tau_valid,
             model,
         })
     }
 
-    fn linear_model(queries: &[Vec<f64>], dmps: &[Dmp]) -> Result<Linear> {
+    fn linear_model(
+        queries: &[Vec<f64>],
+        weights: &[&DMatrix<f64>],
+        scalars: &[Vec<f64>],
+    ) -> Result<Linear> {
         let (m, n) = (queries.len(), queries[0].len());
         if m > n + 1 {
             return Err(Error::DemoCount {
@@ -304,14 +284,19 @@ impl Generalizer {
         })?;
         Ok(Linear {
             pinv,
-            thetas: dmps.iter().map(flatten).collect(),
+            thetas: weights
+                .iter()
+                .zip(scalars)
+                .map(|(w, s)| flatten(w, s))
+                .collect(),
         })
     }
 
     fn lwr_gp_model(
         queries: &[Vec<f64>],
-        normal: Vec<crate::design_matrix::NormalEquations>,
-        dmps: &[Dmp],
+        normal: Vec<NormalEquations>,
+        scalars: &[Vec<f64>],
+        names: &[String],
         opts: &LwrGpOptions,
     ) -> Result<LwrGp> {
         check_scalar("gp_noise", opts.gp_noise, true)?;
@@ -325,20 +310,11 @@ impl Generalizer {
         let lwr = Lwr::new(queries, normal, opts.lwr)?;
         let (m, n) = (queries.len(), queries[0].len());
         let x = DMatrix::from_fn(n, m, |d, k| queries[k][d]);
-        let n_dof = dmps[0].n_dof();
-        let mut outputs = vec![("tau".to_string(), dmps.iter().map(|d| d.tau()).collect())];
-        outputs.extend((0..n_dof).map(|i| {
-            (
-                format!("goal[{i}]"),
-                dmps.iter().map(|d| d.goal()[i]).collect(),
-            )
-        }));
-        outputs.extend((0..n_dof).map(|i| {
-            (
-                format!("start[{i}]"),
-                dmps.iter().map(|d| d.y0()[i]).collect(),
-            )
-        }));
+        let outputs = names
+            .iter()
+            .enumerate()
+            .map(|(i, name)| (name.clone(), scalars.iter().map(|s| s[i]).collect()))
+            .collect();
         let settings = GpSettings {
             noise: opts.gp_noise,
             optimize: opts.gp_optimize,
@@ -351,11 +327,217 @@ impl Generalizer {
         Ok(LwrGp { lwr, gps })
     }
 
-    pub fn method(&self) -> &'static str {
+    pub(crate) fn method(&self) -> &'static str {
         self.method
     }
+    pub(crate) fn n_query(&self) -> usize {
+        self.queries[0].len()
+    }
+    pub(crate) fn queries(&self) -> &[Vec<f64>] {
+        &self.queries
+    }
+
+    /// Checks a query against the demonstrations' (its length, finite values).
+    pub(crate) fn check_query(&self, q: &[f64]) -> Result<()> {
+        let n_dim = self.n_query();
+        if q.len() != n_dim {
+            return Err(Error::Shape {
+                name: "q",
+                expected: format!("({n_dim},), the dimension of the demonstration queries"),
+                got: format!("({},)", q.len()),
+            });
+        }
+        if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                name: "q",
+                location: format!("[{d}]"),
+                value: v,
+            });
+        }
+        Ok(())
+    }
+
+    /// The weights (`N x D`) and the scalars at `q` (checked by the caller).
+    pub(crate) fn at(&self, q: &[f64]) -> Result<(DMatrix<f64>, Vec<f64>)> {
+        match &self.model {
+            Model::Linear(lin) => {
+                let theta = if let Some(k) = self.queries.iter().position(|qk| qk.as_slice() == q) {
+                    // At a vertex the barycentric coordinates are exactly e_k; take them so,
+                    // rather than through the rounding of the pseudo-inverse.
+                    lin.thetas[k].clone()
+                } else {
+                    let dq = DVector::from_fn(self.n_query(), |d, _| q[d] - self.queries[0][d]);
+                    let lam = &lin.pinv * dq;
+                    let lam0 = 1.0 - lam.sum();
+                    let mut theta = &lin.thetas[0] * lam0;
+                    for (k, l) in lam.iter().enumerate() {
+                        theta.axpy(*l, &lin.thetas[k + 1], 1.0);
+                    }
+                    theta
+                };
+                let nw = self.n_basis * self.n_dof;
+                let w =
+                    DMatrix::from_column_slice(self.n_basis, self.n_dof, &theta.as_slice()[..nw]);
+                Ok((w, theta.as_slice()[nw..].to_vec()))
+            }
+            Model::LwrGp(model) => {
+                let w = model.lwr.weights_at(q)?;
+                let nearest = match model.gps.neighbours() {
+                    Some(k) => model.lwr.nearest(q, k),
+                    None => Vec::new(),
+                };
+                Ok((w, model.gps.means_at(q, &nearest)?))
+            }
+        }
+    }
+
+    /// The flattened parameters `[w (D x N, DOF-major), scalars]` at `q`.
+    pub(crate) fn flat_at(&self, q: &[f64]) -> Result<DVector<f64>> {
+        self.check_query(q)?;
+        let (w, scalars) = self.at(q)?;
+        Ok(flatten(&w, &scalars))
+    }
+
+    /// Refuses a tau outside `tau_valid` for the query `q` (docs/method.md §3.3).
+    pub(crate) fn check_tau(&self, q: &[f64], tau: f64, tau_valid: (f64, f64)) -> Result<()> {
+        let (lo, hi) = tau_valid;
+        if tau > lo && tau < hi {
+            return Ok(());
+        }
+        Err(Error::Extrapolation {
+            query: format_query(q),
+            reason: format!(
+                "the '{}' generalization gives tau = {tau} s, outside the valid range ({lo}, {hi}) s \
+                 (0.2 x the shortest and 5 x the longest demonstration); the query is too far from the demonstrations",
+                self.method
+            ),
+        })
+    }
+
+    /// Central-difference Jacobian of [`Self::flat_at`] with respect to `q`
+    /// (`n_parameters x n`), for learners that need a gain (docs/method.md §5.2). The step in
+    /// dimension d is `rel_step x` the range of the demo queries in d (or `max(|q_d|, 1)` where
+    /// they do not vary). Exact up to rounding for the linear generalizer, which is affine.
+    pub(crate) fn jacobian(&self, q: &[f64], rel_step: f64) -> Result<DMatrix<f64>> {
+        self.check_query(q)?;
+        check_scalar("rel_step", rel_step, true)?;
+        let n_dim = self.n_query();
+        let mut jac: Option<DMatrix<f64>> = None;
+        let mut qp = q.to_vec();
+        for d in 0..n_dim {
+            let (lo, hi) = self
+                .queries
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v[d]), b.max(v[d]))
+                });
+            let scale = if hi > lo {
+                hi - lo
+            } else {
+                q[d].abs().max(1.0)
+            };
+            let h = rel_step * scale;
+            qp[d] = q[d] + h;
+            let plus = self.flat_at(&qp)?;
+            qp[d] = q[d] - h;
+            let minus = self.flat_at(&qp)?;
+            qp[d] = q[d];
+            let jac = jac.get_or_insert_with(|| DMatrix::zeros(plus.len(), n_dim));
+            jac.set_column(d, &((plus - minus) / (2.0 * h)));
+        }
+        Ok(jac.unwrap_or_else(|| DMatrix::zeros(0, 0)))
+    }
+}
+
+/// A generalizer over M demonstrations.
+#[derive(Debug, Clone)]
+pub struct Generalizer {
+    config: DmpConfig,
+    n_dof: usize,
+    demo_dmps: Vec<Dmp>,
+    tau_valid: (f64, f64),
+    map: ParameterMap,
+}
+
+/// The names of a DMP's scalar parameters, in [`dmp_scalars`]' order.
+fn dmp_scalar_names(n_dof: usize) -> Vec<String> {
+    let mut names = vec!["tau".to_string()];
+    names.extend((0..n_dof).map(|i| format!("goal[{i}]")));
+    names.extend((0..n_dof).map(|i| format!("start[{i}]")));
+    names
+}
+
+impl Generalizer {
+    /// Fits one DMP per demonstration (docs/method.md §2.3, each on its own tau and goal) and
+    /// precomputes what `method` needs for fast queries.
+    pub fn new(
+        queries: &[Vec<f64>],
+        demos: &[Demonstration<'_>],
+        config: DmpConfig,
+        method: Method,
+    ) -> Result<Self> {
+        config.validate_for_fit()?;
+        let m = demos.len();
+        check_queries(queries, m, method.name())?;
+        let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
+        let mut normal = Vec::with_capacity(m);
+        let mut demo_dmps = Vec::with_capacity(m);
+        let mut n_dof = 0;
+        for (k, demo) in demos.iter().enumerate() {
+            let in_demo = |e: Error| Error::InDemo {
+                index: k,
+                source: Box::new(e),
+            };
+            let prepared = PreparedDemo::new(demo).map_err(in_demo)?;
+            if k == 0 {
+                n_dof = prepared.n_dof();
+            } else if prepared.n_dof() != n_dof {
+                return Err(Error::DofMismatch {
+                    index: k,
+                    got: prepared.n_dof(),
+                    expected: n_dof,
+                });
+            }
+            let ne = normal_equations(&prepared, &basis, &config);
+            // Exactly what Dmp::fit computes: the demo's own DMP, bit for bit.
+            let w = solve_ridge(ne.ata.clone(), &ne.atf, FIT_RIDGE, "DMP fit").map_err(in_demo)?;
+            demo_dmps.push(
+                Dmp::new(
+                    config,
+                    w,
+                    prepared.goal.clone(),
+                    prepared.y0.clone(),
+                    prepared.tau,
+                )
+                .map_err(in_demo)?,
+            );
+            normal.push(ne);
+        }
+        let tau_valid = tau_range(demo_dmps.iter().map(|d| d.tau()));
+        let weights: Vec<&DMatrix<f64>> = demo_dmps.iter().map(|d| d.weights()).collect();
+        let scalars: Vec<Vec<f64>> = demo_dmps.iter().map(dmp_scalars).collect();
+        let map = ParameterMap::new(
+            queries,
+            normal,
+            &weights,
+            &scalars,
+            &dmp_scalar_names(n_dof),
+            &method,
+        )?;
+        Ok(Self {
+            config,
+            n_dof,
+            demo_dmps,
+            tau_valid,
+            map,
+        })
+    }
+
+    pub fn method(&self) -> &'static str {
+        self.map.method()
+    }
     pub fn n_query(&self) -> usize {
-        self.n_dim
+        self.map.n_query()
     }
     pub fn n_dof(&self) -> usize {
         self.n_dof
@@ -371,7 +553,7 @@ impl Generalizer {
         &self.demo_dmps
     }
     pub fn queries(&self) -> &[Vec<f64>] {
-        &self.queries
+        self.map.queries()
     }
     /// Length of the flattened parameter vector: `D N + 1 + 2 D`.
     pub fn n_parameters(&self) -> usize {
@@ -382,128 +564,28 @@ impl Generalizer {
         self.tau_valid
     }
 
-    fn check_query(&self, q: &[f64]) -> Result<()> {
-        if q.len() != self.n_dim {
-            return Err(Error::Shape {
-                name: "q",
-                expected: format!(
-                    "({},), the dimension of the demonstration queries",
-                    self.n_dim
-                ),
-                got: format!("({},)", q.len()),
-            });
-        }
-        if let Some((d, &v)) = q.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                name: "q",
-                location: format!("[{d}]"),
-                value: v,
-            });
-        }
-        Ok(())
-    }
-
-    /// Parameters at `q` without the validity check of tau.
-    fn raw_parameters(&self, q: &[f64]) -> Result<Parameters> {
-        let (n_basis, n_dof) = (self.config.n_basis, self.n_dof);
-        match &self.model {
-            Model::Linear(lin) => {
-                let theta = if let Some(k) = self.queries.iter().position(|qk| qk.as_slice() == q) {
-                    // At a vertex the barycentric coordinates are exactly e_k; take them so,
-                    // rather than through the rounding of the pseudo-inverse.
-                    lin.thetas[k].clone()
-                } else {
-                    let dq = DVector::from_fn(self.n_dim, |d, _| q[d] - self.queries[0][d]);
-                    let lam = &lin.pinv * dq;
-                    let lam0 = 1.0 - lam.sum();
-                    let mut theta = &lin.thetas[0] * lam0;
-                    for (k, l) in lam.iter().enumerate() {
-                        theta.axpy(*l, &lin.thetas[k + 1], 1.0);
-                    }
-                    theta
-                };
-                let nw = n_basis * n_dof;
-                let w = DMatrix::from_column_slice(n_basis, n_dof, &theta.as_slice()[..nw]);
-                let goal = DVector::from_column_slice(&theta.as_slice()[nw + 1..nw + 1 + n_dof]);
-                let y0 = DVector::from_column_slice(&theta.as_slice()[nw + 1 + n_dof..]);
-                Ok((w, theta[nw], goal, y0))
-            }
-            Model::LwrGp(model) => {
-                let w = model.lwr.weights_at(q)?;
-                let nearest = match model.gps.neighbours() {
-                    Some(k) => model.lwr.nearest(q, k),
-                    None => Vec::new(),
-                };
-                let means = model.gps.means_at(q, &nearest)?;
-                let goal = DVector::from_column_slice(&means[1..1 + n_dof]);
-                let y0 = DVector::from_column_slice(&means[1 + n_dof..]);
-                Ok((w, means[0], goal, y0))
-            }
-        }
-    }
-
     /// The DMP for query `q` (paper eq. 6). Fails with [`Error::Extrapolation`] if its tau would
     /// leave `(0.2 min tau_k, 5 max tau_k)`.
     pub fn predict(&self, q: &[f64]) -> Result<Dmp> {
-        self.check_query(q)?;
-        let (w, tau, goal, y0) = self.raw_parameters(q)?;
-        let (lo, hi) = self.tau_valid;
-        if !(tau > lo && tau < hi) {
-            return Err(Error::Extrapolation {
-                query: format_query(q),
-                reason: format!(
-                    "the '{}' generalization gives tau = {tau} s, outside the valid range ({lo}, {hi}) s \
-                     (0.2 x the shortest and 5 x the longest demonstration); the query is too far from the demonstrations",
-                    self.method
-                ),
-            });
-        }
-        Dmp::new(self.config, w, goal, y0, tau)
+        self.map.check_query(q)?;
+        let (w, s) = self.map.at(q)?;
+        let n = self.n_dof;
+        self.map.check_tau(q, s[0], self.tau_valid)?;
+        let goal = DVector::from_column_slice(&s[1..1 + n]);
+        let y0 = DVector::from_column_slice(&s[1 + n..1 + 2 * n]);
+        Dmp::new(self.config, w, goal, y0, s[0])
     }
 
     /// Flattened parameters `[w (D x N, DOF-major), tau, g (D), y0 (D)]` at `q`, without the
     /// tau check.
     pub fn parameters(&self, q: &[f64]) -> Result<DVector<f64>> {
-        self.check_query(q)?;
-        let (w, tau, goal, y0) = self.raw_parameters(q)?;
-        let mut v = Vec::with_capacity(self.n_parameters());
-        v.extend_from_slice(w.as_slice());
-        v.push(tau);
-        v.extend(goal.iter());
-        v.extend(y0.iter());
-        Ok(DVector::from_vec(v))
+        self.map.flat_at(q)
     }
 
     /// Central-difference Jacobian of [`Self::parameters`] with respect to `q`
-    /// (`n_parameters x n`), for learners that need a gain (docs/method.md §5.2). The step in
-    /// dimension d is `rel_step x` the range of the demo queries in d (or `max(|q_d|, 1)` where
-    /// they do not vary). Exact up to rounding for the linear generalizer, which is affine.
+    /// (`n_parameters x n`), for learners that need a gain (docs/method.md §5.2).
     pub fn jacobian(&self, q: &[f64], rel_step: f64) -> Result<DMatrix<f64>> {
-        self.check_query(q)?;
-        check_scalar("rel_step", rel_step, true)?;
-        let mut jac = DMatrix::zeros(self.n_parameters(), self.n_dim);
-        let mut qp = q.to_vec();
-        for d in 0..self.n_dim {
-            let (lo, hi) = self
-                .queries
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                    (a.min(v[d]), b.max(v[d]))
-                });
-            let scale = if hi > lo {
-                hi - lo
-            } else {
-                q[d].abs().max(1.0)
-            };
-            let h = rel_step * scale;
-            qp[d] = q[d] + h;
-            let plus = self.parameters(&qp)?;
-            qp[d] = q[d] - h;
-            let minus = self.parameters(&qp)?;
-            qp[d] = q[d];
-            jac.set_column(d, &((plus - minus) / (2.0 * h)));
-        }
-        Ok(jac)
+        self.map.jacobian(q, rel_step)
     }
 }
 
@@ -511,6 +593,10 @@ impl Generalizer {
 mod tests {
     use super::*;
     use crate::lwr::LocalModel;
+
+    fn flat(dmp: &Dmp) -> DVector<f64> {
+        flatten(dmp.weights(), &dmp_scalars(dmp))
+    }
 
     /// A 2-DOF demo whose amplitude, goal and duration depend on the query.
     fn demo(q: f64) -> (Vec<f64>, DMatrix<f64>) {
@@ -572,7 +658,7 @@ mod tests {
             assert!((mid - avg).amax() < 1e-9);
         }
         // The paper's formula at a = 0.25.
-        let expect = g.demo_dmps().iter().map(flatten).collect::<Vec<_>>();
+        let expect = g.demo_dmps().iter().map(flat).collect::<Vec<_>>();
         assert!((p(0.25) - (&expect[0] * 0.75 + &expect[1] * 0.25)).amax() < 1e-12);
     }
 
@@ -593,7 +679,7 @@ mod tests {
         let g = build(&qs, Method::LwrGp(LwrGpOptions::default())).unwrap();
         for (k, &q) in qs.iter().enumerate() {
             let got = g.parameters(&[q]).unwrap();
-            let want = flatten(&g.demo_dmps()[k]);
+            let want = flat(&g.demo_dmps()[k]);
             assert!(
                 (&got - &want).amax() < 1e-5 * want.amax(),
                 "k={k}: {}",
@@ -632,12 +718,12 @@ mod tests {
         // demos' tau, goal and start to the GP noise
         for (k, &q) in qs.iter().enumerate() {
             assert_eq!(w(&aff, q), w(&cst, q), "q={q}");
-            let (got, want) = (aff.parameters(&[q]).unwrap(), flatten(&aff.demo_dmps()[k]));
+            let (got, want) = (aff.parameters(&[q]).unwrap(), flat(&aff.demo_dmps()[k]));
             assert!((got - &want).amax() < 1e-6 * want.amax(), "q={q}");
         }
         // beyond and between them: the DMP of the demo that would be there (weights by
         // first-order LWR, tau, goal and start by the GPs' affine mean)
-        let fit = |q: f64| flatten(&build_affine(&[q, q + 1.0], false).demo_dmps()[0]);
+        let fit = |q: f64| flat(&build_affine(&[q, q + 1.0], false).demo_dmps()[0]);
         for q in [2.5, -0.8, 0.75] {
             let want = fit(q);
             let err = (aff.parameters(&[q]).unwrap() - &want).amax();
@@ -683,7 +769,7 @@ mod tests {
         let nw = exact.config().n_basis * exact.n_dof();
         for (k, &q) in qs.iter().enumerate() {
             let got = local.parameters(&[q]).unwrap();
-            let want = flatten(&local.demo_dmps()[k]);
+            let want = flat(&local.demo_dmps()[k]);
             let err = (got.rows(nw, want.len() - nw) - want.rows(nw, want.len() - nw)).amax();
             assert!(err < 1e-5 * want.amax(), "demo {k}: {err}");
         }
@@ -742,7 +828,7 @@ mod tests {
     fn the_jacobian_of_linear_is_the_demo_difference() {
         let g = build(&[0.0, 2.0], Method::Linear).unwrap();
         let jac = g.jacobian(&[0.7], 1e-3).unwrap();
-        let want = (flatten(&g.demo_dmps()[1]) - flatten(&g.demo_dmps()[0])) / 2.0;
+        let want = (flat(&g.demo_dmps()[1]) - flat(&g.demo_dmps()[0])) / 2.0;
         assert!((jac.column(0) - want).amax() < 1e-8);
     }
 

@@ -23,7 +23,9 @@ use std::f64::consts::TAU as TWO_PI;
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use rayon::prelude::*;
 
-use crate::design_matrix::{DESIGN_CUTOFF, PreparedDemo, accumulate_row, solve_ridge};
+use crate::design_matrix::{
+    DESIGN_CUTOFF, NormalEquations, PreparedDemo, accumulate_row, solve_ridge,
+};
 use crate::dmp::{Demonstration, FIT_RIDGE, MAX_BASIS};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::rollout::{
@@ -349,6 +351,33 @@ impl PeriodicDmp {
         goal: DVector<f64>,
         amplitude: DVector<f64>,
     ) -> Result<Self> {
+        let (ne, tau) = Self::normal_equations_about(prepared, period, &config, &goal, &amplitude)?;
+        let weights = solve_ridge(ne.ata, &ne.atf, FIT_RIDGE, "periodic DMP fit")?;
+        Self::new(config, weights, goal, amplitude, prepared.y0.clone(), tau)
+    }
+
+    /// [`PeriodicDmp::fit`] and the normal equations `A^T A`, `A^T F / r` it solved, which the
+    /// generalizer's LWR weighs across demonstrations.
+    pub(crate) fn fit_with_normal_equations(
+        prepared: &PreparedDemo<'_>,
+        period: Option<f64>,
+        config: PeriodicConfig,
+    ) -> Result<(Self, NormalEquations)> {
+        let (goal, amplitude) = baseline_and_amplitude(&prepared.y);
+        let (ne, tau) = Self::normal_equations_about(prepared, period, &config, &goal, &amplitude)?;
+        let weights = solve_ridge(ne.ata.clone(), &ne.atf, FIT_RIDGE, "periodic DMP fit")?;
+        let dmp = Self::new(config, weights, goal, amplitude, prepared.y0.clone(), tau)?;
+        Ok((dmp, ne))
+    }
+
+    /// The normal equations of the fit about `goal` and `amplitude`, and tau.
+    fn normal_equations_about(
+        prepared: &PreparedDemo<'_>,
+        period: Option<f64>,
+        config: &PeriodicConfig,
+        goal: &DVector<f64>,
+        amplitude: &DVector<f64>,
+    ) -> Result<(NormalEquations, f64)> {
         config.validate()?;
         let period = period.unwrap_or(prepared.tau);
         check_scalar("period", period, true)?;
@@ -389,9 +418,7 @@ impl PeriodicDmp {
             }
             accumulate_row(&mut ata, &mut atf, &row, nz, &force);
         }
-        let weights = solve_ridge(ata, &atf, FIT_RIDGE, "periodic DMP fit")?;
-        let y0 = prepared.y0.clone();
-        Self::new(config, weights, goal, amplitude, y0, tau)
+        Ok((NormalEquations { ata, atf }, tau))
     }
 
     pub fn config(&self) -> &PeriodicConfig {
