@@ -12,10 +12,12 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs import _core
 from dmprs._arrays import as_count, as_query, as_scalar
 from dmprs.cartesian import CartesianDMP
-from dmprs.database import Database
+from dmprs.database import Database, Demo
 from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError
+from dmprs.periodic import PeriodicDMP
 from dmprs.primitive import constants as _constants
+from dmprs.primitive import spring
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 from dmprs.triangulation import PiecewiseLinear
 
@@ -34,6 +36,34 @@ def _needs_triangulation(queries: NDArray[np.float64]) -> bool:
     """More demos than one simplex (n + 1), or repeated queries: the core's "linear" cannot."""
     distinct = len(np.unique(queries, axis=0))
     return distinct > queries.shape[1] + 1 or distinct < len(queries)
+
+
+def _period(demo: Demo, k: int) -> float | None:
+    """A periodic demonstration's period: its metadata's ``"period"``, else None (its duration)."""
+    if "period" not in demo.metadata:
+        return None
+    return as_scalar(demo.metadata["period"], f"metadata['period'] of demonstration {k}", positive=True)
+
+
+def _periodic_core(db: Database, method: str, n_basis: int, spring_constants: dict[str, float],
+                   alpha_x: float | None, triangulate: bool | None,
+                   options: _core._GeneralizerOptions) -> _core.PeriodicGeneralizer | PiecewiseLinear:
+    """The periodic generalizer over ``db``'s joint trajectories, or the reason it cannot be."""
+    if alpha_x is not None:
+        raise InvalidInputError("alpha_x is the discrete phase's decay rate: a periodic DMP's phase does not "
+                                "decay (leave alpha_x unset with periodic=True)")
+    if db.is_cartesian:
+        raise InvalidInputError("periodic=True generalizes joint-space demonstrations; the database holds "
+                                "pose trajectories")
+    n = as_count(n_basis, "n_basis", 3)
+    trajectories = [tr for tr in (d.trajectory for d in db) if isinstance(tr, Trajectory)]
+    periods = [_period(d, k) for k, d in enumerate(db)]
+    if method == "linear" and (triangulate or (triangulate is None and _needs_triangulation(db.queries))):
+        dmps = [PeriodicDMP.fit(tr.t, tr.y, period, n, tr.yd, tr.ydd, **spring_constants)
+                for tr, period in zip(trajectories, periods, strict=True)]
+        return PiecewiseLinear(db.queries, dmps)
+    demos = [(tr.t, tr.y, tr.yd, tr.ydd) for tr in trajectories]
+    return _core.PeriodicGeneralizer(db.queries, demos, periods, method, n, spring_constants, options)
 
 
 class Generalizer:
@@ -104,11 +134,22 @@ class Generalizer:
     the goal and start orientations as rotation vectors in the tangent space of demonstration
     0's goal and start (linear: slerp for two demos; lwr-gp: a GP per tangent coordinate).
 
+    Periodic demonstrations (``periodic=True``; Ude et al. 2010, docs/method.md §12.7): each
+    demonstration, a joint trajectory of one or more periods, is fitted by
+    :meth:`dmprs.PeriodicDMP.fit` with its period ``demo.metadata["period"]`` (s) where the
+    database holds one, else its duration (exactly one period), and :meth:`predict` gives a
+    :class:`~dmprs.PeriodicDMP`: the amplitude-normalized weights as above (LWR on the demos'
+    normal equations, which are in the phase, so rhythms of different frequencies share them),
+    and tau (the frequency), the baseline, the amplitude and the start per DOF by the GPs
+    (``"lwr-gp"``) or affinely (``"linear"``, piecewise on a triangulation beyond n + 1 demos).
+    A query whose amplitude of some DOF would not be positive is refused like one whose tau
+    leaves its range.
+
     Either way, tau(q) must stay within ``(0.2 x`` the shortest, ``5 x`` the longest demo
     duration); a query outside raises :class:`~dmprs.errors.ExtrapolationError`.
     """
 
-    __slots__ = ("_core", "_db_names")
+    __slots__ = ("_core", "_db_names", "_kind")
 
     def __init__(
         self,
@@ -118,7 +159,7 @@ class Generalizer:
         *,
         alpha_z: float = 48.0,
         beta_z: float | None = None,
-        alpha_x: float = 2.0,
+        alpha_x: float | None = None,
         width_factor: float = 2.0,
         kernel: str = "tricube",
         bandwidth: float = 1.5,
@@ -131,6 +172,7 @@ class Generalizer:
         gp_sparse: bool = False,
         triangulate: bool | None = None,
         trend: str = "constant",
+        periodic: bool = False,
     ) -> None:
         if not isinstance(db, Database):
             raise InvalidInputError(f"db is a {type(db).__name__}; expected a dmprs.Database")
@@ -164,8 +206,29 @@ class Generalizer:
                 "method 'lwr-gp' cannot use repeated queries (its GP needs distinct inputs); add "
                 "repeats with on_duplicate='replace', or use method 'linear', which averages them"
             )
-        self._core: _core.Generalizer | _core.CartesianGeneralizer | PiecewiseLinear
+        self._core: _core.Generalizer | _core.CartesianGeneralizer | _core.PeriodicGeneralizer | PiecewiseLinear
         self._db_names = db.query_names
+        self._kind: type[DMP] | type[CartesianDMP] | type[PeriodicDMP] = (
+            PeriodicDMP if periodic is True else CartesianDMP if db.is_cartesian else DMP)
+        options: _core._GeneralizerOptions = {
+            "kernel": kernel,
+            "bandwidth": as_scalar(bandwidth, "bandwidth", positive=True),
+            "ridge": as_scalar(ridge, "ridge", positive=True),
+            "interpolate": bool(interpolate),
+            "gp_noise": as_scalar(gp_noise, "gp_noise", positive=True),
+            "gp_optimize": None if gp_optimize is None else bool(gp_optimize),
+            "gp_restarts": as_count(gp_restarts, "gp_restarts", 0),
+            "gp_neighbours": neighbours,
+            "gp_sparse": bool(gp_sparse),
+            "trend": trend,
+        }
+        if not isinstance(periodic, bool):
+            raise InvalidInputError(f"periodic = {periodic!r} is invalid: use True or False")
+        if periodic:
+            self._core = _periodic_core(db, method, n_basis, spring(alpha_z, beta_z, width_factor), alpha_x,
+                                        triangulate, options)
+            return
+        alpha_x = 2.0 if alpha_x is None else alpha_x
         if method == "linear" and (triangulate or (triangulate is None and _needs_triangulation(db.queries))):
             if db.is_cartesian:
                 raise InvalidInputError(
@@ -179,18 +242,6 @@ class Generalizer:
             return
         n = as_count(n_basis, "n_basis", 2)
         constants = _constants(alpha_z, beta_z, alpha_x, width_factor)
-        options: _core._GeneralizerOptions = {
-            "kernel": kernel,
-            "bandwidth": as_scalar(bandwidth, "bandwidth", positive=True),
-            "ridge": as_scalar(ridge, "ridge", positive=True),
-            "interpolate": bool(interpolate),
-            "gp_noise": as_scalar(gp_noise, "gp_noise", positive=True),
-            "gp_optimize": None if gp_optimize is None else bool(gp_optimize),
-            "gp_restarts": as_count(gp_restarts, "gp_restarts", 0),
-            "gp_neighbours": neighbours,
-            "gp_sparse": bool(gp_sparse),
-            "trend": trend,
-        }
         if db.is_cartesian:
             poses = [
                 (tr.t, tr.pose, tr.velocity, tr.acceleration, tr.angular_velocity, tr.angular_acceleration)
@@ -213,22 +264,26 @@ class Generalizer:
     @property
     def is_cartesian(self) -> bool:
         """True when the demonstrations are poses (:class:`~dmprs.CartesianTrajectory`)."""
-        return isinstance(self._core, _core.CartesianGeneralizer)
+        return self._kind is CartesianDMP
 
-    def predict(self, q: ArrayLike) -> DMP | CartesianDMP:
+    @property
+    def is_periodic(self) -> bool:
+        """True when it generalizes periodic demonstrations (``periodic=True``)."""
+        return self._kind is PeriodicDMP
+
+    def predict(self, q: ArrayLike) -> DMP | CartesianDMP | PeriodicDMP:
         """The DMP for query ``q`` (n,) (a scalar for n = 1): a :class:`~dmprs.CartesianDMP`
-        when the demonstrations are poses.
+        when the demonstrations are poses, a :class:`~dmprs.PeriodicDMP` when periodic.
         """
-        if isinstance(self._core, _core.CartesianGeneralizer):
-            return CartesianDMP._wrap(self._core.predict(self._query(q)))
-        return DMP._wrap(self._core.predict(self._query(q)))
+        return self._kind._wrap(self._core.predict(self._query(q)))  # type: ignore[arg-type]
 
     def parameters(self, q: ArrayLike) -> NDArray[np.float64]:
         """The generalized parameters flattened as ``[w.ravel() (D*N, row d = DOF d), tau,
         goal (D), y0 (D)]``, without the tau validity check. For poses: ``[w.ravel() (6*N),
         tau, goal position (3), goal rotation vector (3), start position (3), start rotation
         vector (3)]``, the rotation vectors in the tangent space of demonstration 0's goal and
-        start orientations (docs/cartesian.md).
+        start orientations (docs/cartesian.md). Periodic: ``[w.ravel() (D*N), tau, goal (D),
+        amplitude (D), y0 (D)]``.
         """
         return self._core.parameters(self._query(q))
 
@@ -243,11 +298,9 @@ class Generalizer:
         return self._core.jacobian(self._query(q), as_scalar(rel_step, "rel_step", positive=True))
 
     @property
-    def demo_dmps(self) -> list[DMP] | list[CartesianDMP]:
+    def demo_dmps(self) -> list[DMP] | list[CartesianDMP] | list[PeriodicDMP]:
         """The DMP fitted to each demonstration, in database order."""
-        if isinstance(self._core, _core.CartesianGeneralizer):
-            return [CartesianDMP._wrap(c) for c in self._core.demo_dmps]
-        return [DMP._wrap(d) for d in self._core.demo_dmps]
+        return [self._kind._wrap(d) for d in self._core.demo_dmps]  # type: ignore[arg-type,misc]
 
     @property
     def method(self) -> str:
@@ -276,7 +329,9 @@ class Generalizer:
 
     @property
     def n_parameters(self) -> int:
-        """``D * N + 1 + 2 * D``; for poses ``6 * N + 1 + 12`` (see :meth:`parameters`)."""
+        """``D * N + 1 + 2 * D``; for poses ``6 * N + 1 + 12``, periodic ``D * N + 1 + 3 * D``
+        (see :meth:`parameters`).
+        """
         return self._core.n_parameters
 
     @property

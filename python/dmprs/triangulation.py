@@ -2,7 +2,8 @@
 ``"linear"`` method of :class:`dmprs.Generalizer` once a growing database has more than n + 1
 demos for an n-D query.
 
-Each demo is a DMP parameter vector ``theta_k = [w, tau, g, y0]`` at its query ``q_k``. The
+Each demo is a DMP parameter vector ``theta_k = [w, tau, g, y0]`` (a periodic DMP's
+``[w, tau, g, r, y0]``, with its amplitude r) at its query ``q_k``. The
 queries are triangulated (1-D: sorted intervals; n-D: the Delaunay triangulation of
 :class:`scipy.spatial.Delaunay`) and inside a simplex with vertices ``q_0 .. q_n``
 
@@ -34,6 +35,7 @@ from dmprs import _core, portable
 from dmprs._arrays import as_query
 from dmprs.dmp import DMP
 from dmprs.errors import ExtrapolationError, InvalidInputError
+from dmprs.periodic import PeriodicDMP
 
 __all__ = ["PiecewiseLinear"]
 
@@ -45,19 +47,21 @@ TAU_LOW, TAU_HIGH = 0.2, 5.0
 LOCAL_SEARCH_FROM = 256
 
 
-def _flatten(dmp: DMP) -> NDArray[np.float64]:
-    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, dmp.start])
+def _flatten(dmp: DMP | PeriodicDMP) -> NDArray[np.float64]:
+    """``[w, tau, g, y0]``; a periodic DMP's amplitude comes after its baseline g."""
+    amplitude = [dmp.amplitude] if isinstance(dmp, PeriodicDMP) else []
+    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, *amplitude, dmp.start])
 
 
 class PiecewiseLinear:
     """The generalizer with the core ``Generalizer``'s interface (``predict``, ``parameters``,
     ``jacobian``, ...; DMPs as core objects), over ``queries`` (M, n) and the demos' fitted
-    DMPs, so :class:`dmprs.Generalizer` can hold either.
+    DMPs (all discrete or all periodic), so :class:`dmprs.Generalizer` can hold either.
     """
 
     method = "linear"
 
-    def __init__(self, queries: NDArray[np.float64], demo_dmps: Sequence[DMP]) -> None:
+    def __init__(self, queries: NDArray[np.float64], demo_dmps: Sequence[DMP] | Sequence[PeriodicDMP]) -> None:
         queries = np.asarray(queries, dtype=np.float64)
         if queries.ndim != 2 or queries.shape[0] != len(demo_dmps):
             raise InvalidInputError(f"queries has shape {queries.shape}; expected ({len(demo_dmps)}, n)")
@@ -187,7 +191,7 @@ class PiecewiseLinear:
                 "overflow (the query is too far from the demonstrations for their spacing)")
         return theta
 
-    def predict(self, q: NDArray[np.float64]) -> _core.Dmp:
+    def predict(self, q: NDArray[np.float64]) -> _core.Dmp | _core.PeriodicDmp:
         """The DMP for query ``q``: the barycentric blend of its simplex's demonstrations."""
         q = self._check_query(q)
         theta = self.parameters(q)
@@ -200,9 +204,19 @@ class PiecewiseLinear:
                 f"outside the valid range ({lo}, {hi}) s (0.2 x the shortest and 5 x the longest "
                 "demonstration); the query is too far from the demonstrations")
         t = self._template
-        dmp = DMP(theta[: d * n].reshape(d, n), theta[d * n + 1: d * n + 1 + d], theta[d * n + 1 + d:], tau,
-                  alpha_z=t.alpha_z, beta_z=t.beta_z, alpha_x=t.alpha_x, width_factor=t.width_factor)
-        return dmp._core
+        w, goal = theta[: d * n].reshape(d, n), theta[d * n + 1: d * n + 1 + d]
+        if isinstance(t, PeriodicDMP):
+            amplitude = theta[d * n + 1 + d: d * n + 1 + 2 * d]
+            if not (amplitude > 0.0).all():
+                k = int(np.argmin(amplitude))
+                raise ExtrapolationError(
+                    f"cannot generalize to query {q.tolist()}: the 'linear' generalization gives "
+                    f"amplitude[{k}] = {amplitude[k]}, not positive (every demonstration's is); the query "
+                    "is too far from the demonstrations")
+            return PeriodicDMP(w, goal, theta[d * n + 1 + 2 * d:], tau, amplitude=amplitude, alpha_z=t.alpha_z,
+                               beta_z=t.beta_z, width_factor=t.width_factor)._core
+        return DMP(w, goal, theta[d * n + 1 + d:], tau, alpha_z=t.alpha_z, beta_z=t.beta_z, alpha_x=t.alpha_x,
+                   width_factor=t.width_factor)._core
 
     def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]:
         """Central differences, step ``rel_step x`` the demos' query range per dimension (as the
@@ -226,7 +240,7 @@ class PiecewiseLinear:
 
     # --- the core Generalizer's properties --------------------------------------------------
     @property
-    def demo_dmps(self) -> list[_core.Dmp]:
+    def demo_dmps(self) -> list[_core.Dmp] | list[_core.PeriodicDmp]:
         """The demonstrations' DMPs."""
         return [d._core for d in self._dmps]
 
@@ -252,8 +266,8 @@ class PiecewiseLinear:
 
     @property
     def n_parameters(self) -> int:
-        """Length of the parameter vector (weights, tau, goal, start)."""
-        return self.n_dof * self.n_basis + 1 + 2 * self.n_dof
+        """Length of the parameter vector (weights, tau, goal, start; a periodic DMP's amplitude too)."""
+        return len(_flatten(self._template))
 
     @property
     def tau_bounds(self) -> tuple[float, float]:

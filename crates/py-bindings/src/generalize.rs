@@ -9,7 +9,7 @@ use crate::dmp::{PyDmp, contiguous, demonstration, time_major};
 use crate::errors::{IntoPyResult, invalid_input};
 use crate::primitive::Constants;
 
-type DemoArrays<'py> = (
+pub(crate) type DemoArrays<'py> = (
     PyReadonlyArray1<'py, f64>,
     PyReadonlyArray2<'py, f64>,
     Option<PyReadonlyArray2<'py, f64>>,

@@ -42,8 +42,8 @@ mod _core {
     use super::oscillator::PyAdaptiveOscillator;
     #[pymodule_export]
     use super::periodic::{
-        PyPeriodicCartesianDmp, PyPeriodicDmp, PyPeriodicOnlineFit, py_rollout_batch_periodic,
-        py_rollout_batch_periodic_cartesian,
+        PyPeriodicCartesianDmp, PyPeriodicDmp, PyPeriodicGeneralizer, PyPeriodicOnlineFit,
+        py_rollout_batch_periodic, py_rollout_batch_periodic_cartesian,
     };
     #[pymodule_export]
     use super::periodic_stepper::PyPeriodicStepper;

@@ -4,11 +4,13 @@
 
 use dmp_core::online_fit::OnlineFit;
 use dmp_core::{
-    PeriodicCartesianDmp, PeriodicConfig, PeriodicDmp, rollout_batch_periodic,
+    PeriodicCartesianDmp, PeriodicConfig, PeriodicDmp, PeriodicGeneralizer, rollout_batch_periodic,
     rollout_batch_periodic_cartesian,
 };
 use nalgebra::DMatrix;
-use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 
 use crate::cartesian::{
@@ -18,6 +20,9 @@ use crate::dmp::{
     TrajectoryArrays, contiguous, demonstration, time_major, trajectory_arrays, vector,
 };
 use crate::errors::IntoPyResult;
+use crate::generalize::{
+    DemoArrays, GeneralizerOptions, generalizer_methods, parse_method, parse_queries,
+};
 use crate::primitive::{vector_array, weights_array};
 
 /// The periodic DMP's constants as Python passes them (`dmprs.periodic` validates them).
@@ -399,3 +404,48 @@ pub fn py_rollout_batch_periodic_cartesian<'py>(
         .map(|tr| pose_arrays(py, tr))
         .collect()
 }
+
+/// The periodic generalizer over `(t, y, yd, ydd)` demonstrations, each with its period (or
+/// `None`: its duration).
+#[pyclass(name = "PeriodicGeneralizer", module = "dmprs._core", frozen)]
+pub struct PyPeriodicGeneralizer {
+    inner: PeriodicGeneralizer,
+}
+
+#[pymethods]
+impl PyPeriodicGeneralizer {
+    /// `queries` `(M, n)`; `demos` a list of `(t, y, yd, ydd)` with `y` `(T, D)`; `periods` one
+    /// per demo.
+    #[new]
+    #[pyo3(signature = (queries, demos, periods, method, n_basis, constants, options))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        queries: PyReadonlyArray2<'_, f64>,
+        demos: Vec<DemoArrays<'_>>,
+        periods: Vec<Option<f64>>,
+        method: &str,
+        n_basis: usize,
+        constants: PeriodicConstants,
+        options: GeneralizerOptions,
+    ) -> PyResult<Self> {
+        let method = parse_method(method, &options)?;
+        let qs = parse_queries(&queries)?;
+        let mut views = Vec::with_capacity(demos.len());
+        for (t, y, yd, ydd) in &demos {
+            views.push(demonstration(t, y, yd.as_ref(), ydd.as_ref())?);
+        }
+        let config = constants.config(n_basis);
+        let inner = py
+            .detach(|| PeriodicGeneralizer::new(&qs, &views, &periods, config, method))
+            .py_err()?;
+        Ok(Self { inner })
+    }
+
+    #[getter]
+    fn n_dof(&self) -> usize {
+        self.inner.n_dof()
+    }
+}
+
+generalizer_methods!(PyPeriodicGeneralizer, PyPeriodicDmp);
