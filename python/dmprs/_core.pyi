@@ -23,6 +23,7 @@ __all__ = [
     "MatchboxConfig",
     "PeriodicCartesianDmp",
     "PeriodicDmp",
+    "PeriodicGeneralizer",
     "PeriodicOnlineFit",
     "PeriodicStepper",
     "PoWER",

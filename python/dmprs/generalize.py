@@ -4,7 +4,7 @@ computed by the Rust core.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -21,7 +21,10 @@ from dmprs.primitive import spring
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 from dmprs.triangulation import PiecewiseLinear
 
-__all__ = ["Generalizer"]
+__all__ = ["GeneralizedDMP", "Generalizer"]
+
+#: the kinds of DMP a generalizer predicts
+GeneralizedDMP: TypeAlias = DMP | CartesianDMP | PeriodicDMP
 
 #: The most demonstrations the exact GPs of "lwr-gp" take: their build grows with the cube of
 #: their number (docs/growing.md measures it). Local (``gp_neighbours``) and sparse (``gp_sparse``)
@@ -208,7 +211,7 @@ class Generalizer:
             )
         self._core: _core.Generalizer | _core.CartesianGeneralizer | _core.PeriodicGeneralizer | PiecewiseLinear
         self._db_names = db.query_names
-        self._kind: type[DMP] | type[CartesianDMP] | type[PeriodicDMP] = (
+        self._kind: type[GeneralizedDMP] = (
             PeriodicDMP if periodic is True else CartesianDMP if db.is_cartesian else DMP)
         options: _core._GeneralizerOptions = {
             "kernel": kernel,
@@ -271,11 +274,11 @@ class Generalizer:
         """True when it generalizes periodic demonstrations (``periodic=True``)."""
         return self._kind is PeriodicDMP
 
-    def predict(self, q: ArrayLike) -> DMP | CartesianDMP | PeriodicDMP:
+    def predict(self, q: ArrayLike) -> GeneralizedDMP:
         """The DMP for query ``q`` (n,) (a scalar for n = 1): a :class:`~dmprs.CartesianDMP`
         when the demonstrations are poses, a :class:`~dmprs.PeriodicDMP` when periodic.
         """
-        return self._kind._wrap(self._core.predict(self._query(q)))  # type: ignore[arg-type]
+        return self._kind._wrap(self._core.predict(self._query(q)))
 
     def parameters(self, q: ArrayLike) -> NDArray[np.float64]:
         """The generalized parameters flattened as ``[w.ravel() (D*N, row d = DOF d), tau,
@@ -298,9 +301,9 @@ class Generalizer:
         return self._core.jacobian(self._query(q), as_scalar(rel_step, "rel_step", positive=True))
 
     @property
-    def demo_dmps(self) -> list[DMP] | list[CartesianDMP] | list[PeriodicDMP]:
-        """The DMP fitted to each demonstration, in database order."""
-        return [self._kind._wrap(d) for d in self._core.demo_dmps]  # type: ignore[arg-type,misc]
+    def demo_dmps(self) -> list[GeneralizedDMP]:
+        """The DMP fitted to each demonstration, in database order (all of one kind)."""
+        return [self._kind._wrap(d) for d in self._core.demo_dmps]
 
     @property
     def method(self) -> str:

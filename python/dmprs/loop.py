@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,14 +23,15 @@ from numpy.typing import ArrayLike, NDArray
 from dmprs._arrays import as_query
 from dmprs._core import __version__
 from dmprs.adapters.spec import Status
-from dmprs.cartesian import CartesianDMP
 from dmprs.database import DUPLICATE_POLICIES
-from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError, RunLogError
 from dmprs.portable import norm
 from dmprs.runlog import RunLog, TrialRecord
 from dmprs.tasks.base import Task
 from dmprs.trial import run_trial
+
+if TYPE_CHECKING:
+    from dmprs.generalize import GeneralizedDMP
 
 
 class AskTell(Protocol):
@@ -58,7 +59,7 @@ class AskTell(Protocol):
 
 class GeneralizerLike(Protocol):
     """What the loop reads of a generalizer (:class:`dmprs.Generalizer` has it)."""
-    def predict(self, q: Any) -> DMP | CartesianDMP:
+    def predict(self, q: Any) -> GeneralizedDMP:
         """The DMP for query ``q``."""
 
 

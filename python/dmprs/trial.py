@@ -24,8 +24,7 @@ from dmprs.runlog import RunLog, TrialRecord
 from dmprs.tasks.base import Task
 
 if TYPE_CHECKING:
-    from dmprs.cartesian import CartesianDMP
-    from dmprs.dmp import DMP
+    from dmprs.generalize import GeneralizedDMP
     from dmprs.trajectory import AnyTrajectory
 
 
@@ -47,7 +46,7 @@ def run_trial(
     task: Task,
     index: int,
     query: NDArray[np.float64],
-    make_dmp: Callable[[], DMP | CartesianDMP],
+    make_dmp: Callable[[], GeneralizedDMP],
     desired_query: NDArray[np.float64],
     *,
     seed: int,

@@ -65,9 +65,9 @@ class PiecewiseLinear:
         queries = np.asarray(queries, dtype=np.float64)
         if queries.ndim != 2 or queries.shape[0] != len(demo_dmps):
             raise InvalidInputError(f"queries has shape {queries.shape}; expected ({len(demo_dmps)}, n)")
-        self._dmps = list(demo_dmps)
+        self._dmps: list[DMP | PeriodicDMP] = list(demo_dmps)
         self._queries = queries
-        self._template = self._dmps[0]
+        self._template: DMP | PeriodicDMP = self._dmps[0]
         thetas = np.array([_flatten(d) for d in self._dmps])
         nodes, inverse = np.unique(queries, axis=0, return_inverse=True)
         if len(nodes) < 2:
@@ -240,7 +240,7 @@ class PiecewiseLinear:
 
     # --- the core Generalizer's properties --------------------------------------------------
     @property
-    def demo_dmps(self) -> list[_core.Dmp] | list[_core.PeriodicDmp]:
+    def demo_dmps(self) -> list[_core.Dmp | _core.PeriodicDmp]:
         """The demonstrations' DMPs."""
         return [d._core for d in self._dmps]
 

@@ -15,8 +15,7 @@ from dmprs.adapters import Adapter, Outcome
 from dmprs.errors import InvalidInputError
 
 if TYPE_CHECKING:
-    from dmprs.cartesian import CartesianDMP
-    from dmprs.dmp import DMP
+    from dmprs.generalize import GeneralizedDMP
     from dmprs.trajectory import AnyTrajectory
 
 
@@ -57,9 +56,10 @@ class Task(abc.ABC):
         """``query`` as one finite value per query dimension, or a clear error naming ``name``."""
         return as_query(query, name, self.query_names)
 
-    def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
-        """The trajectory to execute for a generalized DMP: by default its rollout at the
-        adapter's control period, up to tau (a pose trajectory for a Cartesian DMP).
+    def trajectory(self, dmp: GeneralizedDMP) -> AnyTrajectory:
+        """The trajectory to execute for a generalized DMP (any kind of primitive): by default
+        its rollout at the adapter's control period, up to tau (a pose trajectory for a
+        Cartesian DMP, one period for a periodic one).
         """
         return dmp.rollout(dt=self.adapter.spec.control_period)
 

@@ -39,8 +39,7 @@ from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
 if TYPE_CHECKING:
-    from dmprs.cartesian import CartesianDMP
-    from dmprs.dmp import DMP
+    from dmprs.generalize import GeneralizedDMP
     from dmprs.trajectory import AnyTrajectory
 
 CONTROL_PERIOD = 0.001
@@ -170,7 +169,7 @@ class MatchboxFlip(Task):
 
     adapter: MatchboxAdapter
 
-    def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
+    def trajectory(self, dmp: GeneralizedDMP) -> AnyTrajectory:
         """The DMP's rollout at 1 ms up to tau; the fingertip then holds still."""
         return dmp.rollout(dt=CONTROL_PERIOD)
 

@@ -15,8 +15,7 @@ from dmprs.tasks.liquid import TARGET_VOLUME, PouringTask
 from dmprs.trajectory import CartesianTrajectory
 
 if TYPE_CHECKING:
-    from dmprs.cartesian import CartesianDMP
-    from dmprs.dmp import DMP
+    from dmprs.generalize import GeneralizedDMP
 
 #: l: success when |V_poured - V*| is below this. Set above the granular outcome's noise floor
 #: (docs/arm.md): the 2-D scene's 10 ml lies below that floor on the arm.
@@ -37,7 +36,7 @@ class ArmPouring(PouringTask):
         adapter = ArmPouringAdapter(bottle_volume, **adapter_options)
         super().__init__(adapter, adapter.bottle_volume, target_volume, tol)
 
-    def trajectory(self, dmp: DMP | CartesianDMP) -> CartesianTrajectory:
+    def trajectory(self, dmp: GeneralizedDMP) -> CartesianTrajectory:
         """The pose trajectory of a generalized DMP, rolled out at the adapter's control period: a
         ``CartesianDMP``'s rollout, or a 6-D DMP of :func:`demonstration_tangent`'s coordinates
         (position, rotation vector from upright) turned back into poses.

@@ -16,7 +16,7 @@ from dmprs.tasks.pouring.demonstrator import demonstration
 from dmprs.trajectory import Trajectory
 
 if TYPE_CHECKING:
-    from dmprs.cartesian import CartesianDMP
+    from dmprs.generalize import GeneralizedDMP
     from dmprs.trajectory import AnyTrajectory
 
 
@@ -42,7 +42,7 @@ class Pouring(PouringTask):
         super().__init__(adapter, adapter.bottle_volume, target_volume, tol)
         self.rollout_substeps = as_count(rollout_substeps, "rollout_substeps", 1)
 
-    def trajectory(self, dmp: DMP | CartesianDMP) -> AnyTrajectory:
+    def trajectory(self, dmp: GeneralizedDMP) -> AnyTrajectory:
         """The tilt to execute: the DMP's rollout at the control period, finer when ``rollout_substeps`` asks."""
         k = self.rollout_substeps
         if k == 1 or not isinstance(dmp, DMP):
