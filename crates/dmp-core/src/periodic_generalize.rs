@@ -1,5 +1,5 @@
 //! Generalization of periodic demonstrations (Ude, Gams, Asfour and Morimoto 2010, the paper's
-//! reference [11]; docs/method.md §12.7): from M rhythms, each with a task query `q_k`, to a
+//! reference 11; docs/method.md §12.7): from M rhythms, each with a task query `q_k`, to a
 //! [`PeriodicDmp`] for any query, its parameters
 //!
 //! ```text
@@ -155,7 +155,11 @@ impl PeriodicGeneralizer {
         self.map.check_tau(q, s[0], self.tau_valid)?;
         let part = |k: usize| DVector::from_column_slice(&s[1 + k * n..1 + (k + 1) * n]);
         let amplitude = part(1);
-        if let Some((d, &r)) = amplitude.iter().enumerate().find(|(_, r)| !(**r > 0.0)) {
+        if let Some((d, &r)) = amplitude
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.is_nan() || **r <= 0.0)
+        {
             return Err(Error::Extrapolation {
                 query: format!("{q:?}"),
                 reason: format!(
@@ -270,7 +274,7 @@ mod tests {
         };
         let err = PeriodicGeneralizer::new(
             &[vec![0.0], vec![1.0]],
-            &[d.clone(), d],
+            &[d, d],
             &[None],
             PeriodicConfig::default(),
             Method::Linear,
