@@ -1,7 +1,8 @@
 //! Time of one `step()` of the online steppers in Rust (benches/README.md, "Online steppers"):
 //! a 7-DOF joint DMP with 25 and 50 kernels and a Cartesian DMP with 50, open loop, and the
 //! joint one with a measured state (a robot that tracks perfectly) and with velocity and
-//! acceleration limits.
+//! acceleration limits; a 7-DOF periodic DMP with 50 kernels, open loop, and one step of its
+//! rollout.
 //!
 //! `cargo run --release -p dmp-core --example bench_stepper`: the median over 2000 rounds of
 //! 500 steps (about 20 us each, mostly shorter than a scheduler's time slice, so that the median
@@ -12,8 +13,8 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use dmp_core::{
-    CartesianDmp, CartesianStepper, CartesianStepperOptions, Dmp, DmpConfig, Stepper,
-    StepperOptions,
+    CartesianDmp, CartesianStepper, CartesianStepperOptions, Dmp, DmpConfig, PeriodicConfig,
+    PeriodicDmp, PeriodicStepper, PeriodicStepperOptions, Stepper, StepperOptions,
 };
 use nalgebra::{DMatrix, DVector};
 
@@ -99,6 +100,53 @@ fn cartesian(n_basis: usize) -> f64 {
     })
 }
 
+fn periodic_dmp(n_basis: usize) -> PeriodicDmp {
+    let config = PeriodicConfig {
+        n_basis,
+        ..PeriodicConfig::default()
+    };
+    let ones = DVector::from_element(7, 1.0);
+    PeriodicDmp::new(
+        config,
+        weights(n_basis, 7),
+        ones.clone() * 0.5,
+        ones,
+        DVector::from_element(7, 0.0),
+        1.0,
+    )
+    .unwrap()
+}
+
+fn periodic(n_basis: usize) -> f64 {
+    let dmp = periodic_dmp(n_basis);
+    let opts = PeriodicStepperOptions {
+        ramp: 0.0,
+        ..PeriodicStepperOptions::new(1e-3)
+    };
+    let mut s = PeriodicStepper::new(&dmp, &opts).unwrap();
+    median_ns(|_| {
+        let t = Instant::now();
+        for _ in 0..STEPS {
+            black_box(s.step(None).unwrap());
+        }
+        t.elapsed().as_secs_f64() * 1e9 / STEPS as f64
+    })
+}
+
+/// ns per sample of the periodic rollout (one period at 1 ms, 6,284 samples), the median of 200.
+fn periodic_rollout(n_basis: usize) -> f64 {
+    let dmp = periodic_dmp(n_basis);
+    let mut times: Vec<f64> = (0..200)
+        .map(|_| {
+            let t = Instant::now();
+            let tr = black_box(dmp.rollout(1e-3, None, 0.0).unwrap());
+            t.elapsed().as_secs_f64() * 1e9 / tr.t.len() as f64
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[100]
+}
+
 fn main() {
     let open = StepperOptions::new(1e-3);
     let limited = StepperOptions {
@@ -123,4 +171,12 @@ fn main() {
         joint(50, &limited, false)
     );
     println!("| Cartesian, N = 50, open loop | {:.1} |", cartesian(50));
+    println!(
+        "| periodic, 7 DOF, N = 50, open loop | {:.1} |",
+        periodic(50)
+    );
+    println!(
+        "| periodic rollout, 7 DOF, N = 50, per sample | {:.1} |",
+        periodic_rollout(50)
+    );
 }
