@@ -52,12 +52,15 @@ def demonstrations(target_volume: float = TARGET_VOLUME, liquid_seed: int = 0, c
     bottles of :data:`~dmprs.tasks.arm_pouring.DEMO_VOLUMES` (calibrations cached on disk in
     ``cache_dir`` or ``$DMPRS_CACHE_DIR`` when given).
     """
-    out = []
-    for volume in DEMO_VOLUMES:
-        cal = calibrate_peak_tilt(volume, target_volume, liquid_seed=liquid_seed, bracket=DEMO_BRACKET,
-                                  cache_dir=cache_dir)
-        out.append((np.array([cal.bottle_volume]), pour_poses(cal.peak_tilt), cal))
-    return tuple(out)
+    return tuple(demonstration(volume, target_volume, liquid_seed, cache_dir) for volume in DEMO_VOLUMES)
+
+
+def demonstration(bottle_volume: float, target_volume: float = TARGET_VOLUME, liquid_seed: int = 0,
+                  cache_dir: str | None = None) -> tuple[NDArray[np.float64], CartesianTrajectory, Calibration]:
+    """One calibrated demonstration of :func:`demonstrations`: (query, pose trajectory, calibration)."""
+    cal = calibrate_peak_tilt(bottle_volume, target_volume, liquid_seed=liquid_seed, bracket=DEMO_BRACKET,
+                              cache_dir=cache_dir)
+    return np.array([cal.bottle_volume]), pour_poses(cal.peak_tilt), cal
 
 
 def setup(bottle_volume: float = 0.5, target_volume: float = TARGET_VOLUME, tol: float = SUCCESS_TOLERANCE,

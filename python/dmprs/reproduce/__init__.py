@@ -29,7 +29,14 @@ from dmprs.parallel import pmap
 from dmprs.reproduce.figures import write_figures
 from dmprs.reproduce.plan import LearnSpec, plan, skipped
 from dmprs.reproduce.report import PAPER, markdown, summarize
-from dmprs.reproduce.run import _prepare_pouring, dispatch, part_of, pinned_numerics, run_learning
+from dmprs.reproduce.run import (
+    dispatch,
+    longest_first,
+    part_of,
+    pinned_numerics,
+    prepare_pouring,
+    run_learning,
+)
 
 
 @dataclasses.dataclass
@@ -86,9 +93,10 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
             progress(done[0], len(specs), r)
 
     try:
-        _prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]))
         with pinned_numerics():
-            results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result)
+            prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]), backend=backend, workers=workers)
+            results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result,
+                           order=longest_first(specs))
         report = summarize(results)
         report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1),
                       skipped=skipped(quick),

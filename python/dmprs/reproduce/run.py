@@ -12,13 +12,20 @@ from typing import Any
 
 from dmprs import experiments
 from dmprs.baselines import BaselineSpec, run_baseline
-from dmprs.experiments.arm_pouring import demonstrations
+from dmprs.experiments import arm_pouring
+from dmprs.parallel import pmap
 from dmprs.reproduce.parts import BY_KIND
 from dmprs.reproduce.plan import LearnSpec
-from dmprs.tasks.pouring import DEMO_VOLUMES, demonstration
+from dmprs.tasks import pouring
+from dmprs.tasks.arm_pouring import DEMO_VOLUMES as ARM_DEMO_VOLUMES
 
 #: OpenBLAS's kernel for the x86-64 baseline (SSE3), which every x86-64 CPU can run
 PORTABLE_BLAS_KERNEL = "Prescott"
+#: s: roughly how long one run of a part takes (the report's "Where the time went"), so that the
+#: longest runs go to the workers first and no worker is left with a long one at the end; a part
+#: not listed counts as one second. Only the order of the runs depends on it, never a result.
+RUN_SECONDS = {"arm_pouring": 30.0, "growing": 17.0, "pouring": 5.0, "versus": 5.0, "online": 2.0,
+               "noisy": 1.0, "baselines": 0.5}
 
 
 def _numpy_dispatch_targets() -> str:
@@ -89,6 +96,11 @@ def part_of(spec: Any) -> str:
     return str(spec.kind)
 
 
+def longest_first(specs: list[Any]) -> list[int]:
+    """The specs' indices, the longest runs first (:data:`RUN_SECONDS`), in plan order otherwise."""
+    return sorted(range(len(specs)), key=lambda i: -RUN_SECONDS.get(part_of(specs[i]), 1.0))
+
+
 def dispatch(spec: Any) -> dict[str, Any]:
     """Runs one spec of the plan: a paper experiment, a baseline, or a run of another part; its
     result carries the run's wall-clock ``seconds``.
@@ -105,13 +117,21 @@ def dispatch(spec: Any) -> dict[str, Any]:
     return result
 
 
-def _prepare_pouring(specs: list[Any], cache_dir: Path) -> None:
-    """Calibrates the pouring demonstrations once, before workers start, into the disk cache."""
+def _calibrate(job: tuple[str, float, str]) -> None:
+    """Calibrates one pouring demonstration (``experiment``, bottle volume) into the disk cache."""
+    experiment, volume, cache_dir = job
+    if experiment == "pouring":
+        pouring.demonstration(volume, cache_dir=cache_dir)
+    else:
+        arm_pouring.demonstration(volume, cache_dir=cache_dir)
+
+
+def prepare_pouring(specs: list[Any], cache_dir: Path, *, backend: str = "local", workers: int | None = None) -> None:
+    """Calibrates the pouring demonstrations the runs share, each once and side by side (on
+    ``backend``'s workers), into the disk cache the runs then read, before they start.
+    """
     experiments = {getattr(s, "experiment", "") for s in specs}
-    if "pouring" in experiments:
-
-        for v in DEMO_VOLUMES:
-            demonstration(v, cache_dir=str(cache_dir))
-    if "arm-pouring" in experiments:
-
-        demonstrations(cache_dir=str(cache_dir))
+    jobs = [(e, v, str(cache_dir)) for e, volumes in (("pouring", pouring.DEMO_VOLUMES),
+                                                        ("arm-pouring", ARM_DEMO_VOLUMES))
+            if e in experiments for v in volumes]
+    pmap(_calibrate, jobs, backend=backend, workers=workers)
