@@ -36,39 +36,48 @@ def pmap(
     backend: str = "local",
     workers: int | None = None,
     on_result: Callable[[int, R], None] | None = None,
+    order: Sequence[int] | None = None,
 ) -> list[R]:
-    """``[fn(x) for x in items]``, in parallel; ``on_result(index, result)`` as each finishes."""
+    """``[fn(x) for x in items]``, in parallel; ``on_result(index, result)`` as each finishes.
+
+    ``order`` (a permutation of the items' indices) is the order in which they are handed to
+    the workers, longest first keeping every worker busy to the end; the results are in the
+    items' order whatever it is.
+    """
     jobs: Sequence[T] = list(items)
+    if order is None:
+        order = range(len(jobs))
+    elif sorted(order) != list(range(len(jobs))):
+        raise InvalidInputError(f"order must be a permutation of the {len(jobs)} items' indices")
     if backend not in BACKENDS:
         raise InvalidInputError(f"unknown backend {backend!r}; choose from {', '.join(BACKENDS)}")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise InvalidInputError(f"workers = {workers!r} must be a positive integer")
     n = workers or os.cpu_count() or 1
     if backend == "serial" or not jobs:
-        return _serial(fn, jobs, on_result)
+        return _serial(fn, jobs, on_result, order)
     if backend == "ray":
-        return _ray(fn, jobs, n, on_result)
-    return _local(fn, jobs, n, on_result)
+        return _ray(fn, jobs, n, on_result, order)
+    return _local(fn, jobs, n, on_result, order)
 
 
-def _serial(fn, jobs, on_result):
-    out = []
-    for i, item in enumerate(jobs):
+def _serial(fn, jobs, on_result, order):
+    out: list[Any] = [None] * len(jobs)
+    for i in order:
         try:
-            r = fn(item)
+            out[i] = fn(jobs[i])
         except Exception as exc:
-            raise ParallelError(f"run {i} ({item!r}) failed: {type(exc).__name__}: {exc}") from exc
-        out.append(r)
+            raise ParallelError(f"run {i} ({jobs[i]!r}) failed: {type(exc).__name__}: {exc}") from exc
         if on_result:
-            on_result(i, r)
+            on_result(i, out[i])
     return out
 
 
-def _local(fn, jobs, n, on_result):
+def _local(fn, jobs, n, on_result, order):
     results: list[Any] = [None] * len(jobs)
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=min(n, len(jobs)), mp_context=ctx) as pool:
-        futures = {pool.submit(fn, item): i for i, item in enumerate(jobs)}
+        futures = {pool.submit(fn, jobs[i]): i for i in order}
         pending = set(futures)
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -85,7 +94,7 @@ def _local(fn, jobs, n, on_result):
     return results
 
 
-def _ray(fn, jobs, n, on_result):
+def _ray(fn, jobs, n, on_result, order):
     try:
         import ray
     except ImportError:
@@ -96,8 +105,8 @@ def _ray(fn, jobs, n, on_result):
         else:
             ray.init(num_cpus=n, include_dashboard=False, log_to_driver=False)
     remote = ray.remote(fn)
-    refs = [remote.remote(item) for item in jobs]
-    index = {r: i for i, r in enumerate(refs)}
+    index = {remote.remote(jobs[i]): i for i in order}
+    refs = list(index)
     results: list[Any] = [None] * len(jobs)
     pending = list(refs)
     while pending:
