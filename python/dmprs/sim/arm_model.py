@@ -227,15 +227,16 @@ def particle_bodies(positions: NDArray[np.float64], radii: NDArray[np.float64] |
 
 
 def header(model: str, *, solver: str = SOLVER, iterations: int = ITERATIONS, tolerance: float = SOLVER_TOLERANCE,
-           condim: int = CONDIM, classes: Sequence[str] = ()) -> str:
+           condim: int = CONDIM, classes: Sequence[str] = (), timestep: float = TIMESTEP) -> str:
     """The MJCF of a scene with this arm up to its world body: the compiler, the physics options,
     the offscreen buffer and the default classes of the arm's links and of containers, then
-    ``classes`` (more default classes, one MJCF line each).
+    ``classes`` (more default classes, one MJCF line each). ``timestep``: the physics step (s),
+    the servo's period unless a scene sub-steps its commands.
     """
     lines = [
         f'<mujoco model="{model}">',
         '<compiler angle="radian" autolimits="true"/>',
-        f'<option timestep="{TIMESTEP}" integrator="implicitfast" solver="{solver}" iterations="{iterations}"',
+        f'<option timestep="{timestep:.17g}" integrator="implicitfast" solver="{solver}" iterations="{iterations}"',
         f'        tolerance="{tolerance}" cone="pyramidal"/>',
         '<visual><global offwidth="640" offheight="480"/></visual>',
         "<default>",
