@@ -9,6 +9,7 @@ optimization from the same first trial.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -143,6 +144,30 @@ def test_an_apex_out_of_reach_is_refused_naming_the_range(apex: float) -> None:
             ArmJuggling().validate_query(apex)
     with pytest.raises(InvalidInputError, match="q0"):
         ArmJuggling().validate_query(apex, "q0")
+
+
+def test_the_gymnasium_environment_steps_as_the_task_pipeline_by_hand() -> None:
+    """``dmprs/ArmJuggling-v0``: the context is a desired apex between the demos', the action the
+    query; a step scores -|eps| of the trial the task would run for that query.
+    """
+    import gymnasium as gym
+    from gymnasium.utils.env_checker import check_env
+
+    import dmprs.envs
+
+    env = gym.make("dmprs/ArmJuggling-v0", ball_seed=2)
+    with warnings.catch_warnings():  # the action is the query in m, not normalized: Gymnasium notes it
+        warnings.filterwarnings("ignore", message=".*symmetric and normalized space")
+        check_env(env.unwrapped, skip_render_check=True)
+    scenario = env.unwrapped.scenario
+    obs, _ = env.reset(seed=5)
+    assert scenario.query_low[0] <= obs[0] <= scenario.query_high[0]
+    _, reward, terminated, _, info = env.step(np.array([0.3]))
+    task = ArmJuggling(seed=2)
+    with task.adapter as adapter:
+        outcome = adapter.execute(task.trajectory(scenario.generalizer.predict([0.3])))
+    assert terminated and reward == -abs(float(task.error(obs, outcome)[0])) and info["apex"] == outcome.signals["apex"]
+    assert "dmprs/ArmJuggling-v0" in dmprs.envs.ENV_IDS
 
 
 def test_unseen_apexes_are_learned_within_the_floors_and_faster_than_bo() -> None:
