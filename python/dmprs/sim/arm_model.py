@@ -23,6 +23,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs.errors import NumericalError
+
 # --- the arm: KUKA LBR iiwa 14 R820 ------------------------------------------------------------
 #: Distances between consecutive joint frames along the arm in the zero configuration (m):
 #: base -> A1, A1 -> A2, ..., A7 -> flange. KUKA's data sheet gives 360 mm (base to A2),
@@ -303,3 +305,20 @@ def load(particle_positions: NDArray[np.float64] | None = None, **options: Any) 
     import mujoco
 
     return mujoco.MjModel.from_xml_string(scene_xml(particle_positions, **options))
+
+
+#: MuJoCo's warnings that mean the state is no longer physical (on a bad qpos, qvel or qacc
+#: MuJoCo resets the state and carries on, so the warning is the only trace)
+WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL", "mjWARN_CONTACTFULL",
+            "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
+
+
+def check_health(mujoco: Any, data: Any, when: float) -> None:
+    """Raises :class:`~dmprs.errors.NumericalError` if MuJoCo warned any of :data:`WARNINGS` or
+    the state of a scene with this arm became non-finite (``when``: the time, s, for the message).
+    """
+    for name in WARNINGS:
+        if data.warning[getattr(mujoco.mjtWarning, name)].number > 0:
+            raise NumericalError(f"MuJoCo warned {name} at t = {when:.3f} s: the simulation diverged")
+    if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
+        raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")

@@ -49,7 +49,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmprs.errors import NumericalError
 from dmprs.portable import exp
 from dmprs.sim import arm_model as am
 from dmprs.sim.paddle_ik import level_paddle_joints
@@ -80,9 +79,6 @@ FULL_SWING = 0.95
 MIN_SWING = 0.005
 #: physics steps between stop/timeout/health checks
 STOP_CHECK_EVERY = 40
-
-_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL", "mjWARN_CONTACTFULL",
-             "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
 
 
 @functools.lru_cache(maxsize=1)
@@ -272,14 +268,6 @@ class JuggleResult:
     interrupted: bool = False
 
 
-def _check_health(mujoco: Any, data: Any, when: float) -> None:
-    for name in _WARNINGS:
-        if data.warning[getattr(mujoco.mjtWarning, name)].number > 0:
-            raise NumericalError(f"MuJoCo warned {name} at t = {when:.3f} s: the simulation diverged")
-    if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
-        raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")
-
-
 def simulate_juggle(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np.float64], release: Release,
                     damping_ratio: float = DAMPING_RATIO,
                     should_stop: Callable[[], bool] | None = None) -> JuggleResult:
@@ -338,7 +326,7 @@ def simulate_juggle(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[
                 apex = z
             touching = contact
             if step % STOP_CHECK_EVERY == 0:
-                _check_health(mujoco, d, step * TIMESTEP)
+                am.check_health(mujoco, d, step * TIMESTEP)
                 if should_stop is not None and should_stop():
                     return _result(flights, release, fell, times[:k + 1], executed[:k], q_ref[:k + 1],
                                    ball[:k], interrupted=True)
@@ -347,7 +335,7 @@ def simulate_juggle(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[
         if ball[k] < -PADDLE_RADIUS:  # below the paddle's face by more than its size: it missed
             fell = True
             return _result(flights, release, fell, times[:k + 1], executed[:k + 1], q_ref[:k + 1], ball[:k + 1])
-    _check_health(mujoco, d, step * TIMESTEP)
+    am.check_health(mujoco, d, step * TIMESTEP)
     return _result(flights, release, fell, times, executed, q_ref, ball)
 
 
