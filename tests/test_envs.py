@@ -21,7 +21,8 @@ from dmprs.errors import InvalidInputError
 SMALL_POURING = {"target_volume": 0.04, "demo_volumes": (0.08, 0.16), "volume_range": (0.08, 0.16)}
 KWARGS = {"dmprs/MatchboxFlip-v0": {}, "dmprs/MatchboxFlipWeights-v0": {},
           "dmprs/Pouring-v0": SMALL_POURING, "dmprs/PouringWeights-v0": SMALL_POURING,
-          "dmprs/ArmThrowing-v0": {}, "dmprs/ArmThrowingWeights-v0": {}, "dmprs/ArmPouring-v0": {}}
+          "dmprs/ArmThrowing-v0": {}, "dmprs/ArmThrowingWeights-v0": {}, "dmprs/ArmPouring-v0": {},
+          "dmprs/ArmJuggling-v0": {}}
 
 
 @contextlib.contextmanager

@@ -66,7 +66,7 @@ def test_a_reproduction_without_mujoco_says_which_rows_of_the_comparison_it_leav
     # the comparison with BO runs without MuJoCo, but without its arm's settings
     monkeypatch.setattr(versus_bo, "available", lambda module: module != "mujoco")
     monkeypatch.setattr(plan_module, "available", lambda module: module != "mujoco")
-    arm = [s for s in versus_bo.SETTINGS if s.experiment in ("arm-pouring", "arm-throwing")]
+    arm = [s for s in versus_bo.SETTINGS if s.experiment in ("arm-pouring", "arm-throwing", "arm-juggling")]
     assert arm and not any(versus_bo.SETTINGS[s.setting] in arm for s in versus_bo.plan_versus())
     notes = [n for n in plan_module.skipped() if n.startswith(versus_bo.TITLE)]
     assert notes == [(f"{versus_bo.TITLE}: {len(arm)} setting(s) not run: they need mujoco "

@@ -56,7 +56,7 @@ def main() -> None:
 @click.argument("task")
 @click.option("--learner", default=None,
               help=f"{learner_help()} (default: auto; each task offers some)")
-@click.option("--desired", type=float, default=None, help="desired query (task units)")
+@click.option("--desired", type=float, default=None, help="desired query (task units; arm-juggling: the apex in m)")
 @click.option("--max-trials", type=click.IntRange(min=1, max=10**6), default=20, show_default=True)
 @click.option("--tol", type=float, default=None, help="success when |eps| < tol (default: the task's criterion)")
 @click.option("--log-dir", type=click.Path(path_type=Path), default=None, help="run directory for the trial log")
@@ -76,7 +76,7 @@ def learn_cmd(task: str, learner: str | None, desired: float | None, max_trials:
               tol: float | None, log_dir: Path | None, seed: int, noise: float | None,
               volume: float | None, demos: str | None, target: tuple[float, float] | None,
               generalizer: str | None, robot: str | None, domain_id: int | None) -> None:
-    """Learn TASK (analytic, matchbox, pouring, arm-pouring, arm-throwing) from its
+    """Learn TASK (analytic, matchbox, pouring, arm-pouring, arm-throwing, arm-juggling) from its
     demonstrations, one trial at a time.
     """
     options: dict[str, Any] = {k: v for k, v in {

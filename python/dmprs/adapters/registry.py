@@ -27,6 +27,7 @@ BUILTIN: dict[str, str] = {
     "matchbox": "dmprs.tasks.matchbox:MatchboxAdapter",
     "pouring": "dmprs.tasks.pouring:PouringAdapter",
     "arm-throwing": "dmprs.tasks.arm_throwing:ArmThrowingAdapter",
+    "arm-juggling": "dmprs.tasks.arm_juggling:ArmJugglingAdapter",
 }
 
 

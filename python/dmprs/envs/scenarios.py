@@ -13,14 +13,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs.errors import InvalidInputError
-from dmprs.experiments import arm_pouring, arm_throwing, matchbox, pouring
+from dmprs.experiments import arm_juggling, arm_pouring, arm_throwing, matchbox, pouring
 from dmprs.generalize import Generalizer
+from dmprs.tasks import arm_juggling as juggling_task
 from dmprs.tasks import arm_throwing as throwing_task
 from dmprs.tasks.arm_pouring import ArmPouring
 from dmprs.tasks.base import Task
 from dmprs.tasks.pouring import DEMO_VOLUMES, SUCCESS_TOLERANCE, TARGET_VOLUME, Pouring
 
-__all__ = ["Scenario", "arm_pouring_scenario", "matchbox_scenario", "pouring_scenario", "throwing_scenario"]
+__all__ = ["Scenario", "arm_pouring_scenario", "juggling_scenario", "matchbox_scenario", "pouring_scenario",
+           "throwing_scenario"]
 
 
 @dataclass
@@ -146,4 +148,23 @@ def arm_pouring_scenario(volume_range: Sequence[float] = (0.4, 0.9), cache_dir: 
         query_low=np.array([setup.low]), query_high=np.array([setup.high]),
         context_low=np.array([lo]), context_high=np.array([hi]), context_names=("bottle_volume",),
         make_task=make_task, desired_query=lambda context: context.copy(), failure_reward=-1.0,
+    )
+
+
+def juggling_scenario(ball_seed: int = 0, tol: float = juggling_task.SUCCESS_TOLERANCE) -> Scenario:
+    """Bounce the ball on the paddle to a desired apex with the 7-DOF arm
+    (``dmprs.tasks.arm_juggling``, needs the ``robot`` extra): the context is the desired apex (m
+    above the paddle at rest), drawn at each reset from between the demonstrations' apexes; the
+    query is the apex the periodic generalizer is asked for, within that range. ``ball_seed``:
+    the ball's drop and restitution in every episode. A measured trial scores ``-|eps|`` (m), a
+    trial without a measurement (the ball stopped bouncing) minus the range's width.
+    """
+    apexes = np.array([float(label[0]) for label, _ in arm_juggling.demonstrations()])
+    lo, hi = np.array([apexes.min()]), np.array([apexes.max()])
+    setup = arm_juggling.setup(float((lo[0] + hi[0]) / 2), tol=tol, ball_seed=ball_seed)
+    return Scenario(
+        name="juggling", generalizer=setup.generalizer, query_low=lo, query_high=hi,
+        context_low=lo.copy(), context_high=hi.copy(), context_names=("desired_apex",),
+        make_task=lambda context: setup.task, desired_query=lambda context: context.copy(),
+        failure_reward=-float(hi[0] - lo[0]),
     )

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from dmprs.errors import InvalidInputError
-from dmprs.experiments import analytic, arm_pouring, arm_throwing, matchbox, pouring
+from dmprs.experiments import analytic, arm_juggling, arm_pouring, arm_throwing, matchbox, pouring
 from dmprs.experiments.base import DEFAULT_LEARNER, LEARNERS, ExperimentSetup, LearnerSettings, learner_help
 from dmprs.loop import LearningResult, learn
 from dmprs.runlog import TrialRecord
@@ -26,10 +26,11 @@ EXPERIMENTS: dict[str, Callable[..., ExperimentSetup]] = {
     "pouring": pouring.setup,
     "arm-pouring": arm_pouring.setup,
     "arm-throwing": arm_throwing.setup,
+    "arm-juggling": arm_juggling.setup,
 }
 
 #: The optional package (an extra) an experiment needs beyond the core install.
-_NEEDS = {"arm-pouring": "mujoco", "arm-throwing": "mujoco"}
+_NEEDS = {"arm-pouring": "mujoco", "arm-throwing": "mujoco", "arm-juggling": "mujoco"}
 
 
 def needs(name: str) -> str | None:

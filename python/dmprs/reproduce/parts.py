@@ -4,9 +4,9 @@ report appends their sections.
 
 from __future__ import annotations
 
-from dmprs.reproduce import growing, noisy, online, throwing, versus_bo
+from dmprs.reproduce import growing, juggling, noisy, online, throwing, versus_bo
 from dmprs.reproduce.part import Part
 
-PARTS: tuple[Part, ...] = (growing.PART, noisy.PART, throwing.PART, online.PART, versus_bo.PART)
+PARTS: tuple[Part, ...] = (growing.PART, noisy.PART, throwing.PART, juggling.PART, online.PART, versus_bo.PART)
 
 BY_KIND = {p.kind: p for p in PARTS}

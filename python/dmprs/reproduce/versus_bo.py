@@ -6,7 +6,8 @@ same search limits, judged by the same tolerance.
 
 Deterministic learners on the deterministic simulators run once per setting; the others run
 :data:`SEEDS` times: the optimizers' seed, the arm's liquid, the throw's basket or the noisy
-robot's noise draw differ from run to run (the same index for every learner).
+robot's noise draw or the juggled ball (its drop and restitution) differ from run to run (the same
+index for every learner).
 """
 
 from __future__ import annotations
@@ -47,7 +48,8 @@ class Setting:
     experiment: str
     options: tuple[tuple[str, Any], ...]
     max_trials: int
-    #: what varies per seed besides the learner's own seed: "" (nothing), "liquid", "basket", "noise"
+    #: what varies per seed besides the learner's own seed: "" (nothing), "liquid", "basket", "noise",
+    #: "ball" (the juggled ball's drop and restitution)
     draw: str = ""
 
 
@@ -62,6 +64,7 @@ SETTINGS = (
               (("tol", 0.02), ("region", region)), 15, draw="basket") for region in ("inside", "outside")),
     Setting("matchbox on a noisy robot (flipped back + over), 5 noise draws", "matchbox", (("demos", "default"),), 20,
             draw="noise"),
+    Setting("arm juggling to a 0.27 m apex, 5 balls", "arm-juggling", (("desired", 0.27),), 15, draw="ball"),
 )
 
 
@@ -119,6 +122,8 @@ def prepare(setting: int, seed: int) -> tuple[ExperimentSetup, int]:
         options["liquid_seed"] = seed
     elif s.draw == "basket":
         options["target"] = baskets(SEEDS)[options.pop("region")][seed]
+    elif s.draw == "ball":
+        options["ball_seed"] = seed
     elif s.draw == "noise":
         execution, measurement, contact = NOISY_ROBOT[s.experiment]
         options["noise"] = Noise(execution=execution, measurement=measurement, contact=contact)

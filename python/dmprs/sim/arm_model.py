@@ -23,6 +23,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from dmprs.errors import NumericalError
+
 # --- the arm: KUKA LBR iiwa 14 R820 ------------------------------------------------------------
 #: Distances between consecutive joint frames along the arm in the zero configuration (m):
 #: base -> A1, A1 -> A2, ..., A7 -> flange. KUKA's data sheet gives 360 mm (base to A2),
@@ -227,15 +229,16 @@ def particle_bodies(positions: NDArray[np.float64], radii: NDArray[np.float64] |
 
 
 def header(model: str, *, solver: str = SOLVER, iterations: int = ITERATIONS, tolerance: float = SOLVER_TOLERANCE,
-           condim: int = CONDIM, classes: Sequence[str] = ()) -> str:
+           condim: int = CONDIM, classes: Sequence[str] = (), timestep: float = TIMESTEP) -> str:
     """The MJCF of a scene with this arm up to its world body: the compiler, the physics options,
     the offscreen buffer and the default classes of the arm's links and of containers, then
-    ``classes`` (more default classes, one MJCF line each).
+    ``classes`` (more default classes, one MJCF line each). ``timestep``: the physics step (s),
+    the servo's period unless a scene sub-steps its commands.
     """
     lines = [
         f'<mujoco model="{model}">',
         '<compiler angle="radian" autolimits="true"/>',
-        f'<option timestep="{TIMESTEP}" integrator="implicitfast" solver="{solver}" iterations="{iterations}"',
+        f'<option timestep="{timestep:.17g}" integrator="implicitfast" solver="{solver}" iterations="{iterations}"',
         f'        tolerance="{tolerance}" cone="pyramidal"/>',
         '<visual><global offwidth="640" offheight="480"/></visual>',
         "<default>",
@@ -302,3 +305,20 @@ def load(particle_positions: NDArray[np.float64] | None = None, **options: Any) 
     import mujoco
 
     return mujoco.MjModel.from_xml_string(scene_xml(particle_positions, **options))
+
+
+#: MuJoCo's warnings that mean the state is no longer physical (on a bad qpos, qvel or qacc
+#: MuJoCo resets the state and carries on, so the warning is the only trace)
+WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL", "mjWARN_CONTACTFULL",
+            "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
+
+
+def check_health(mujoco: Any, data: Any, when: float) -> None:
+    """Raises :class:`~dmprs.errors.NumericalError` if MuJoCo warned any of :data:`WARNINGS` or
+    the state of a scene with this arm became non-finite (``when``: the time, s, for the message).
+    """
+    for name in WARNINGS:
+        if data.warning[getattr(mujoco.mjtWarning, name)].number > 0:
+            raise NumericalError(f"MuJoCo warned {name} at t = {when:.3f} s: the simulation diverged")
+    if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
+        raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")

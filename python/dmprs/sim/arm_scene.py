@@ -43,11 +43,6 @@ SETTLE_TIME = 0.4
 #: physics steps (1 ms each) between stop/timeout checks while settling and pouring
 STOP_CHECK_EVERY = 10
 
-#: MuJoCo's warnings that mean the state is no longer physical (on a bad qpos, qvel or qacc
-#: MuJoCo resets the state and carries on, so the warning is the only trace)
-_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL", "mjWARN_CONTACTFULL",
-             "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
-
 
 @functools.lru_cache(maxsize=1)
 def home_configuration() -> NDArray[np.float64]:
@@ -91,15 +86,6 @@ def _bottle_frame(model: Any, data: Any) -> tuple[NDArray[np.float64], NDArray[n
 def _particle_positions(data: Any, n: int) -> NDArray[np.float64]:
     # free joints after the 7 arm joints: 7 qpos each (position then quaternion)
     return data.qpos[7:].reshape(n, 7)[:, :3].copy() if n else np.zeros((0, 3))
-
-
-def _check_health(mujoco: Any, data: Any, when: float) -> None:
-    for name in _WARNINGS:
-        w = data.warning[getattr(mujoco.mjtWarning, name)]
-        if w.number > 0:
-            raise NumericalError(f"MuJoCo warned {name} at t = {when:.3f} s: the simulation diverged")
-    if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
-        raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")
 
 
 #: settled liquids kept per process, most recently used last (each holds a compiled model)
@@ -157,7 +143,7 @@ def settle_liquid(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLV
         if should_stop is not None and k % STOP_CHECK_EVERY == 0 and should_stop():
             return None
         mujoco.mj_step(model, data)
-    _check_health(mujoco, data, SETTLE_TIME)
+    am.check_health(mujoco, data, SETTLE_TIME)
     mujoco.mj_kinematics(model, data)
     region = granular.classify(_particle_positions(data, n), *_bottle_frame(model, data))
     if not (region == granular.IN_BOTTLE).all():
@@ -192,7 +178,7 @@ def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np
     data.qpos[:] = liquid.qpos
     data.qvel[:] = liquid.qvel
     mujoco.mj_forward(model, data)
-    _check_health(mujoco, data, 0.0)
+    am.check_health(mujoco, data, 0.0)
     dt = am.TIMESTEP
     n_move = max(1, math.ceil((t[-1] - t[0]) / dt - 1e-9))
     n_steps = n_move + round(hold / dt)
@@ -219,11 +205,11 @@ def simulate_pour(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[np
             counts.append(int(granular.in_glass(_particle_positions(data, n)).sum()))
             if on_sample is not None:
                 on_sample(model, data, k * dt)
-            _check_health(mujoco, data, k * dt)
+            am.check_health(mujoco, data, k * dt)
         if should_stop is not None and k % STOP_CHECK_EVERY == 0 and should_stop():
             interrupted = True
             break
-    _check_health(mujoco, data, k * dt)
+    am.check_health(mujoco, data, k * dt)
     mujoco.mj_kinematics(model, data)
     positions = _particle_positions(data, n)
     region = granular.classify(positions, *_bottle_frame(model, data))

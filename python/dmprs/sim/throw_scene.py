@@ -61,9 +61,6 @@ STOP_CHECK_EVERY = 10
 #: the home configuration (rad): the arm leaning back, elbow and wrist bent so the cup opens up
 HOME = (0.0, 0.4, 0.0, -0.6, 0.0, 0.55, 0.0)
 
-_WARNINGS = ("mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL", "mjWARN_CONTACTFULL",
-             "mjWARN_CNSTRFULL", "mjWARN_INERTIA")
-
 
 def cup_geoms() -> list[str]:
     """The cup in the frame of ``arm_model``'s tool body: bottom on the flange axis ``BRACKET``
@@ -109,14 +106,6 @@ def model() -> Any:
     return mujoco.MjModel.from_xml_string(throw_xml())
 
 
-def _check_health(mujoco: Any, data: Any, when: float) -> None:
-    for name in _WARNINGS:
-        if data.warning[getattr(mujoco.mjtWarning, name)].number > 0:
-            raise NumericalError(f"MuJoCo warned {name} at t = {when:.3f} s: the simulation diverged")
-    if not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()):
-        raise NumericalError(f"the simulation diverged: its state became non-finite at t = {when:.3f} s")
-
-
 def _cup_geoms(m: Any) -> frozenset[int]:
     return frozenset(g for g in range(m.ngeom) if m.geom(g).name.startswith("cup"))
 
@@ -140,7 +129,7 @@ def settled_ball() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     d.ctrl[:] = HOME
     for _ in range(round(SETTLE_TIME / am.TIMESTEP)):
         mujoco.mj_step(m, d)
-    _check_health(mujoco, d, SETTLE_TIME)
+    am.check_health(mujoco, d, SETTLE_TIME)
     cups = _cup_geoms(m)
     if not any(int(g) in cups for g in d.contact.geom[: d.ncon].ravel()):
         raise NumericalError(f"the ball is not in the cup after settling: at {d.qpos[7:10].round(3).tolist()} m")
@@ -268,18 +257,18 @@ def simulate_throw(t: NDArray[np.float64], q: NDArray[np.float64], qd: NDArray[n
         if pos[2] <= BALL_RADIUS:
             f = (prev[2] - BALL_RADIUS) / (prev[2] - pos[2])  # the crossing within this step
             landing = prev[:2] + f * (pos[:2] - prev[:2])
-            _check_health(mujoco, d, k * dt)
+            am.check_health(mujoco, d, k * dt)
             return ThrowResult(landing, (k - 1 + f) * dt, release[0], release[1], release[2], hit,
                                times, executed, q_ref)
         if not hit and touching - cups - {floor_geom}:
             hit = m.geom(min(touching - cups - {floor_geom})).name
         prev[:] = pos
         if k % 100 == 0:
-            _check_health(mujoco, d, k * dt)
+            am.check_health(mujoco, d, k * dt)
         if should_stop is not None and k % STOP_CHECK_EVERY == 0 and should_stop():
             n = min(k, n_move)
             return ThrowResult(np.full(2, np.nan), math.nan, release[0], release[1], release[2], hit,
                                times[: n + 1], executed[: n + 1], q_ref[: n + 1], interrupted=True)
-    _check_health(mujoco, d, n_total * dt)
+    am.check_health(mujoco, d, n_total * dt)
     return ThrowResult(np.full(2, np.nan), math.nan, release[0], release[1], release[2], hit, times, executed,
                        q_ref)
