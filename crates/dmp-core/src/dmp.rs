@@ -135,13 +135,16 @@ pub enum FinalVelocity {
     Given(DVector<f64>),
 }
 
-/// The time left until `t = tau`, `tau - t`, recovered from the phase of eq. 3:
-/// `x = exp(-alpha_x t / tau)` gives `t = -tau ln(x) / alpha_x`. Taking it from the phase, not a
-/// clock, lets phase stopping and a changed tau hold or stretch the moving goal with the rest
-/// of the movement (docs/method.md §2.8).
+/// The time left until `t = tau`, `tau - t`, recovered from the phase of eq. 3 as the
+/// integrator advances it: explicit Euler steps of `h` make `x_k = (1 - alpha_x h / tau)^k`, so
+/// `t = k h = h ln(x) / ln(1 - alpha_x h / tau)` (`-tau ln(x) / alpha_x` as `h -> 0`). Taken
+/// from the integrator's own phase, the moving goal arrives at `g` on the step that reaches tau
+/// rather than about `alpha_x h / 2` early; taken from the phase rather than a clock, phase
+/// stopping and a changed tau hold or stretch it with the rest of the movement
+/// (docs/method.md §2.8).
 #[inline]
-pub(crate) fn time_to_go(x: f64, tau: f64, alpha_x: f64) -> f64 {
-    tau * (1.0 + libm::log(x) / alpha_x)
+pub(crate) fn time_to_go(x: f64, tau: f64, alpha_x: f64, h: f64) -> f64 {
+    tau - h * libm::log(x) / libm::log1p(-alpha_x * h / tau)
 }
 
 impl Dmp {

@@ -1032,7 +1032,8 @@ impl Stepper {
     fn moving_spring_into(&self, out: &mut [f64], gd: &[f64]) {
         let cfg = self.dmp.config();
         let tau = self.clock.tau;
-        let to_go = time_to_go(self.x, tau, cfg.alpha_x);
+        let hs = self.clock.dt / self.clock.substeps as f64;
+        let to_go = time_to_go(self.x, tau, cfg.alpha_x, hs);
         for d in 0..self.n {
             out[d] =
                 moving_spring(cfg, self.g[d], gd[d], to_go, tau, self.y[d], self.z[d]) + self.f[d];
