@@ -67,7 +67,7 @@ def test_a_fitted_demonstration_ending_in_motion_is_reproduced():
     assert np.max(np.abs(tr.yd[-1] - v)) < 2e-2
     # what is left is the integrator's: halving dt halves it
     coarse, fine = final_errors(dmp, 0.002), final_errors(dmp, 0.001)
-    for c, f in zip(coarse, fine):
+    for c, f in zip(coarse, fine, strict=True):
         assert 1.7 < c / f < 2.3
     # "demo": the demonstration's last velocity (its finite difference, second order)
     from_demo = dmprs.DMP.fit(t, y, 40, final_velocity="demo")

@@ -401,13 +401,22 @@ mod final_velocity_tests {
     fn the_spring_alone_meets_the_request() {
         let cfg = DmpConfig::default();
         let goal = DVector::from_vec(vec![1.0, -0.5]);
-        let dmp = Dmp::new(cfg, DMatrix::zeros(cfg.n_basis, 2), goal, DVector::zeros(2), 0.8)
-            .unwrap()
-            .with_final_velocity(DVector::from_vec(vec![0.8, -1.5]))
-            .unwrap();
+        let dmp = Dmp::new(
+            cfg,
+            DMatrix::zeros(cfg.n_basis, 2),
+            goal,
+            DVector::zeros(2),
+            0.8,
+        )
+        .unwrap()
+        .with_final_velocity(DVector::from_vec(vec![0.8, -1.5]))
+        .unwrap();
         for dt in [1e-3, 4e-3, 0.02] {
             let (position, velocity) = final_errors(&dmp, dt);
-            assert!(position < 1e-8 && velocity < 1e-7, "{position} {velocity} at {dt}");
+            assert!(
+                position < 1e-8 && velocity < 1e-7,
+                "{position} {velocity} at {dt}"
+            );
         }
     }
 
