@@ -177,3 +177,42 @@ def test_the_final_velocity_is_met_as_well_as_movement_primitives_does(dt):
         yy, yd = theirs.step(yy, yd)
     assert ours[1] <= np.max(np.abs(yd - v))
     assert ours[0] <= np.max(np.abs(yy - y[-1]))
+
+
+def throws(end_velocities) -> dmprs.Database:
+    """Demonstrations ending in motion, one per end velocity (the query), as moving_demo's first DOF."""
+    db = dmprs.Database(("v",))
+    t = np.linspace(0.0, T_DEMO, 601)
+    s = t / T_DEMO
+    for v in end_velocities:
+        db.add([v], dmprs.Trajectory(t, 10 * s**3 - 15 * s**4 + 6 * s**5 + v * T_DEMO * (s**5 - s**4)))
+    return db
+
+
+@pytest.mark.parametrize(("method", "velocities", "options"),
+                         [("linear", [0.5, 1.5], {}), ("lwr-gp", [0.5, 1.0, 1.5], {"trend": "affine"})])
+def test_the_final_velocity_is_generalized_with_the_other_parameters(method, velocities, options):
+    db = throws(velocities)
+    gen = dmprs.Generalizer(db, method, 30, final_velocity=True, **options)
+    assert gen.n_parameters == 30 + 1 + 3
+    for demo in db:
+        tr = demo.trajectory
+        own = dmprs.DMP.fit(tr.t, tr.y, 30, final_velocity="demo")
+        at_demo = gen.predict(demo.query)
+        np.testing.assert_allclose(at_demo.final_velocity, own.final_velocity, rtol=1e-6)
+        np.testing.assert_allclose(gen.parameters(demo.query)[-1], own.final_velocity[0], rtol=1e-6)
+    # between the demos: the demonstrations' end velocity is affine in the query, and so is the
+    # generalized final velocity, which the rollout meets to the integrator's order
+    between = gen.predict([1.25])
+    np.testing.assert_allclose(between.final_velocity, [1.25], atol=1e-3)
+    assert abs(between.rollout(0.001).yd[-1, 0] - 1.25) < 2e-2
+
+
+def test_without_final_velocities_the_generalizer_is_todays():
+    db = throws([0.5, 1.0, 1.5])
+    today = dmprs.Generalizer(db, "linear", 30)
+    assert today.n_parameters == 30 + 1 + 2
+    np.testing.assert_array_equal(today.predict([1.25]).final_velocity, [0.0])
+    for refused in ({"final_velocity": 1}, {"final_velocity": True}):  # the latter needs a triangulation
+        with pytest.raises(InvalidInputError, match="final_velocity"):
+            dmprs.Generalizer(db, "linear", 30, **refused)

@@ -344,7 +344,7 @@ fn checked_final_velocity(gd: DVector<f64>, n_dof: usize) -> Result<DVector<f64>
 }
 
 /// `None` for a zero final velocity, so that it is today's DMP in every respect.
-fn nonzero(gd: DVector<f64>) -> Option<DVector<f64>> {
+pub(crate) fn nonzero(gd: DVector<f64>) -> Option<DVector<f64>> {
     gd.iter().any(|&v| v != 0.0).then_some(gd)
 }
 
