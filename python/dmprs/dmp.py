@@ -63,21 +63,12 @@ class DMP(DiscretePrimitive):
     _DICT_TYPE = "dmprs.DMP"
     _OPTIONAL = ("final_velocity",)
 
-    def __init__(
-        self,
-        weights: ArrayLike,
-        goal: ArrayLike,
-        start: ArrayLike,
-        tau: float,
-        *,
-        alpha_z: float = 48.0,
-        beta_z: float | None = None,
-        alpha_x: float = 2.0,
-        width_factor: float = 2.0,
-        final_velocity: ArrayLike | None = None,
-    ) -> None:
-        super().__init__(weights, goal, start, tau, alpha_z=alpha_z, beta_z=beta_z, alpha_x=alpha_x,
-                         width_factor=width_factor)
+    def __init__(self, *args: Any, final_velocity: ArrayLike | None = None, **kwargs: Any) -> None:
+        """As :class:`~dmprs.primitive.DiscretePrimitive` (weights, goal, start, tau and the
+        constants), and the velocity ``(D,)`` it reaches its goal with (docs/method.md §2.8;
+        None: zero, the DMP of eqs. 1-4).
+        """
+        super().__init__(*args, **kwargs)
         if final_velocity is not None:
             object.__setattr__(self, "_core", self._core.with_final_velocity(self._velocity(final_velocity)))
 
