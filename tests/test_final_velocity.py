@@ -216,3 +216,15 @@ def test_without_final_velocities_the_generalizer_is_todays():
     for refused in ({"final_velocity": 1}, {"final_velocity": True}):  # the latter needs a triangulation
         with pytest.raises(InvalidInputError, match="final_velocity"):
             dmprs.Generalizer(db, "linear", 30, **refused)
+
+
+def test_via_points_keep_the_final_velocity():
+    """The moving goal adds a term independent of the weights, so the rollout stays linear in
+    them and the via-point is met, the final velocity kept.
+    """
+    t, y, v = moving_demo()
+    dmp = dmprs.DMP.fit(t, y, 40, final_velocity=v)
+    via = dmp.with_via_points([0.5], [[0.6, -0.1]])
+    np.testing.assert_array_equal(via.final_velocity, v)
+    tr = via.rollout(0.001)
+    np.testing.assert_allclose(tr.y[500], [0.6, -0.1], atol=1e-9)

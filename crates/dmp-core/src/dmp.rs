@@ -298,6 +298,17 @@ impl Dmp {
         self.config.n_basis
     }
 
+    /// The same goal, start, tau and final velocity with other weights (the same shape changed).
+    pub fn with_weights(&self, weights: DMatrix<f64>) -> Result<Self> {
+        self.keeping_final_velocity(Self::new(
+            self.config,
+            weights,
+            self.goal.clone(),
+            self.y0.clone(),
+            self.tau,
+        ))
+    }
+
     /// The same movement towards a new goal (weights unchanged).
     pub fn with_goal(&self, goal: DVector<f64>) -> Result<Self> {
         self.keeping_final_velocity(Self::new(
