@@ -135,16 +135,16 @@ pub enum FinalVelocity {
     Given(DVector<f64>),
 }
 
-/// The time left until `t = tau`, `tau - t`, recovered from the phase of eq. 3 as the
-/// integrator advances it: explicit Euler steps of `h` make `x_k = (1 - alpha_x h / tau)^k`, so
-/// `t = k h = h ln(x) / ln(1 - alpha_x h / tau)` (`-tau ln(x) / alpha_x` as `h -> 0`). Taken
-/// from the integrator's own phase, the moving goal arrives at `g` on the step that reaches tau
-/// rather than about `alpha_x h / 2` early; taken from the phase rather than a clock, phase
-/// stopping and a changed tau hold or stretch it with the rest of the movement
+/// The scaled time left until `t = tau`, `(tau - t) / tau`, recovered from the phase of eq. 3
+/// as the integrator advances it: explicit Euler steps of `h` make `x_k = (1 - alpha_x h /
+/// tau)^k`, so `t = k h = h ln(x) / ln(1 - alpha_x h / tau)` (`-tau ln(x) / alpha_x` as
+/// `h -> 0`). Taken from the integrator's own phase, the moving goal arrives at `g` on the step
+/// that reaches tau rather than about `alpha_x h / 2` early; taken from the phase rather than a
+/// clock, phase stopping and a changed tau hold or stretch it with the rest of the movement
 /// (docs/method.md §2.8).
 #[inline]
-pub(crate) fn time_to_go(x: f64, tau: f64, alpha_x: f64, h: f64) -> f64 {
-    tau - h * libm::log(x) / libm::log1p(-alpha_x * h / tau)
+pub(crate) fn phase_to_go(x: f64, tau: f64, alpha_x: f64, h: f64) -> f64 {
+    1.0 - h / tau * libm::log(x) / libm::log1p(-alpha_x * h / tau)
 }
 
 impl Dmp {
@@ -329,15 +329,20 @@ impl Dmp {
             self.tau,
         ))
     }
-    /// The same path at another speed: tau only scales time.
+    /// The same path at another speed: tau only scales time, so the final velocity scales by
+    /// the old tau over the new (the moving goal covers the same path).
     pub fn with_tau(&self, tau: f64) -> Result<Self> {
-        self.keeping_final_velocity(Self::new(
+        let scaled = Self::new(
             self.config,
             self.weights.clone(),
             self.goal.clone(),
             self.y0.clone(),
             tau,
-        ))
+        )?;
+        Ok(Self {
+            final_velocity: self.final_velocity.as_ref().map(|gd| gd * (self.tau / tau)),
+            ..scaled
+        })
     }
 }
 

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::dmp::{Dmp, DmpConfig, time_to_go};
+use crate::dmp::{Dmp, DmpConfig, phase_to_go};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 
 /// Rollouts longer than this many values per array (samples x DOFs) are refused rather than
@@ -197,8 +197,11 @@ impl Dmp {
         let h = dt / substeps as f64;
         let n = cfg.n_basis;
         let goal = self.goal().as_slice();
-        let gd = self.final_velocity().map_or(&[][..], |v| v.as_slice());
         let tau = self.tau();
+        // The goal's velocity per unit of scaled time t / tau (docs/method.md §2.8).
+        let v: Vec<f64> = self
+            .final_velocity()
+            .map_or(vec![], |gd| (gd * tau).data.into());
         // N x D column-major: the weights of DOF d are the contiguous slice w[d n .. (d+1) n].
         let w = self.weights().as_slice();
         let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
@@ -212,7 +215,7 @@ impl Dmp {
             let range = self.basis().normalized_activations(x, &mut psi);
             let psi = &psi[range.clone()];
             let to_go = if MOVING {
-                time_to_go(x, tau, cfg.alpha_x, h)
+                phase_to_go(x, tau, cfg.alpha_x, h)
             } else {
                 0.0
             };
@@ -220,7 +223,7 @@ impl Dmp {
                 let wd = &w[d * n + range.start..d * n + range.end];
                 let f = x * wd.iter().zip(psi).map(|(w, p)| w * p).sum::<f64>();
                 let spring = if MOVING {
-                    moving_spring(&cfg, goal[d], gd[d], to_go, tau, y[d], z[d])
+                    moving_spring(&cfg, goal[d], v[d], to_go, y[d], z[d])
                 } else {
                     cfg.alpha_z * (cfg.beta_z * (goal[d] - y[d]) - z[d])
                 };
@@ -309,18 +312,13 @@ impl Dmp {
 }
 
 /// The spring of eq. 1 towards a goal moving with the final velocity `gd` (docs/method.md
-/// §2.8): `alpha_z (beta_z (g - gd (tau - t) - y) + tau gd - z)`, `to_go = tau - t`.
+/// §2.8): `alpha_z (beta_z (g - gd (tau - t) - y) + tau gd - z)`, written with the goal's
+/// velocity per unit of scaled time, `v = tau gd`, and the scaled time to go, `s = (tau - t) /
+/// tau`: `alpha_z (beta_z (g - v s - y) + v - z)`. So written it depends on time only through
+/// the phase, and a stepper whose time scale changes keeps the path.
 #[inline(always)]
-pub(crate) fn moving_spring(
-    cfg: &DmpConfig,
-    g: f64,
-    gd: f64,
-    to_go: f64,
-    tau: f64,
-    y: f64,
-    z: f64,
-) -> f64 {
-    cfg.alpha_z * (cfg.beta_z * (g - gd * to_go - y) + tau * gd - z)
+pub(crate) fn moving_spring(cfg: &DmpConfig, g: f64, v: f64, s: f64, y: f64, z: f64) -> f64 {
+    cfg.alpha_z * (cfg.beta_z * (g - v * s - y) + v - z)
 }
 
 /// A rollout whose values overflowed (a huge goal or weights) is an error, not a result.

@@ -25,7 +25,7 @@
 //! to the next command's: with one sub-step `yd[k+1] = yd[k] + ydd[k] dt` to rounding.
 
 use crate::coupling::PositionLimits;
-use crate::dmp::{Dmp, DmpConfig, time_to_go};
+use crate::dmp::{Dmp, DmpConfig, phase_to_go};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::forcing::{Forcing, padded};
 use crate::rollout::{MAX_SUBSTEPS, moving_spring, stable_step};
@@ -502,8 +502,9 @@ pub struct Stepper {
     g: Vec<f64>,
     g_target: Vec<f64>,
     goal_moving: bool,
-    /// The DMP's final velocity (docs/method.md §2.8), if it has one: the spring then pulls to
-    /// the goal moving with it, outside the plain period.
+    /// The DMP's final velocity (docs/method.md §2.8) per unit of scaled time, `tau gd` at the
+    /// DMP's tau, if it has one: the spring then pulls to the goal moving with it, outside the
+    /// plain period. Per scaled time, so that phase stopping and `set_tau` keep the path.
     final_velocity: Option<Vec<f64>>,
     /// `f(x)` of the current phase.
     f: Vec<f64>,
@@ -552,7 +553,7 @@ impl Stepper {
             g: padded_copy(dmp.goal().as_slice()),
             g_target: padded_copy(dmp.goal().as_slice()),
             goal_moving: false,
-            final_velocity: dmp.final_velocity().map(|v| v.as_slice().to_vec()),
+            final_velocity: dmp.final_velocity().map(|gd| (gd * dmp.tau()).data.into()),
             f: vec![0.0; padded(n)],
             forcing: Forcing::new(dmp.basis(), dmp.weights()),
             h: vec![0.0; padded(n)],
@@ -1026,17 +1027,15 @@ impl Stepper {
         }
     }
 
-    /// [`spring`] towards the goal moving with the final velocity `gd`, as the rollout's
-    /// (docs/method.md §2.8), at the current phase and time scale.
+    /// [`spring`] towards the goal moving with the final velocity, `v` per unit of scaled
+    /// time, as the rollout's (docs/method.md §2.8), at the current phase and time scale.
     #[inline(always)]
-    fn moving_spring_into(&self, out: &mut [f64], gd: &[f64]) {
+    fn moving_spring_into(&self, out: &mut [f64], v: &[f64]) {
         let cfg = self.dmp.config();
-        let tau = self.clock.tau;
         let hs = self.clock.dt / self.clock.substeps as f64;
-        let to_go = time_to_go(self.x, tau, cfg.alpha_x, hs);
+        let to_go = phase_to_go(self.x, self.clock.tau, cfg.alpha_x, hs);
         for d in 0..self.n {
-            out[d] =
-                moving_spring(cfg, self.g[d], gd[d], to_go, tau, self.y[d], self.z[d]) + self.f[d];
+            out[d] = moving_spring(cfg, self.g[d], v[d], to_go, self.y[d], self.z[d]) + self.f[d];
         }
     }
 
