@@ -142,9 +142,18 @@ pub enum FinalVelocity {
 /// that reaches tau rather than about `alpha_x h / 2` early; taken from the phase rather than a
 /// clock, phase stopping and a changed tau hold or stretch it with the rest of the movement
 /// (docs/method.md §2.8).
+///
+/// `clock` is [`phase_clock`]`(tau, alpha_x, h)`, constant while tau and the step are.
 #[inline]
-pub(crate) fn phase_to_go(x: f64, tau: f64, alpha_x: f64, h: f64) -> f64 {
-    1.0 - h / tau * libm::log(x) / libm::log1p(-alpha_x * h / tau)
+pub(crate) fn phase_to_go(x: f64, clock: f64) -> f64 {
+    1.0 - clock * libm::log(x)
+}
+
+/// `(h / tau) / ln(1 - alpha_x h / tau)`, which turns `ln(x)` into the scaled time `t / tau` of
+/// the integrator's phase ([`phase_to_go`]).
+#[inline]
+pub(crate) fn phase_clock(tau: f64, alpha_x: f64, h: f64) -> f64 {
+    h / tau / libm::log1p(-alpha_x * h / tau)
 }
 
 impl Dmp {

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::dmp::{Dmp, DmpConfig, phase_to_go};
+use crate::dmp::{Dmp, DmpConfig, phase_clock, phase_to_go};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 
 /// Rollouts longer than this many values per array (samples x DOFs) are refused rather than
@@ -202,6 +202,7 @@ impl Dmp {
         let v: Vec<f64> = self
             .final_velocity()
             .map_or(vec![], |gd| (gd * tau).data.into());
+        let clock = phase_clock(tau, cfg.alpha_x, h);
         // N x D column-major: the weights of DOF d are the contiguous slice w[d n .. (d+1) n].
         let w = self.weights().as_slice();
         let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
@@ -214,11 +215,7 @@ impl Dmp {
         let mut derivative = |x: f64, y: &[f64], z: &[f64], dz: &mut [f64]| {
             let range = self.basis().normalized_activations(x, &mut psi);
             let psi = &psi[range.clone()];
-            let to_go = if MOVING {
-                phase_to_go(x, tau, cfg.alpha_x, h)
-            } else {
-                0.0
-            };
+            let to_go = if MOVING { phase_to_go(x, clock) } else { 0.0 };
             for d in 0..n_dof {
                 let wd = &w[d * n + range.start..d * n + range.end];
                 let f = x * wd.iter().zip(psi).map(|(w, p)| w * p).sum::<f64>();

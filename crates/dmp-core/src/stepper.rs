@@ -25,7 +25,7 @@
 //! to the next command's: with one sub-step `yd[k+1] = yd[k] + ydd[k] dt` to rounding.
 
 use crate::coupling::PositionLimits;
-use crate::dmp::{Dmp, DmpConfig, phase_to_go};
+use crate::dmp::{Dmp, DmpConfig, phase_clock, phase_to_go};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::forcing::{Forcing, padded};
 use crate::rollout::{MAX_SUBSTEPS, moving_spring, stable_step};
@@ -1033,7 +1033,7 @@ impl Stepper {
     fn moving_spring_into(&self, out: &mut [f64], v: &[f64]) {
         let cfg = self.dmp.config();
         let hs = self.clock.dt / self.clock.substeps as f64;
-        let to_go = phase_to_go(self.x, self.clock.tau, cfg.alpha_x, hs);
+        let to_go = phase_to_go(self.x, phase_clock(self.clock.tau, cfg.alpha_x, hs));
         for d in 0..self.n {
             out[d] = moving_spring(cfg, self.g[d], v[d], to_go, self.y[d], self.z[d]) + self.f[d];
         }
