@@ -181,7 +181,9 @@ class DMP(DiscretePrimitive):
         """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
         period, with phase stopping, goal changes, limits and coupling terms; ``options`` as
         :class:`dmprs.stepper.JointStepper` (``substeps``, ``alpha_e``, ``goal_filter``,
-        ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...).
+        ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...). A DMP
+        with a final velocity moves on at it past tau, so its stepper is never ``done()``: stop
+        at the phase ``exp(-alpha_x)`` (``t = tau``) or hand over to the next primitive.
         """
         return JointStepper(self, dt, **options)
 
