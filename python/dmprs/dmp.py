@@ -4,7 +4,7 @@ Rust core.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,6 +61,35 @@ class DMP(DiscretePrimitive):
     _CORE = _core.Dmp
     _core: _core.Dmp
     _DICT_TYPE = "dmprs.DMP"
+    _OPTIONAL = ("final_velocity",)
+
+    def __init__(self, *args: Any, final_velocity: ArrayLike | None = None, **kwargs: Any) -> None:
+        """As :class:`~dmprs.primitive.DiscretePrimitive` (weights, goal, start, tau and the
+        constants), and the velocity ``(D,)`` it reaches its goal with (docs/method.md §2.8;
+        None: zero, the DMP of eqs. 1-4).
+        """
+        super().__init__(*args, **kwargs)
+        if final_velocity is not None:
+            object.__setattr__(self, "_core", self._core.with_final_velocity(self._velocity(final_velocity)))
+
+    def _velocity(self, value: ArrayLike) -> NDArray[np.float64]:
+        """A final velocity as the core takes it: ``(D,)``, a scalar for a one-DOF DMP."""
+        v = np.atleast_1d(as_float_array(value, "final_velocity", (0, 1)))
+        if v.shape != (self.n_dof,):
+            raise InvalidInputError(f"final_velocity has shape {v.shape}, expected ({self.n_dof},): one entry per DOF")
+        return v
+
+    @property
+    def final_velocity(self) -> NDArray[np.float64]:
+        """The velocity ``(D,)`` the movement reaches its goal with at ``t = tau`` (docs/method.md
+        §2.8); zeros for the DMP of eqs. 1-4.
+        """
+        v = self._core.final_velocity
+        return np.zeros(self.n_dof) if v is None else v
+
+    def _optional_parameters(self) -> dict[str, Any]:
+        v = self._core.final_velocity
+        return {} if v is None else {"final_velocity": v.tolist()}
 
     @staticmethod
     def _parameters(weights: ArrayLike, goal: ArrayLike, start: ArrayLike) -> Parameters:
@@ -88,6 +117,7 @@ class DMP(DiscretePrimitive):
         beta_z: float | None = None,
         alpha_x: float = 2.0,
         width_factor: float = 2.0,
+        final_velocity: ArrayLike | Literal["demo"] | None = None,
     ) -> DMP:
         """Fits a DMP to one demonstration by batch least squares (docs/method.md §2.3).
 
@@ -112,10 +142,19 @@ class DMP(DiscretePrimitive):
             alpha_x: the phase decay (eq. 3); at most ln 1e8, beyond which the phase underflows
                 the basis functions and the fit is refused.
             width_factor: kernel width relative to the spacing of the kernel centres.
+            final_velocity: the velocity ``(D,)`` the DMP reaches its goal with at ``t = tau``
+                (docs/method.md §2.8), ``"demo"`` for the demonstration's last velocity, or None
+                for zero (eqs. 1-4). With one, the targets are
+                ``F_j = tau^2 ydd_j - alpha_z (beta_z (g - gd (tau - t_j) - y_j) + tau (gd - yd_j))``.
         """
         tt, yy, *derivs = demonstration_arrays(t, y, yd, ydd)
+        from_demo = isinstance(final_velocity, str)
+        if from_demo and final_velocity != "demo":
+            raise InvalidInputError(f"final_velocity must be an array, 'demo' or None; got {final_velocity!r}")
+        given = None if final_velocity is None or from_demo else np.atleast_1d(
+            as_float_array(final_velocity, "final_velocity", (0, 1)))
         core = _core.Dmp.fit(tt, yy, derivs[0], derivs[1], as_count(n_basis, "n_basis", 2),
-                             constants(alpha_z, beta_z, alpha_x, width_factor))
+                             constants(alpha_z, beta_z, alpha_x, width_factor), given, from_demo)
         return cls._wrap(core)
 
     # --- behaviour --------------------------------------------------------------------------
@@ -132,7 +171,8 @@ class DMP(DiscretePrimitive):
         Returns a :class:`Trajectory` sampled at ``t_j = j * dt`` up to ``duration`` (default
         tau; rounded up to a whole step). The phase is still e^-2 = 0.135 at tau; pass
         ``until_rest=True`` to go on until every DOF is within ``rest_tol`` of its goal, at rest,
-        and no longer driven by the forcing term.
+        and no longer driven by the forcing term. A DMP with a final velocity moves on at it past
+        tau and never rests (docs/method.md §2.8): ``until_rest`` is refused for it.
         """
         opts = rollout_options(dt, duration, until_rest, rest_tol)
         return Trajectory._trusted(*self._core.rollout(**opts))
@@ -141,9 +181,18 @@ class DMP(DiscretePrimitive):
         """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
         period, with phase stopping, goal changes, limits and coupling terms; ``options`` as
         :class:`dmprs.stepper.JointStepper` (``substeps``, ``alpha_e``, ``goal_filter``,
-        ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...).
+        ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...). A DMP
+        with a final velocity moves on at it past tau, so its stepper is never ``done()``: stop
+        at the phase ``exp(-alpha_x)`` (``t = tau``) or hand over to the next primitive.
         """
         return JointStepper(self, dt, **options)
+
+    def with_final_velocity(self, final_velocity: ArrayLike) -> DMP:
+        """The same movement reaching its goal with velocity ``final_velocity`` ``(D,)`` at
+        ``t = tau`` (docs/method.md §2.8): the spring pulls to a goal moving at that velocity that
+        arrives at ``goal`` at tau. Zeros give the DMP of eqs. 1-4, bit for bit.
+        """
+        return DMP._wrap(self._core.with_final_velocity(self._velocity(final_velocity)))
 
     def with_goal(self, goal: ArrayLike) -> DMP:
         """The same movement towards a new goal (weights and tau unchanged)."""

@@ -73,7 +73,9 @@ class Generalizer:
     r"""Maps a task query q (n,) to a DMP, learned from the demonstrations of a :class:`Database`.
 
     Each demonstration is first fitted as a DMP (:meth:`dmprs.DMP.fit`, with its own tau = its
-    duration, its own goal and start, and its measured yd/ydd if the trajectory has them). Then:
+    duration, its own goal and start, and its measured yd/ydd if the trajectory has them; with
+    ``final_velocity=True`` its last velocity as its final velocity, docs/method.md §2.8, which
+    is then generalized like the goal). Then:
 
     ``method="linear"`` (docs/method.md §3.3; the paper's matchbox setting): every parameter
     (weights, tau, goal, start) is interpolated and extrapolated affinely in q. For two demos
@@ -176,6 +178,7 @@ class Generalizer:
         triangulate: bool | None = None,
         trend: str = "constant",
         periodic: bool = False,
+        final_velocity: bool = False,
     ) -> None:
         if not isinstance(db, Database):
             raise InvalidInputError(f"db is a {type(db).__name__}; expected a dmprs.Database")
@@ -227,12 +230,22 @@ class Generalizer:
         }
         if not isinstance(periodic, bool):
             raise InvalidInputError(f"periodic = {periodic!r} is invalid: use True or False")
+        if not isinstance(final_velocity, bool):
+            raise InvalidInputError(f"final_velocity = {final_velocity!r} is invalid: use True or False")
+        if final_velocity and (periodic or db.is_cartesian):
+            raise InvalidInputError("final_velocity=True generalizes joint-space discrete demonstrations only "
+                                    "(docs/method.md §2.8)")
         if periodic:
             self._core = _periodic_core(db, method, n_basis, spring(alpha_z, beta_z, width_factor), alpha_x,
                                         triangulate, options)
             return
         alpha_x = 2.0 if alpha_x is None else alpha_x
         if method == "linear" and (triangulate or (triangulate is None and _needs_triangulation(db.queries))):
+            if final_velocity:
+                raise InvalidInputError(
+                    f"final_velocity=True with method 'linear' over {len(db)} demonstrations needs a "
+                    "triangulation, which does not generalize final velocities yet; use at most "
+                    f"{db.queries.shape[1] + 1} distinct queries or method 'lwr-gp'")
             if db.is_cartesian:
                 raise InvalidInputError(
                     f"method 'linear' over {len(db)} pose demonstrations needs a triangulation, which "
@@ -258,7 +271,7 @@ class Generalizer:
                 for tr in (d.trajectory for d in db)
                 if isinstance(tr, Trajectory)
             ]
-            self._core = _core.Generalizer(db.queries, demos, method, n, constants, options)
+            self._core = _core.Generalizer(db.queries, demos, method, n, constants, options, final_velocity)
         self._db_names = db.query_names
 
     def _query(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -286,7 +299,8 @@ class Generalizer:
         tau, goal position (3), goal rotation vector (3), start position (3), start rotation
         vector (3)]``, the rotation vectors in the tangent space of demonstration 0's goal and
         start orientations (docs/cartesian.md). Periodic: ``[w.ravel() (D*N), tau, goal (D),
-        amplitude (D), y0 (D)]``.
+        amplitude (D), y0 (D)]``. With ``final_velocity=True``: ``[w.ravel() (D*N), tau,
+        goal (D), y0 (D), final velocity (D)]``.
         """
         return self._core.parameters(self._query(q))
 
@@ -332,8 +346,8 @@ class Generalizer:
 
     @property
     def n_parameters(self) -> int:
-        """``D * N + 1 + 2 * D``; for poses ``6 * N + 1 + 12``, periodic ``D * N + 1 + 3 * D``
-        (see :meth:`parameters`).
+        """``D * N + 1 + 2 * D``; for poses ``6 * N + 1 + 12``, periodic ``D * N + 1 + 3 * D``,
+        with final velocities ``D * N + 1 + 3 * D`` (see :meth:`parameters`).
         """
         return self._core.n_parameters
 

@@ -68,6 +68,9 @@ class Primitive:
     _PARAMETERS: ClassVar[tuple[str, ...]] = ("tau", "goal", "start", "weights")
     #: the constants' names, in the order of the dict form; the constructor takes each by name
     _CONSTANTS: ClassVar[tuple[str, ...]] = ("alpha_z", "beta_z", "width_factor")
+    #: parameters the dict form holds only when they are not their default (so a primitive
+    #: without them writes the dict it always did); the constructor takes each by name
+    _OPTIONAL: ClassVar[tuple[str, ...]] = ()
 
     @classmethod
     def _wrap(cls, core: Any) -> Self:
@@ -134,6 +137,10 @@ class Primitive:
     def _constants(self) -> dict[str, float]:
         return {name: getattr(self, name) for name in self._CONSTANTS}
 
+    def _optional_parameters(self) -> dict[str, Any]:
+        """The :attr:`_OPTIONAL` parameters that are not their default, as the dict form holds them."""
+        return {}
+
     # --- behaviour --------------------------------------------------------------------------
     def with_tau(self, tau: float) -> Self:
         """The same path at another speed: scaling tau by k stretches time by k, nothing else."""
@@ -148,6 +155,7 @@ class Primitive:
             "version": _DICT_VERSION,
             **{k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in parameters.items()},
             **self._constants(),
+            **self._optional_parameters(),
         }
 
     @classmethod
@@ -168,12 +176,13 @@ class Primitive:
         missing = [k for k in required if k not in fields]
         if missing:
             raise InvalidInputError(f"{kind} dict is missing {', '.join(missing)}")
-        unknown = sorted(set(fields) - set(required) - {"type", "version"}, key=str)
+        unknown = sorted(set(fields) - set(required) - set(cls._OPTIONAL) - {"type", "version"}, key=str)
         if unknown:
             raise InvalidInputError(f"{kind} dict has unknown keys {', '.join(map(short, unknown))}")
         if fields["beta_z"] is None:
             raise InvalidInputError(f"{kind} dict has beta_z = None; to_dict() always writes a number")
-        return cls(**{name: fields[name] for name in required})
+        optional = {name: fields[name] for name in cls._OPTIONAL if name in fields}
+        return cls(**{name: fields[name] for name in required}, **optional)
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (type(self).from_dict, (self.to_dict(),))

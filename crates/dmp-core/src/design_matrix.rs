@@ -37,6 +37,8 @@ pub struct PreparedDemo<'a> {
     pub goal: DVector<f64>,
     /// `y_1`.
     pub y0: DVector<f64>,
+    /// The velocity the fitted DMP reaches its goal with (docs/method.md §2.8); `None`: zero.
+    pub final_velocity: Option<DVector<f64>>,
 }
 
 impl<'a> PreparedDemo<'a> {
@@ -97,6 +99,7 @@ impl<'a> PreparedDemo<'a> {
             tau: t[t.len() - 1] - t[0],
             goal: y.column(t.len() - 1).into_owned(),
             y0: y.column(0).into_owned(),
+            final_velocity: None,
         })
     }
 
@@ -150,8 +153,22 @@ pub fn normal_equations(
         }
         let yj = y.column(j);
         for d in 0..n_dof {
-            force[d] = tau * tau * demo.ydd[(d, j)]
-                - config.alpha_z * (config.beta_z * (demo.goal[d] - yj[d]) - tau * demo.yd[(d, j)]);
+            force[d] = match &demo.final_velocity {
+                None => {
+                    tau * tau * demo.ydd[(d, j)]
+                        - config.alpha_z
+                            * (config.beta_z * (demo.goal[d] - yj[d]) - tau * demo.yd[(d, j)])
+                }
+                // docs/method.md §2.8: the spring pulls to the moving goal g - gd (tau - t) and
+                // damps towards the velocity gd.
+                Some(gd) => {
+                    let moving_goal = demo.goal[d] - gd[d] * (tau - (tj - t0));
+                    tau * tau * demo.ydd[(d, j)]
+                        - config.alpha_z
+                            * (config.beta_z * (moving_goal - yj[d])
+                                + tau * (gd[d] - demo.yd[(d, j)]))
+                }
+            };
         }
         accumulate_row(&mut ata, &mut atf, &psi, nz, &force);
     }

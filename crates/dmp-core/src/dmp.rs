@@ -121,6 +121,39 @@ pub struct Dmp {
     goal: DVector<f64>,
     y0: DVector<f64>,
     tau: f64,
+    /// The velocity `gd` at which the movement reaches its goal at `t = tau` (docs/method.md
+    /// §2.8); `None` for zero, today's DMP.
+    final_velocity: Option<DVector<f64>>,
+}
+
+/// Where a fit takes the final velocity from (docs/method.md §2.8).
+#[derive(Debug, Clone, PartialEq)]
+pub enum FinalVelocity {
+    /// The demonstration's last velocity (measured, or its finite difference).
+    FromDemo,
+    /// A given velocity per DOF.
+    Given(DVector<f64>),
+}
+
+/// The scaled time left until `t = tau`, `(tau - t) / tau`, recovered from the phase of eq. 3
+/// as the integrator advances it: explicit Euler steps of `h` make `x_k = (1 - alpha_x h /
+/// tau)^k`, so `t = k h = h ln(x) / ln(1 - alpha_x h / tau)` (`-tau ln(x) / alpha_x` as
+/// `h -> 0`). Taken from the integrator's own phase, the moving goal arrives at `g` on the step
+/// that reaches tau rather than about `alpha_x h / 2` early; taken from the phase rather than a
+/// clock, phase stopping and a changed tau hold or stretch it with the rest of the movement
+/// (docs/method.md §2.8).
+///
+/// `clock` is [`phase_clock`]`(tau, alpha_x, h)`, constant while tau and the step are.
+#[inline]
+pub(crate) fn phase_to_go(x: f64, clock: f64) -> f64 {
+    1.0 - clock * libm::log(x)
+}
+
+/// `(h / tau) / ln(1 - alpha_x h / tau)`, which turns `ln(x)` into the scaled time `t / tau` of
+/// the integrator's phase ([`phase_to_go`]).
+#[inline]
+pub(crate) fn phase_clock(tau: f64, alpha_x: f64, h: f64) -> f64 {
+    h / tau / libm::log1p(-alpha_x * h / tau)
 }
 
 impl Dmp {
@@ -170,6 +203,7 @@ impl Dmp {
             goal,
             y0,
             tau,
+            final_velocity: None,
         })
     }
 
@@ -180,12 +214,39 @@ impl Dmp {
     ///
     /// Missing derivatives are computed with [`crate::finite_difference::gradient`] (second order, non-uniform grid).
     pub fn fit(demo: &Demonstration<'_>, config: DmpConfig) -> Result<Self> {
+        Self::fit_prepared(PreparedDemo::new(demo)?, config)
+    }
+
+    /// [`Self::fit`] of a DMP that reaches its goal with a final velocity `gd` (docs/method.md
+    /// §2.8): the targets become `F_j = tau^2 ydd_j - alpha_z (beta_z (g_m(t_j) - y_j) +
+    /// tau (gd - yd_j))` with the moving goal `g_m(t) = g - gd (tau - t)`. A final velocity of
+    /// zero is [`Self::fit`], bit for bit.
+    pub fn fit_with_final_velocity(
+        demo: &Demonstration<'_>,
+        config: DmpConfig,
+        final_velocity: FinalVelocity,
+    ) -> Result<Self> {
+        let mut prepared = PreparedDemo::new(demo)?;
+        let gd = match final_velocity {
+            FinalVelocity::FromDemo => prepared.yd.column(prepared.t.len() - 1).into_owned(),
+            FinalVelocity::Given(v) => v,
+        };
+        prepared.final_velocity = nonzero(checked_final_velocity(gd, prepared.n_dof())?);
+        Self::fit_prepared(prepared, config)
+    }
+
+    fn fit_prepared(prepared: PreparedDemo<'_>, config: DmpConfig) -> Result<Self> {
         config.validate_for_fit()?;
-        let prepared = PreparedDemo::new(demo)?;
         let basis = Basis::new(config.n_basis, config.alpha_x, config.width_factor)?;
         let normal = normal_equations(&prepared, &basis, &config);
         let weights = solve_ridge(normal.ata, &normal.atf, FIT_RIDGE, "DMP fit")?;
-        let PreparedDemo { goal, y0, tau, .. } = prepared;
+        let PreparedDemo {
+            goal,
+            y0,
+            tau,
+            final_velocity,
+            ..
+        } = prepared;
         Ok(Self {
             config,
             basis,
@@ -193,6 +254,30 @@ impl Dmp {
             goal,
             y0,
             tau,
+            final_velocity,
+        })
+    }
+
+    /// The same movement reaching its goal with velocity `gd` at `t = tau` (weights unchanged;
+    /// docs/method.md §2.8). All zeros give today's DMP, bit for bit.
+    pub fn with_final_velocity(&self, gd: DVector<f64>) -> Result<Self> {
+        let gd = checked_final_velocity(gd, self.n_dof())?;
+        Ok(Self {
+            final_velocity: nonzero(gd),
+            ..self.clone()
+        })
+    }
+
+    /// The final velocity, `None` when it is zero.
+    pub fn final_velocity(&self) -> Option<&DVector<f64>> {
+        self.final_velocity.as_ref()
+    }
+
+    /// A DMP built by [`Self::new`] from this one's parameters keeps its final velocity.
+    fn keeping_final_velocity(&self, built: Result<Self>) -> Result<Self> {
+        built.map(|d| Self {
+            final_velocity: self.final_velocity.clone(),
+            ..d
         })
     }
 
@@ -222,36 +307,70 @@ impl Dmp {
         self.config.n_basis
     }
 
+    /// The same goal, start, tau and final velocity with other weights (the same shape changed).
+    pub fn with_weights(&self, weights: DMatrix<f64>) -> Result<Self> {
+        self.keeping_final_velocity(Self::new(
+            self.config,
+            weights,
+            self.goal.clone(),
+            self.y0.clone(),
+            self.tau,
+        ))
+    }
+
     /// The same movement towards a new goal (weights unchanged).
     pub fn with_goal(&self, goal: DVector<f64>) -> Result<Self> {
-        Self::new(
+        self.keeping_final_velocity(Self::new(
             self.config,
             self.weights.clone(),
             goal,
             self.y0.clone(),
             self.tau,
-        )
+        ))
     }
     /// The same movement from a new start.
     pub fn with_start(&self, y0: DVector<f64>) -> Result<Self> {
-        Self::new(
+        self.keeping_final_velocity(Self::new(
             self.config,
             self.weights.clone(),
             self.goal.clone(),
             y0,
             self.tau,
-        )
+        ))
     }
-    /// The same path at another speed: tau only scales time.
+    /// The same path at another speed: tau only scales time, so the final velocity scales by
+    /// the old tau over the new (the moving goal covers the same path).
     pub fn with_tau(&self, tau: f64) -> Result<Self> {
-        Self::new(
+        let scaled = Self::new(
             self.config,
             self.weights.clone(),
             self.goal.clone(),
             self.y0.clone(),
             tau,
-        )
+        )?;
+        Ok(Self {
+            final_velocity: self.final_velocity.as_ref().map(|gd| gd * (self.tau / tau)),
+            ..scaled
+        })
     }
+}
+
+/// A final velocity with one finite entry per DOF.
+fn checked_final_velocity(gd: DVector<f64>, n_dof: usize) -> Result<DVector<f64>> {
+    if gd.len() != n_dof {
+        return Err(Error::Shape {
+            name: "final_velocity",
+            expected: format!("({n_dof},), one entry per DOF"),
+            got: format!("({},)", gd.len()),
+        });
+    }
+    check_vector("final_velocity", &gd)?;
+    Ok(gd)
+}
+
+/// `None` for a zero final velocity, so that it is today's DMP in every respect.
+pub(crate) fn nonzero(gd: DVector<f64>) -> Option<DVector<f64>> {
+    gd.iter().any(|&v| v != 0.0).then_some(gd)
 }
 
 fn check_vector(name: &'static str, v: &DVector<f64>) -> Result<()> {

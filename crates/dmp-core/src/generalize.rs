@@ -21,7 +21,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::basis::Basis;
 use crate::design_matrix::{NormalEquations, PreparedDemo, normal_equations, solve_ridge};
-use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE};
+use crate::dmp::{Demonstration, Dmp, DmpConfig, FIT_RIDGE, nonzero};
 use crate::error::{Error, Result, check_scalar};
 use crate::lwr::{Lwr, LwrOptions};
 use crate::output_gp::{GpMean, GpSettings, OutputGps};
@@ -139,11 +139,18 @@ fn flatten(weights: &DMatrix<f64>, scalars: &[f64]) -> DVector<f64> {
     DVector::from_vec(v)
 }
 
-/// A DMP's scalar parameters `[tau, g (D), y0 (D)]`.
-fn dmp_scalars(dmp: &Dmp) -> Vec<f64> {
+/// A DMP's scalar parameters `[tau, g (D), y0 (D)]`, then its final velocity `gd (D)` when the
+/// generalizer has them (docs/method.md §2.8; zeros for a demonstration ending at rest).
+fn dmp_scalars(dmp: &Dmp, final_velocity: bool) -> Vec<f64> {
     let mut v = vec![dmp.tau()];
     v.extend(dmp.goal().iter());
     v.extend(dmp.y0().iter());
+    if final_velocity {
+        match dmp.final_velocity() {
+            Some(gd) => v.extend(gd.iter()),
+            None => v.extend(std::iter::repeat_n(0.0, dmp.n_dof())),
+        }
+    }
     v
 }
 
@@ -457,13 +464,18 @@ pub struct Generalizer {
     demo_dmps: Vec<Dmp>,
     tau_valid: (f64, f64),
     map: ParameterMap,
+    /// Whether the final velocity is among the generalized scalars ([`Self::with_final_velocity`]).
+    final_velocity: bool,
 }
 
 /// The names of a DMP's scalar parameters, in [`dmp_scalars`]' order.
-fn dmp_scalar_names(n_dof: usize) -> Vec<String> {
+fn dmp_scalar_names(n_dof: usize, final_velocity: bool) -> Vec<String> {
     let mut names = vec!["tau".to_string()];
     names.extend((0..n_dof).map(|i| format!("goal[{i}]")));
     names.extend((0..n_dof).map(|i| format!("start[{i}]")));
+    if final_velocity {
+        names.extend((0..n_dof).map(|i| format!("final_velocity[{i}]")));
+    }
     names
 }
 
@@ -475,6 +487,28 @@ impl Generalizer {
         demos: &[Demonstration<'_>],
         config: DmpConfig,
         method: Method,
+    ) -> Result<Self> {
+        Self::build(queries, demos, config, method, false)
+    }
+
+    /// [`Self::new`] for demonstrations that end in motion (docs/method.md §2.8): each is fitted
+    /// with its last velocity as its final velocity, and the final velocity joins the
+    /// generalized scalars, after the starts.
+    pub fn with_final_velocity(
+        queries: &[Vec<f64>],
+        demos: &[Demonstration<'_>],
+        config: DmpConfig,
+        method: Method,
+    ) -> Result<Self> {
+        Self::build(queries, demos, config, method, true)
+    }
+
+    fn build(
+        queries: &[Vec<f64>],
+        demos: &[Demonstration<'_>],
+        config: DmpConfig,
+        method: Method,
+        final_velocity: bool,
     ) -> Result<Self> {
         config.validate_for_fit()?;
         let m = demos.len();
@@ -488,7 +522,11 @@ impl Generalizer {
                 index: k,
                 source: Box::new(e),
             };
-            let prepared = PreparedDemo::new(demo).map_err(in_demo)?;
+            let mut prepared = PreparedDemo::new(demo).map_err(in_demo)?;
+            if final_velocity {
+                prepared.final_velocity =
+                    nonzero(prepared.yd.column(prepared.t.len() - 1).into_owned());
+            }
             if k == 0 {
                 n_dof = prepared.n_dof();
             } else if prepared.n_dof() != n_dof {
@@ -499,29 +537,35 @@ impl Generalizer {
                 });
             }
             let ne = normal_equations(&prepared, &basis, &config);
-            // Exactly what Dmp::fit computes: the demo's own DMP, bit for bit.
+            // Exactly what Dmp::fit (with_final_velocity) computes: the demo's own DMP, bit
+            // for bit.
             let w = solve_ridge(ne.ata.clone(), &ne.atf, FIT_RIDGE, "DMP fit").map_err(in_demo)?;
-            demo_dmps.push(
-                Dmp::new(
-                    config,
-                    w,
-                    prepared.goal.clone(),
-                    prepared.y0.clone(),
-                    prepared.tau,
-                )
-                .map_err(in_demo)?,
-            );
+            let dmp = Dmp::new(
+                config,
+                w,
+                prepared.goal.clone(),
+                prepared.y0.clone(),
+                prepared.tau,
+            )
+            .map_err(in_demo)?;
+            demo_dmps.push(match &prepared.final_velocity {
+                Some(gd) => dmp.with_final_velocity(gd.clone()).map_err(in_demo)?,
+                None => dmp,
+            });
             normal.push(ne);
         }
         let tau_valid = tau_range(demo_dmps.iter().map(|d| d.tau()));
         let weights: Vec<&DMatrix<f64>> = demo_dmps.iter().map(|d| d.weights()).collect();
-        let scalars: Vec<Vec<f64>> = demo_dmps.iter().map(dmp_scalars).collect();
+        let scalars: Vec<Vec<f64>> = demo_dmps
+            .iter()
+            .map(|d| dmp_scalars(d, final_velocity))
+            .collect();
         let map = ParameterMap::new(
             queries,
             normal,
             &weights,
             &scalars,
-            &dmp_scalar_names(n_dof),
+            &dmp_scalar_names(n_dof, final_velocity),
             &method,
         )?;
         Ok(Self {
@@ -530,6 +574,7 @@ impl Generalizer {
             demo_dmps,
             tau_valid,
             map,
+            final_velocity,
         })
     }
 
@@ -555,9 +600,14 @@ impl Generalizer {
     pub fn queries(&self) -> &[Vec<f64>] {
         self.map.queries()
     }
-    /// Length of the flattened parameter vector: `D N + 1 + 2 D`.
+    /// Length of the flattened parameter vector: `D N + 1 + 2 D`, `+ D` with final velocities.
     pub fn n_parameters(&self) -> usize {
-        self.n_dof * self.config.n_basis + 1 + 2 * self.n_dof
+        let scalars = if self.final_velocity { 3 } else { 2 } * self.n_dof;
+        self.n_dof * self.config.n_basis + 1 + scalars
+    }
+    /// Whether the final velocity is generalized ([`Self::with_final_velocity`]).
+    pub fn has_final_velocity(&self) -> bool {
+        self.final_velocity
     }
     /// The interval tau(q) must lie strictly inside.
     pub fn tau_bounds(&self) -> (f64, f64) {
@@ -573,11 +623,15 @@ impl Generalizer {
         self.map.check_tau(q, s[0], self.tau_valid)?;
         let goal = DVector::from_column_slice(&s[1..1 + n]);
         let y0 = DVector::from_column_slice(&s[1 + n..1 + 2 * n]);
-        Dmp::new(self.config, w, goal, y0, s[0])
+        let dmp = Dmp::new(self.config, w, goal, y0, s[0])?;
+        if !self.final_velocity {
+            return Ok(dmp);
+        }
+        dmp.with_final_velocity(DVector::from_column_slice(&s[1 + 2 * n..1 + 3 * n]))
     }
 
-    /// Flattened parameters `[w (D x N, DOF-major), tau, g (D), y0 (D)]` at `q`, without the
-    /// tau check.
+    /// Flattened parameters `[w (D x N, DOF-major), tau, g (D), y0 (D)]` at `q`, then
+    /// `gd (D)` with final velocities; without the tau check.
     pub fn parameters(&self, q: &[f64]) -> Result<DVector<f64>> {
         self.map.flat_at(q)
     }
@@ -595,7 +649,7 @@ mod tests {
     use crate::lwr::LocalModel;
 
     fn flat(dmp: &Dmp) -> DVector<f64> {
-        flatten(dmp.weights(), &dmp_scalars(dmp))
+        flatten(dmp.weights(), &dmp_scalars(dmp, false))
     }
 
     /// A 2-DOF demo whose amplitude, goal and duration depend on the query.

@@ -45,7 +45,7 @@ pub use cartesian::{
 };
 pub use cartesian_generalize::CartesianGeneralizer;
 pub use cartesian_stepper::{CartesianStepper, CartesianStepperOptions};
-pub use dmp::{Demonstration, Dmp, DmpConfig};
+pub use dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity};
 pub use error::{Error, Result};
 pub use generalize::{Generalizer, LwrGpOptions, Method};
 pub use gp::{GaussianProcess, GpOptions, HyperBounds, Hyperparameters};

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::dmp::Dmp;
+use crate::dmp::{Dmp, DmpConfig, phase_clock, phase_to_go};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 
 /// Rollouts longer than this many values per array (samples x DOFs) are refused rather than
@@ -139,7 +139,30 @@ impl Dmp {
     /// each sample interval is integrated in the fewest equal sub-steps that are stable; at most
     /// [`MAX_SUBSTEPS`], beyond which the rollout is refused. Within the limit nothing changes.
     /// A trajectory that still overflows (a goal of 1e308, say) is an error, never returned.
+    ///
+    /// A DMP with a final velocity (docs/method.md §2.8) pulls to the moving goal `g_m = g - gd
+    /// (tau - t)`, `t` taken from the phase, and damps towards `z = tau gd`; it never rests, so
+    /// `until_rest` is refused for it.
     pub fn rollout(&self, opts: &RolloutOptions) -> Result<Trajectory> {
+        // Chosen once per rollout, so the loop of a DMP without one is today's, instruction for
+        // instruction.
+        if self.final_velocity().is_some() {
+            if opts.until_rest {
+                return Err(Error::InvalidParameter {
+                    name: "until_rest",
+                    value: "true".into(),
+                    requirement: "must be false for a DMP with a final velocity: it moves on at \
+                                  that velocity past tau and never rests (docs/method.md §2.8)",
+                });
+            }
+            self.rollout_with::<true>(opts)
+        } else {
+            self.rollout_with::<false>(opts)
+        }
+    }
+
+    /// [`Self::rollout`]; `MOVING`: the goal moves with the final velocity.
+    fn rollout_with<const MOVING: bool>(&self, opts: &RolloutOptions) -> Result<Trajectory> {
         opts.validate()?;
         let duration = opts.duration.unwrap_or(self.tau());
         let steps = n_steps(duration, opts.dt);
@@ -174,6 +197,12 @@ impl Dmp {
         let h = dt / substeps as f64;
         let n = cfg.n_basis;
         let goal = self.goal().as_slice();
+        let tau = self.tau();
+        // The goal's velocity per unit of scaled time t / tau (docs/method.md §2.8).
+        let v: Vec<f64> = self
+            .final_velocity()
+            .map_or(vec![], |gd| (gd * tau).data.into());
+        let clock = phase_clock(tau, cfg.alpha_x, h);
         // N x D column-major: the weights of DOF d are the contiguous slice w[d n .. (d+1) n].
         let w = self.weights().as_slice();
         let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
@@ -186,10 +215,16 @@ impl Dmp {
         let mut derivative = |x: f64, y: &[f64], z: &[f64], dz: &mut [f64]| {
             let range = self.basis().normalized_activations(x, &mut psi);
             let psi = &psi[range.clone()];
+            let to_go = if MOVING { phase_to_go(x, clock) } else { 0.0 };
             for d in 0..n_dof {
                 let wd = &w[d * n + range.start..d * n + range.end];
                 let f = x * wd.iter().zip(psi).map(|(w, p)| w * p).sum::<f64>();
-                dz[d] = (cfg.alpha_z * (cfg.beta_z * (goal[d] - y[d]) - z[d]) + f) * inv_tau;
+                let spring = if MOVING {
+                    moving_spring(&cfg, goal[d], v[d], to_go, y[d], z[d])
+                } else {
+                    cfg.alpha_z * (cfg.beta_z * (goal[d] - y[d]) - z[d])
+                };
+                dz[d] = (spring + f) * inv_tau;
             }
         };
         let mut step = 0usize;
@@ -273,6 +308,16 @@ impl Dmp {
     }
 }
 
+/// The spring of eq. 1 towards a goal moving with the final velocity `gd` (docs/method.md
+/// §2.8): `alpha_z (beta_z (g - gd (tau - t) - y) + tau gd - z)`, written with the goal's
+/// velocity per unit of scaled time, `v = tau gd`, and the scaled time to go, `s = (tau - t) /
+/// tau`: `alpha_z (beta_z (g - v s - y) + v - z)`. So written it depends on time only through
+/// the phase, and a stepper whose time scale changes keeps the path.
+#[inline(always)]
+pub(crate) fn moving_spring(cfg: &DmpConfig, g: f64, v: f64, s: f64, y: f64, z: f64) -> f64 {
+    cfg.alpha_z * (cfg.beta_z * (g - v * s - y) + v - z)
+}
+
 /// A rollout whose values overflowed (a huge goal or weights) is an error, not a result.
 ///
 /// Only the last sample needs a look: the recurrence only adds and multiplies, so once a state
@@ -304,4 +349,153 @@ pub(crate) fn check_trajectory(tr: &Trajectory, context: &'static str) -> Result
 pub fn rollout_batch(dmps: &[Dmp], opts: &RolloutOptions) -> Result<Vec<Trajectory>> {
     opts.validate()?;
     dmps.par_iter().map(|d| d.rollout(opts)).collect()
+}
+
+#[cfg(test)]
+mod final_velocity_tests {
+    use nalgebra::{DMatrix, DVector};
+
+    use super::*;
+    use crate::dmp::{Demonstration, DmpConfig, FinalVelocity};
+    use crate::stepper::{Stepper, StepperOptions};
+
+    fn shaped(n_dof: usize) -> Dmp {
+        let cfg = DmpConfig::default();
+        let w = DMatrix::from_fn(cfg.n_basis, n_dof, |k, d| {
+            40.0 * libm::sin(0.7 * k as f64 + d as f64)
+        });
+        let goal = DVector::from_fn(n_dof, |d, _| 1.0 - 0.3 * d as f64);
+        Dmp::new(cfg, w, goal, DVector::zeros(n_dof), 0.8).unwrap()
+    }
+
+    /// The last sample's distance from the goal and from the final velocity, largest over DOFs.
+    fn final_errors(dmp: &Dmp, dt: f64) -> (f64, f64) {
+        let tr = dmp.rollout(&RolloutOptions::new(dt)).unwrap();
+        let last = tr.y.len() - tr.n_dof;
+        let gd = dmp.final_velocity().unwrap();
+        (0..tr.n_dof).fold((0.0f64, 0.0f64), |(ep, ev), d| {
+            (
+                ep.max((tr.y[last + d] - dmp.goal()[d]).abs()),
+                ev.max((tr.yd[last + d] - gd[d]).abs()),
+            )
+        })
+    }
+
+    #[test]
+    fn a_zero_final_velocity_is_todays_dmp() {
+        let dmp = shaped(3);
+        let same = dmp.with_final_velocity(DVector::zeros(3)).unwrap();
+        assert_eq!(same, dmp);
+        assert!(same.final_velocity().is_none());
+    }
+
+    /// Without a forcing term the spring alone tracks the moving goal: its transient from rest,
+    /// `(1 + a) e^-a` with `a = alpha_z / 2` at tau, is below 1e-9, and Euler tracks a ramp with
+    /// its velocity fed forward exactly, so the request is met to rounding at any dt.
+    #[test]
+    fn the_spring_alone_meets_the_request() {
+        let cfg = DmpConfig::default();
+        let goal = DVector::from_vec(vec![1.0, -0.5]);
+        let dmp = Dmp::new(
+            cfg,
+            DMatrix::zeros(cfg.n_basis, 2),
+            goal,
+            DVector::zeros(2),
+            0.8,
+        )
+        .unwrap()
+        .with_final_velocity(DVector::from_vec(vec![0.8, -1.5]))
+        .unwrap();
+        for dt in [1e-3, 4e-3, 0.02] {
+            let (position, velocity) = final_errors(&dmp, dt);
+            assert!(
+                position < 1e-8 && velocity < 1e-7,
+                "{position} {velocity} at {dt}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_demonstration_ending_in_motion_is_reproduced() {
+        // Min-jerk from rest at 0 to 1 plus v T (s^5 - s^4), s = t / T: the end position is
+        // still 1, the end velocity v (closed form, no integrator involved).
+        let (big_t, v, n) = (1.2, 0.9, 1201);
+        let t: Vec<f64> = (0..n).map(|j| big_t * j as f64 / (n - 1) as f64).collect();
+        let pos = |s: f64| {
+            let s3 = s * s * s;
+            10.0 * s3 - 15.0 * s3 * s + 6.0 * s3 * s * s + v * big_t * (s3 * s * s - s3 * s)
+        };
+        let y = DMatrix::from_fn(1, n, |_, j| pos(t[j] / big_t));
+        let demo = Demonstration {
+            t: &t,
+            y: y.as_view(),
+            yd: None,
+            ydd: None,
+        };
+        let cfg = DmpConfig {
+            n_basis: 40,
+            ..DmpConfig::default()
+        };
+        let given = FinalVelocity::Given(DVector::from_element(1, v));
+        let dmp = Dmp::fit_with_final_velocity(&demo, cfg, given).unwrap();
+        let from_demo = Dmp::fit_with_final_velocity(&demo, cfg, FinalVelocity::FromDemo).unwrap();
+        assert!((from_demo.final_velocity().unwrap()[0] - v).abs() < 1e-4);
+        let tr = dmp.rollout(&RolloutOptions::new(1e-3)).unwrap();
+        let worst = (0..n)
+            .map(|j| (tr.y[j] - y[(0, j)]).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-2, "largest reproduction error {worst}");
+        assert!(
+            (tr.yd[n - 1] - v).abs() < 2e-2,
+            "final velocity {}",
+            tr.yd[n - 1]
+        );
+    }
+
+    /// To rounding, as without a final velocity: only the forcing term's exponentials are
+    /// computed differently (crate::stepper's module docs).
+    #[test]
+    fn the_stepper_is_the_rollout() {
+        let dmp = shaped(3)
+            .with_final_velocity(DVector::from_vec(vec![0.5, 0.0, -2.0]))
+            .unwrap();
+        for dt in [1e-3, 0.02] {
+            let tr = dmp
+                .rollout(&RolloutOptions {
+                    duration: Some(1.5 * dmp.tau()),
+                    ..RolloutOptions::new(dt)
+                })
+                .unwrap();
+            let opts = StepperOptions {
+                goal_filter: None,
+                ..StepperOptions::new(dt)
+            };
+            let mut stepper = Stepper::new(&dmp, &opts).unwrap();
+            for j in 0..tr.n_samples() {
+                let (y, yd, _) = stepper.step(None).unwrap();
+                for d in 0..3 {
+                    let (ey, ev) = (y[d] - tr.y[j * 3 + d], yd[d] - tr.yd[j * 3 + d]);
+                    assert!(
+                        ey.abs() < 1e-12 && ev.abs() < 1e-11,
+                        "sample {j} at dt {dt}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn until_rest_is_refused_by_name() {
+        let dmp = shaped(1)
+            .with_final_velocity(DVector::from_element(1, 1.0))
+            .unwrap();
+        let opts = RolloutOptions {
+            until_rest: true,
+            ..RolloutOptions::new(1e-3)
+        };
+        let err = dmp.rollout(&opts).unwrap_err().to_string();
+        assert!(err.contains("until_rest"), "{err}");
+        let bad = dmp.with_final_velocity(DVector::from_element(2, 1.0));
+        assert!(bad.unwrap_err().to_string().contains("final_velocity"));
+    }
 }

@@ -25,10 +25,10 @@
 //! to the next command's: with one sub-step `yd[k+1] = yd[k] + ydd[k] dt` to rounding.
 
 use crate::coupling::PositionLimits;
-use crate::dmp::{Dmp, DmpConfig};
+use crate::dmp::{Dmp, DmpConfig, phase_clock, phase_to_go};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::forcing::{Forcing, padded};
-use crate::rollout::{MAX_SUBSTEPS, stable_step};
+use crate::rollout::{MAX_SUBSTEPS, moving_spring, stable_step};
 use crate::temporal_coupling::{TemporalCoupling, TemporalCouplingGains};
 
 /// Default phase-stopping gain, in 1 / (units of y)^2: a tracking error of 0.01 (rad or m)
@@ -502,6 +502,10 @@ pub struct Stepper {
     g: Vec<f64>,
     g_target: Vec<f64>,
     goal_moving: bool,
+    /// The DMP's final velocity (docs/method.md §2.8) per unit of scaled time, `tau gd` at the
+    /// DMP's tau, if it has one: the spring then pulls to the goal moving with it, outside the
+    /// plain period. Per scaled time, so that phase stopping and `set_tau` keep the path.
+    final_velocity: Option<Vec<f64>>,
     /// `f(x)` of the current phase.
     f: Vec<f64>,
     forcing: Forcing,
@@ -549,6 +553,7 @@ impl Stepper {
             g: padded_copy(dmp.goal().as_slice()),
             g_target: padded_copy(dmp.goal().as_slice()),
             goal_moving: false,
+            final_velocity: dmp.final_velocity().map(|gd| (gd * dmp.tau()).data.into()),
             f: vec![0.0; padded(n)],
             forcing: Forcing::new(dmp.basis(), dmp.weights()),
             h: vec![0.0; padded(n)],
@@ -692,6 +697,7 @@ impl Stepper {
             && self.clock.coupling.is_none()
             && self.clock.substeps == 1
             && !self.goal_moving
+            && self.final_velocity.is_none()
         {
             self.plain_period::<AVX2>(tau, inv_tau, target)?;
             return Ok(self.output());
@@ -998,7 +1004,10 @@ impl Stepper {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn derivative_into(&mut self, out: &mut [f64], coupled: bool) {
-        spring(self.dmp.config(), out, &self.g, &self.y, &self.z, &self.f);
+        match &self.final_velocity {
+            None => spring(self.dmp.config(), out, &self.g, &self.y, &self.z, &self.f),
+            Some(gd) => self.moving_spring_into(out, gd),
+        }
         if let Some(lim) = &self.limits {
             for d in 0..self.n {
                 self.stiffness[d] = match lim.repulsion(d, self.y[d]) {
@@ -1015,6 +1024,18 @@ impl Stepper {
             for (o, c) in out.iter_mut().zip(&self.user) {
                 *o += c;
             }
+        }
+    }
+
+    /// [`spring`] towards the goal moving with the final velocity, `v` per unit of scaled
+    /// time, as the rollout's (docs/method.md §2.8), at the current phase and time scale.
+    #[inline(always)]
+    fn moving_spring_into(&self, out: &mut [f64], v: &[f64]) {
+        let cfg = self.dmp.config();
+        let hs = self.clock.dt / self.clock.substeps as f64;
+        let to_go = phase_to_go(self.x, phase_clock(self.clock.tau, cfg.alpha_x, hs));
+        for d in 0..self.n {
+            out[d] = moving_spring(cfg, self.g[d], v[d], to_go, self.y[d], self.z[d]) + self.f[d];
         }
     }
 
@@ -1053,7 +1074,9 @@ impl Stepper {
     #[inline(always)]
     fn forcing_spent(&self) -> bool {
         let cfg = self.dmp.config();
-        !self.goal_moving && self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) <= self.rest_tol
+        !self.goal_moving
+            && self.final_velocity.is_none()
+            && self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) <= self.rest_tol
     }
 
     #[inline(always)]

@@ -129,13 +129,7 @@ pub fn through_via_points(
             weights[(i, d)] += dw;
         }
     }
-    Dmp::new(
-        *dmp.config(),
-        weights,
-        dmp.goal().clone(),
-        dmp.y0().clone(),
-        dmp.tau(),
-    )
+    dmp.with_weights(weights)
 }
 
 #[cfg(test)]

@@ -1,7 +1,10 @@
 //! `dmprs._core.Dmp` and `rollout_batch`: numpy in, numpy out. `dmprs.DMP` (Python) wraps these
 //! and documents them; the arrays reaching here are already float64 and of the right rank.
 
-use dmp_core::{Demonstration, Dmp, RolloutOptions, Trajectory, rollout_batch, through_via_points};
+use dmp_core::{
+    Demonstration, Dmp, FinalVelocity, RolloutOptions, Trajectory, rollout_batch,
+    through_via_points,
+};
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
@@ -99,8 +102,11 @@ impl PyDmp {
         })
     }
 
+    /// `final_velocity`: the velocity `(D,)` the fitted DMP reaches its goal with; when `None`,
+    /// the demonstration's last velocity if `final_velocity_from_demo`, else zero.
     #[staticmethod]
-    #[pyo3(signature = (t, y, yd, ydd, n_basis, constants))]
+    #[pyo3(signature = (t, y, yd, ydd, n_basis, constants, final_velocity=None, final_velocity_from_demo=false))]
+    #[allow(clippy::too_many_arguments)]
     fn fit(
         t: PyReadonlyArray1<'_, f64>,
         y: PyReadonlyArray2<'_, f64>,
@@ -108,11 +114,37 @@ impl PyDmp {
         ydd: Option<PyReadonlyArray2<'_, f64>>,
         n_basis: usize,
         constants: Constants,
+        final_velocity: Option<PyReadonlyArray1<'_, f64>>,
+        final_velocity_from_demo: bool,
     ) -> PyResult<Self> {
         let demo = demonstration(&t, &y, yd.as_ref(), ydd.as_ref())?;
+        let config = constants.config(n_basis);
+        let given = final_velocity
+            .map(|v| vector("final_velocity", &v))
+            .transpose()?;
+        let inner = match (given, final_velocity_from_demo) {
+            (Some(v), _) => Dmp::fit_with_final_velocity(&demo, config, FinalVelocity::Given(v)),
+            (None, true) => Dmp::fit_with_final_velocity(&demo, config, FinalVelocity::FromDemo),
+            (None, false) => Dmp::fit(&demo, config),
+        };
         Ok(Self {
-            inner: Dmp::fit(&demo, constants.config(n_basis)).py_err()?,
+            inner: inner.py_err()?,
         })
+    }
+
+    fn with_final_velocity(&self, final_velocity: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        let v = vector("final_velocity", &final_velocity)?;
+        Ok(Self {
+            inner: self.inner.with_final_velocity(v).py_err()?,
+        })
+    }
+
+    /// `(D,)`, or `None` when it is zero.
+    #[getter]
+    fn final_velocity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .final_velocity()
+            .map(|v| v.as_slice().to_vec().into_pyarray(py))
     }
 
     #[pyo3(signature = (dt, duration=None, until_rest=false, rest_tol=1e-4))]

@@ -192,9 +192,11 @@ pub struct PyGeneralizer {
 
 #[pymethods]
 impl PyGeneralizer {
-    /// `queries` `(M, n)`; `demos` a list of `(t, y, yd, ydd)` with `y` `(T, D)`.
+    /// `queries` `(M, n)`; `demos` a list of `(t, y, yd, ydd)` with `y` `(T, D)`;
+    /// `final_velocity`: each demo's last velocity is its DMP's final velocity, generalized.
     #[new]
-    #[pyo3(signature = (queries, demos, method, n_basis, constants, options))]
+    #[pyo3(signature = (queries, demos, method, n_basis, constants, options, final_velocity=false))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         queries: PyReadonlyArray2<'_, f64>,
@@ -203,6 +205,7 @@ impl PyGeneralizer {
         n_basis: usize,
         constants: Constants,
         options: GeneralizerOptions,
+        final_velocity: bool,
     ) -> PyResult<Self> {
         let method = parse_method(method, &options)?;
         let qs = parse_queries(&queries)?;
@@ -211,9 +214,12 @@ impl PyGeneralizer {
             views.push(demonstration(t, y, yd.as_ref(), ydd.as_ref())?);
         }
         let config = constants.config(n_basis);
-        let inner = py
-            .detach(|| Generalizer::new(&qs, &views, config, method))
-            .py_err()?;
+        let build = if final_velocity {
+            Generalizer::with_final_velocity
+        } else {
+            Generalizer::new
+        };
+        let inner = py.detach(|| build(&qs, &views, config, method)).py_err()?;
         Ok(Self { inner })
     }
 
