@@ -78,10 +78,12 @@ def _local(fn, jobs, n, on_result, order):
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=min(n, len(jobs)), mp_context=ctx) as pool:
         futures = {pool.submit(fn, jobs[i]): i for i in order}
+        handed = {f: position for position, f in enumerate(futures)}
         pending = set(futures)
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for f in sorted(done, key=futures.__getitem__):
+            # runs that finished together are told in the order they were handed out
+            for f in sorted(done, key=handed.__getitem__):
                 i = futures[f]
                 try:
                     results[i] = f.result()
