@@ -257,13 +257,16 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
                            f"its joints are {', '.join(robot_joints)}")
         recorder = JointStateRecorder(self._node, list(joints), self.joint_states).start()
         try:
-            status, message = (self._follow(trajectory, recorder) if self.mode == "action"
-                               else self._publish(trajectory, recorder, robot_start))
+            until: float | None = None  # the motion's end on the robot's clock, when only the clock tells it
+            if self.mode == "action":
+                status, message = self._follow(trajectory, recorder)
+            else:
+                status, message, until = self._publish(trajectory, recorder, robot_start)
             # the motion's end on this machine's clock, for signals without a header stamp
             ended = time.time()
         finally:
             recording = recorder.stop()
-        executed = _executed(recording)
+        executed = _executed(recording, until)
         if status is not Status.OK:
             return Outcome(status, executed=executed, message=message)
         if executed is None:
@@ -309,34 +312,40 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
         assert self._client is not None
         self._client.cancel(handle, self.answer_timeout)
 
-    def _publish(self, trajectory: Trajectory, recorder: JointStateRecorder, robot_start: float) -> tuple[Status, str]:
+    def _publish(self, trajectory: Trajectory, recorder: JointStateRecorder,
+                 robot_start: float) -> tuple[Status, str, float | None]:
         """The trajectory on the controller's topic; the motion ends when the robot's clock has
-        passed its duration since the trajectory was sent. Not this machine's clock: a simulated
-        robot's runs at its own pace, and stands still while its physics computes.
+        passed its duration since the robot acknowledged the trajectory (that end is returned).
+        Not this machine's clock: a simulated robot's runs at its own pace, and stands still while
+        its physics computes.
         """
         if not self._publisher.wait_for_subscribers(1, self.answer_timeout):
-            return Status.ERROR, f"nothing subscribes to {self.controller}/joint_trajectory"
-        # the robot's clock as last seen just before sending: the wait above may have been long
-        # on a clock that runs faster than this machine's
+            return Status.ERROR, f"nothing subscribes to {self.controller}/joint_trajectory", None
+        self._publisher.publish(joint_trajectory(self.spec.dof_names, trajectory))
+        # a zero stamp starts the trajectory as it arrives, and it has arrived once acknowledged:
+        # its start on the robot's clock is the clock as seen then, not when it was sent (the
+        # robot may take a while to match this publisher, on a clock that may run faster)
+        if not self._publisher.wait_for_acknowledgments(self.answer_timeout):
+            return Status.ERROR, (f"{self.controller}/joint_trajectory was not acknowledged within "
+                                  f"{self.answer_timeout:g} s: the robot may not have it"), None
         latest = recorder.latest_stamp
         sent = robot_start if latest is None else max(robot_start, latest)
-        self._publisher.publish(joint_trajectory(self.spec.dof_names, trajectory))
         end = sent + float(trajectory.t[-1] - trajectory.t[0])
         seen, since = recorder.latest_stamp, time.monotonic()
         while True:
             latest = recorder.latest_stamp
             if latest is not None and latest >= end:
-                return Status.OK, ""
+                return Status.OK, "", end
             if self._interrupted():
                 outcome = self._interrupted_outcome()
-                return outcome.status, outcome.message
+                return outcome.status, outcome.message, end
             if latest != seen:
                 seen, since = latest, time.monotonic()
             elif time.monotonic() - since > self.answer_timeout:
                 if latest is None:  # nothing usable came: the recording says why
-                    return Status.OK, ""
+                    return Status.OK, "", end
                 return Status.ERROR, (f"the robot's clock stopped at {latest:.3f} s, before the trajectory's end at "
-                                      f"{end:.3f} s: no new {self.joint_states} stamp for {self.answer_timeout:g} s")
+                                      f"{end:.3f} s: no new {self.joint_states} stamp for {self.answer_timeout:g} s"), end
             time.sleep(_POLL)
 
 
@@ -354,9 +363,17 @@ def _ended(goal_status: int, result: Any) -> tuple[Status, str]:
     return Status.ERROR, f"the goal ended with status {goal_status} and error code {code}: {text}"
 
 
-def _executed(recording: JointRecording) -> Trajectory | None:
-    """The recorded motion, timed by the robot's stamps from its first sample; None if too short."""
+def _executed(recording: JointRecording, until: float | None = None) -> Trajectory | None:
+    """The recorded motion, timed by the robot's stamps from its first sample, up to the first
+    sample stamped at or after ``until`` on the robot's clock; None if too short.
+    """
     keep = increasing(recording.times)
+    if until is not None:
+        # what came after the motion's end (the rest, the next motion) is not this motion's;
+        # the first sample at or after the end is, the end being known to a state's period
+        after = np.flatnonzero(keep & (recording.times >= until))
+        if after.size:
+            keep[after[0] + 1:] = False
     t = recording.times[keep]
     if len(t) < 2:
         return None

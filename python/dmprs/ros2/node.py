@@ -148,6 +148,12 @@ class Publisher(Generic[M]):
         """Write one message."""
         self._writer.write(message)
 
+    def wait_for_acknowledgments(self, timeout: float = 5.0) -> bool:
+        """Whether every matched reliable subscription acknowledged what was published, within
+        ``timeout`` seconds: it has the messages.
+        """
+        return self._writer.wait_for_acks(check_timeout(timeout))
+
     def subscription_count(self) -> int:
         """Number of subscriptions matched now."""
         return int(self._writer.get_publication_matched_status().current_count)

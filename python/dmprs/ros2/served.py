@@ -63,6 +63,9 @@ SCALE = (SignalTopic("poured_volume", SCALE_TOPIC, "std_msgs/msg/Float64", "data
                      "liquid in the glass, read once the pour has settled"),)
 #: Hz: /joint_states while idle and during playback (every other servo step of the 1 kHz scene)
 STATE_RATE = 500.0
+#: s: a thrown arm rests at its last sample this long before it is back home, as a real arm
+#: holds its last command; a client timing the motion from its side sees it end at rest
+REST = 0.1
 #: the scale publishes with every this many joint states (50 Hz)
 SCALE_EVERY = 10
 #: s: the robot's clock when it starts
@@ -156,9 +159,15 @@ class _Robot:
         motion being played back (None when idle).
         """
 
-    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome, speed: float,
-                 stop: threading.Event) -> None:
-        """The sensors' samples once the motion has ended (and the goal succeeded)."""
+    @property
+    def rest(self) -> float:
+        """s on the robot's clock: how long the arm rests at its last sample after a motion,
+        its sensors sampling, before it is back home for the next one.
+        """
+        return REST
+
+    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome) -> None:
+        """The sensors' samples once the motion has ended and the arm has rested."""
 
 
 class _Throwing(_Robot):
@@ -170,8 +179,7 @@ class _Throwing(_Robot):
     def new_goal(self) -> None:
         self.scene.reset(seed=0)
 
-    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome, speed: float,
-                 stop: threading.Event) -> None:
+    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome) -> None:
         node.publish_signal(LANDING_TOPIC, [outcome.signals["landing_x"], outcome.signals["landing_y"], 0.0],
                             clock.tick(0.001))
 
@@ -207,22 +215,13 @@ class _Pouring(_Robot):
         self.curve = (np.asarray(outcome.signals["poured_volume_time"]),
                       np.asarray(outcome.signals["poured_volume_curve"]))
 
-    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome, speed: float,
-                 stop: threading.Event) -> None:
-        """The scene's hold: the arm rests at its last sample while the liquid settles, then the
-        scale shows the count.
-        """
-        executed = outcome.executed
-        assert isinstance(executed, Trajectory)
-        last, t_end = executed.y[-1], float(executed.t[-1] - executed.t[0])
-        period, start = 1.0 / STATE_RATE, time.monotonic()
-        for k in range(1, round(self.scene.liquid.hold * STATE_RATE) + 1):
-            if stop.is_set():
-                break
-            now = clock.tick(period)
-            node.publish_joint_state(now, last)
-            self.sense(node, now, t_end + k * period)
-            time.sleep(max(0.0, start + k * period / speed - time.monotonic()))
+    @property
+    def rest(self) -> float:
+        """The scene's hold: the liquid settles before the scale shows the count."""
+        return self.scene.liquid.hold
+
+    def measured(self, node: RobotNode, clock: _Clock, outcome: Outcome) -> None:
+        """The scale shows the settled count."""
         self.reading = float(outcome.signals["poured_volume"])
 
 
@@ -342,22 +341,53 @@ def _run(node: RobotNode, clock: _Clock, robot: _Robot, tr: Any, goal_id: bytes 
         robot.started(out)
     executed = out.executed
     if isinstance(executed, Trajectory):
-        step = max(1, round(1.0 / (STATE_RATE * float(np.median(np.diff(executed.t))))))
-        start = time.monotonic()
-        t0 = clock.now
-        for k in range(0, len(executed.t), step):
-            why = _interrupted(incoming, clock, goal_id, stop)
-            if why is not None:
-                _end(node, goal_id, why)
-                return
-            t = float(executed.t[k] - executed.t[0])
-            clock.now = t0 + t
-            node.publish_clock(clock.now)
-            node.publish_joint_state(clock.now, executed.y[k])
-            robot.sense(node, clock.now, t)
-            # paced at speed x real time, so that the client sees a motion, not a burst
-            time.sleep(max(0.0, start + t / speed - time.monotonic()))
+        why = _play_back(node, clock, robot, executed, goal_id, speed, stop, incoming)
+        if why is not None:
+            _end(node, goal_id, why)
+            return
     if goal_id is not None:
         node.finish_goal(goal_id, messages.GoalStatus.STATUS_SUCCEEDED)
     if out.ok:
-        robot.measured(node, clock, out, speed, stop)
+        if isinstance(executed, Trajectory):
+            _rest(node, clock, robot, executed, speed, stop)
+        robot.measured(node, clock, out)
+
+
+def _play_back(node: RobotNode, clock: _Clock, robot: _Robot, executed: Trajectory, goal_id: bytes | None,
+               speed: float, stop: threading.Event, incoming: _Incoming) -> str | None:
+    """The executed motion's joint states at :data:`STATE_RATE`, its last sample included;
+    why it stopped if it was canceled or replaced meanwhile.
+    """
+    n = len(executed.t)
+    step = max(1, round(1.0 / (STATE_RATE * float(np.median(np.diff(executed.t))))))
+    samples = list(range(0, n, step))
+    if samples[-1] != n - 1:
+        samples.append(n - 1)
+    start = time.monotonic()
+    t0 = clock.now
+    for k in samples:
+        why = _interrupted(incoming, clock, goal_id, stop)
+        if why is not None:
+            return why
+        t = float(executed.t[k] - executed.t[0])
+        clock.now = t0 + t
+        node.publish_clock(clock.now)
+        node.publish_joint_state(clock.now, executed.y[k])
+        robot.sense(node, clock.now, t)
+        # paced at speed x real time, so that the client sees a motion, not a burst
+        time.sleep(max(0.0, start + t / speed - time.monotonic()))
+    return None
+
+
+def _rest(node: RobotNode, clock: _Clock, robot: _Robot, executed: Trajectory, speed: float,
+          stop: threading.Event) -> None:
+    """The arm at rest at its last sample for ``robot.rest``, its sensors sampling."""
+    last, t_end = executed.y[-1], float(executed.t[-1] - executed.t[0])
+    period, start = 1.0 / STATE_RATE, time.monotonic()
+    for k in range(1, round(robot.rest * STATE_RATE) + 1):
+        if stop.is_set():
+            break
+        now = clock.tick(period)
+        node.publish_joint_state(now, last)
+        robot.sense(node, now, t_end + k * period)
+        time.sleep(max(0.0, start + k * period / speed - time.monotonic()))
