@@ -30,6 +30,7 @@ pub mod oscillator;
 pub mod output_gp;
 pub mod periodic;
 pub mod periodic_cartesian;
+mod periodic_forcing;
 pub mod periodic_generalize;
 pub mod periodic_stepper;
 pub mod portable;

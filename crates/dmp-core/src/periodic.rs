@@ -28,13 +28,14 @@ use crate::design_matrix::{
 };
 use crate::dmp::{Demonstration, FIT_RIDGE, MAX_BASIS};
 use crate::error::{Error, Result, check_scalar, fmt_g};
+use crate::periodic_forcing::{ForcingScratch, PeriodicForcing};
 use crate::rollout::{
     MAX_SUBSTEPS, MAX_VALUES, Trajectory, check_trajectory, check_work, n_steps, spring_stable_step,
 };
 
 /// Relative activations below `exp(-ACTIVATION_CUTOFF)` are exactly zero, as for the discrete
 /// basis ([`crate::basis`]): they cannot change the normalized sum beyond rounding.
-const ACTIVATION_CUTOFF: f64 = 37.0;
+pub(crate) const ACTIVATION_CUTOFF: f64 = 37.0;
 
 /// The meta-parameters of a periodic DMP.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -102,7 +103,7 @@ pub struct Activations {
 }
 
 impl Activations {
-    fn with_capacity(n: usize) -> Self {
+    pub(crate) fn with_capacity(n: usize) -> Self {
         Self {
             start: 0,
             values: Vec::with_capacity(n),
@@ -160,8 +161,8 @@ impl PeriodicBasis {
     /// e^r`, e^r by its Taylor polynomial to r^5 (the next term is below 4e-17). The kernels'
     /// exponentials are most of a step's work; this is about three times quicker than libm's
     /// general `exp`, and like it is plain arithmetic in a fixed order: the same bits everywhere.
-    #[inline]
-    fn exp(&self, x: f64) -> f64 {
+    #[inline(always)]
+    pub(crate) fn exp(&self, x: f64) -> f64 {
         const SIXTY_FOUR_OVER_LN2: f64 = 92.332_482_616_893_66;
         // ln 2 / 64 split, its high part with 32 significant bits: k * LN2_64_HI is exact for |k| < 2^21
         const LN2_64_HI: f64 = 0.010_830_424_693_267_56;
@@ -170,8 +171,11 @@ impl PeriodicBasis {
         const ROUND: f64 = 6_755_399_441_055_744.0;
         // (a neighbour's exponent may exceed the nearest kernel's by a rounding error)
         debug_assert!((-ACTIVATION_CUTOFF - 1.0..=1.0).contains(&x));
-        let kf = (x * SIXTY_FOUR_OVER_LN2 + ROUND) - ROUND;
-        let k = kf as i64;
+        let shifted = x * SIXTY_FOUR_OVER_LN2 + ROUND;
+        let kf = shifted - ROUND;
+        // k = kf as an integer, read from the bits of `shifted` (whose last bit is worth 1, and
+        // ROUND's last six bits are 0), so that the lanes of a vector need no conversion
+        let k = shifted.to_bits().wrapping_sub(ROUND.to_bits()) as i64;
         let r = (x - kf * LN2_64_HI) - kf * LN2_64_LO;
         let p =
             1.0 + r * (1.0 + r * (0.5 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0)))));
@@ -179,9 +183,29 @@ impl PeriodicBasis {
         self.exp2_64ths[(k & 63) as usize] * p * scale
     }
 
-    #[inline]
-    fn arg(&self, i: usize, cos_phi: f64, sin_phi: f64) -> f64 {
+    #[inline(always)]
+    pub(crate) fn arg(&self, i: usize, cos_phi: f64, sin_phi: f64) -> f64 {
         self.h * (cos_phi * self.cos_c[i] + sin_phi * self.sin_c[i] - 1.0)
+    }
+
+    /// `cos c_i` and `sin c_i` of every centre.
+    pub(crate) fn trig(&self) -> (&[f64], &[f64]) {
+        (&self.cos_c, &self.sin_c)
+    }
+
+    /// The index of the centre nearest to `phi`.
+    #[inline(always)]
+    pub(crate) fn nearest(&self, phi: f64) -> usize {
+        let n = self.len();
+        // phi in [0, 2 pi) (the integrator keeps it there), so the nearest centre's index is a
+        // truncation, without a division
+        let wrapped = if (0.0..TWO_PI).contains(&phi) {
+            phi
+        } else {
+            phi.rem_euclid(TWO_PI)
+        };
+        let nearest = (wrapped * self.inv_spacing + 0.5) as usize;
+        if nearest >= n { nearest - n } else { nearest }
     }
 
     /// The normalized activations `psi_i(phi) / sum_j psi_j(phi)` at `phi` into `out`.
@@ -193,17 +217,7 @@ impl PeriodicBasis {
     pub fn normalized_activations(&self, phi: f64, out: &mut Activations) {
         let n = self.len();
         let (sin_phi, cos_phi) = libm::sincos(phi);
-        // phi in [0, 2 pi) (the integrator keeps it there), so the nearest centre's index is a
-        // truncation, without a division
-        let wrapped = if (0.0..TWO_PI).contains(&phi) {
-            phi
-        } else {
-            phi.rem_euclid(TWO_PI)
-        };
-        let mut nearest = (wrapped * self.inv_spacing + 0.5) as usize;
-        if nearest >= n {
-            nearest -= n;
-        }
+        let nearest = self.nearest(phi);
         let top = self.arg(nearest, cos_phi, sin_phi);
         let floor = top - ACTIVATION_CUTOFF;
         // Walk down, then up, at most half the circle each way (the two walks never overlap),
@@ -264,9 +278,8 @@ pub struct PeriodicDmp {
     basis: PeriodicBasis,
     /// `N x D`: column d holds the weights of DOF d, in units of y per unit amplitude.
     weights: DMatrix<f64>,
-    /// The same weights kernel by kernel (`[i * D + d]`): a step adds each active kernel's row
-    /// to every DOF at once, a loop the compiler vectorizes.
-    weights_by_kernel: Vec<f64>,
+    /// The forcing term's shape, evaluated a phase at a time.
+    forcing: PeriodicForcing,
     goal: DVector<f64>,
     amplitude: DVector<f64>,
     y0: DVector<f64>,
@@ -276,8 +289,8 @@ pub struct PeriodicDmp {
 /// Scratch space for [`PeriodicDmp::acceleration`], reused from step to step.
 #[derive(Debug, Clone)]
 pub struct Workspace {
-    activations: Activations,
-    /// `sum_i psi_i w_i / sum_i psi_i` per DOF.
+    scratch: ForcingScratch,
+    /// `sum_i psi_i w_i / sum_i psi_i` per DOF, padded to whole vectors.
     shape: Vec<f64>,
 }
 
@@ -312,12 +325,11 @@ impl PeriodicDmp {
                 value: w,
             });
         }
-        let weights_by_kernel = weights.transpose().as_slice().to_vec();
         Ok(Self {
             config,
+            forcing: PeriodicForcing::new(&basis, &weights),
             basis,
             weights,
-            weights_by_kernel,
             goal,
             amplitude,
             y0,
@@ -484,8 +496,8 @@ impl PeriodicDmp {
 
     pub fn workspace(&self) -> Workspace {
         Workspace {
-            activations: Activations::with_capacity(self.basis.len()),
-            shape: vec![0.0; self.n_dof()],
+            scratch: self.forcing.scratch(),
+            shape: vec![0.0; self.forcing.stride()],
         }
     }
 
@@ -509,20 +521,9 @@ impl PeriodicDmp {
         dz: &mut [f64],
     ) {
         let cfg = &self.config;
-        let (n, n_dof) = (cfg.n_basis, dz.len());
-        self.basis
-            .normalized_activations(state.phi, &mut ws.activations);
-        let shape = &mut ws.shape[..n_dof];
-        shape.fill(0.0);
-        let mut i = ws.activations.start;
-        for &psi in &ws.activations.values {
-            let row = &self.weights_by_kernel[i * n_dof..(i + 1) * n_dof];
-            for (s, w) in shape.iter_mut().zip(row) {
-                *s += psi * w;
-            }
-            i = if i + 1 == n { 0 } else { i + 1 };
-        }
-        for d in 0..n_dof {
+        self.forcing.eval(state.phi, &mut ws.scratch, &mut ws.shape);
+        let shape = &ws.shape;
+        for d in 0..dz.len() {
             dz[d] = cfg.alpha_z * (cfg.beta_z * (goal[d] - state.y[d]) - state.z[d])
                 + amplitude[d] * shape[d];
         }

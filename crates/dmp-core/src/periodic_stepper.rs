@@ -233,18 +233,38 @@ impl PeriodicStepper {
         saved.state.phi = self.state.phi;
         saved.state.y.copy_from_slice(&self.state.y);
         saved.state.z.copy_from_slice(&self.state.z);
-        saved.goal.copy_from(&self.goal);
-        saved.amplitude.copy_from(&self.amplitude);
-        saved.frequency.copy_from(&self.frequency);
+        // (a filter at rest stays as it is)
+        let moving = [&self.goal, &self.amplitude, &self.frequency].map(|f| !f.at_rest);
+        for ((saved, filter), moving) in [
+            (&mut saved.goal, &self.goal),
+            (&mut saved.amplitude, &self.amplitude),
+            (&mut saved.frequency, &self.frequency),
+        ]
+        .into_iter()
+        .zip(moving)
+        {
+            if moving {
+                saved.copy_from(filter);
+            }
+        }
         let (progress, envelope) = (self.progress, self.envelope);
         match self.advance(stop) {
             Ok(()) => Ok((&self.out_y, &self.out_yd, &self.out_ydd)),
             Err(e) => {
                 let saved = &mut self.saved;
                 std::mem::swap(&mut self.state, &mut saved.state);
-                std::mem::swap(&mut self.goal, &mut saved.goal);
-                std::mem::swap(&mut self.amplitude, &mut saved.amplitude);
-                std::mem::swap(&mut self.frequency, &mut saved.frequency);
+                for ((filter, saved), moving) in [
+                    (&mut self.goal, &mut saved.goal),
+                    (&mut self.amplitude, &mut saved.amplitude),
+                    (&mut self.frequency, &mut saved.frequency),
+                ]
+                .into_iter()
+                .zip(moving)
+                {
+                    if moving {
+                        std::mem::swap(filter, saved);
+                    }
+                }
                 (self.progress, self.envelope) = (progress, envelope);
                 Err(e)
             }
@@ -397,7 +417,7 @@ impl PeriodicStepper {
     pub fn stop(&mut self, rest: Option<&[f64]>) -> Result<()> {
         if let Some(r) = rest {
             check_per_dof("rest", r, self.dmp.n_dof())?;
-            self.goal.target.copy_from_slice(r);
+            self.goal.set_target(r);
         }
         if self.opts.ramp == 0.0 {
             self.progress = 0.0;
@@ -411,14 +431,14 @@ impl PeriodicStepper {
     /// A new baseline, approached through the change filter.
     pub fn set_goal(&mut self, goal: &[f64]) -> Result<()> {
         check_per_dof("goal", goal, self.dmp.n_dof())?;
-        self.goal.target.copy_from_slice(goal);
+        self.goal.set_target(goal);
         Ok(())
     }
 
     /// A new amplitude per coordinate, approached through the change filter.
     pub fn set_amplitude(&mut self, amplitude: &[f64]) -> Result<()> {
         check_per_dof("amplitude", amplitude, self.dmp.n_dof())?;
-        self.amplitude.target.copy_from_slice(amplitude);
+        self.amplitude.set_target(amplitude);
         Ok(())
     }
 
@@ -428,7 +448,7 @@ impl PeriodicStepper {
         check_scalar("tau", tau, true)?;
         check_time_scale(&self.dmp, &self.opts, tau, "tau")?;
         self.substeps = self.substeps.max(self.dmp.substeps_at(self.opts.dt, tau)?);
-        self.frequency.target[0] = 1.0 / tau;
+        self.frequency.set_target(&[1.0 / tau]);
         Ok(())
     }
 
@@ -489,6 +509,9 @@ struct Filtered {
     value: Vec<f64>,
     rate: Vec<f64>,
     target: Vec<f64>,
+    /// Every value at its target at rest: a step changes nothing (the common case, kept so that
+    /// a step neither advances nor saves it).
+    at_rest: bool,
 }
 
 impl Filtered {
@@ -497,6 +520,7 @@ impl Filtered {
             value: value.to_vec(),
             rate: vec![0.0; value.len()],
             target: target.to_vec(),
+            at_rest: value == target,
         }
     }
     fn at(value: &[f64]) -> Self {
@@ -506,6 +530,11 @@ impl Filtered {
         self.value.copy_from_slice(&other.value);
         self.rate.copy_from_slice(&other.rate);
         self.target.copy_from_slice(&other.target);
+        self.at_rest = other.at_rest;
+    }
+    fn set_target(&mut self, target: &[f64]) {
+        self.target.copy_from_slice(target);
+        self.at_rest = self.settled();
     }
     fn settled_at(&self, d: usize) -> bool {
         self.value[d] == self.target[d] && self.rate[d] == 0.0
@@ -516,6 +545,9 @@ impl Filtered {
     /// One semi-implicit Euler step over `dphase` radians; values within 1e-12 (relative to
     /// max(1, |target|)) of their targets, at a rate as small, are set to them.
     fn advance(&mut self, alpha: f64, dphase: f64) {
+        if self.at_rest {
+            return;
+        }
         for d in 0..self.value.len() {
             if self.settled_at(d) {
                 continue;
@@ -529,6 +561,7 @@ impl Filtered {
                 *r = 0.0;
             }
         }
+        self.at_rest = self.settled();
     }
 }
 
