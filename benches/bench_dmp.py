@@ -91,6 +91,25 @@ def bench_batch(t, y, n=1000):
     return loop, batch
 
 
+def bench_memory_limit(t, y):
+    """The rollout against what writing its output costs: the bytes one ``DMP.rollout`` returns
+    per step (t, then y, yd and ydd for every DOF), and the time per step of a plain copy of the
+    same four arrays into fresh ones (numpy's ``copy``, one read and one write of every byte,
+    what the rollout's output costs at the least), both in this process, minutes apart at most.
+    """
+    dmp = dmprs.DMP.fit(t, y, N_BASIS)
+    tr = dmp.rollout(dt=DT)
+    arrays = (np.asarray(tr.t), np.asarray(tr.y), np.asarray(tr.yd), np.asarray(tr.ydd))
+    steps = tr.n_samples
+    copy, _ = timed(lambda: [a.copy() for a in arrays], REPEATS * 10)
+    roll, _ = timed(lambda: dmp.rollout(dt=DT), REPEATS)
+    written = sum(a.nbytes for a in arrays)
+    # and main memory's bandwidth, for a copy far larger than the caches
+    big = np.ones(2**23)
+    dram, _ = timed(big.copy, 10)
+    return written / steps, copy / steps, roll / steps, 2 * written / copy, 2 * big.nbytes / dram
+
+
 def main() -> None:
     t, y = reaching_demo(N_SAMPLES, 1.0, N_DOF)
     rows = [("dmprs", *bench_dmprs(t, y), "Euler (Rust)")]
@@ -112,6 +131,12 @@ def main() -> None:
     for name, fit, roll, err, step in rows:
         print(f"| {name} | {fit * 1e3:.3f} | {roll * 1e9:.1f} | {err:.2e} | {step} | "
               f"{fit / ours[1]:.0f}x | {roll / ours[2]:.0f}x |")
+    per_step, copy, roll, bandwidth, dram = bench_memory_limit(t, y)
+    print(f"\nmemory limit: a rollout returns {per_step:.0f} bytes per step; a plain copy of its four "
+          f"arrays takes {copy * 1e9:.1f} ns per step ({bandwidth / 1e9:.1f} GB/s read + write; "
+          f"{dram / 1e9:.1f} GB/s for a 64 MB copy, main memory's), "
+          f"{copy / N_DOF * 1e9:.2f} ns per step per DOF; DMP.rollout {roll * 1e9:.1f} ns per step: "
+          f"{roll / copy:.1f}x the copy")
     loop, batch = bench_batch(t, y)
     print(f"\nrollout_batch of 1000 DMPs (7 DOF, 1 s at 1 ms): {batch * 1e3:.1f} ms; "
           f"a Python loop of DMP.rollout: {loop * 1e3:.1f} ms; speed-up {loop / batch:.2f}x "
