@@ -47,3 +47,22 @@ def test_cma_es_on_a_gymnasium_environment():
         out = load("cma_es_matchbox").main(iterations=4)
     # the generalizer's strike for pi/2 flips the box back (|eps| ~ 0.53 rad): CMA-ES improves on it
     assert out["evaluations"] <= 32 and -out["reward"] < 0.3
+
+
+def test_goals_near_start_side_by_side(tmp_path):
+    out = load("goals_near_start").main(tmp_path)
+    reach, loop = out["reach"], out["loop"]
+    assert out["figure"].is_file()
+    # dmprs: every rollout finite and bounded; a goal at the start of a returning movement keeps
+    # its bump (0.3 high), and its goal is reached
+    for runs in (reach["dmprs"], loop["dmprs"]):
+        for goal, y in runs.items():
+            assert np.isfinite(y).all() and np.abs(y).max() < 2 and abs(y[-1] - goal) < 0.01
+    assert 0.29 < loop["dmprs"][0.0].max() < 0.31
+    # Ijspeert's scaling: the bump squashed towards a goal near the start, gone (no motion at all)
+    # for the returning movement sent to its start, and an explosion to any other goal
+    assert reach["ijspeert"][0.05].max() < 0.06
+    assert np.abs(loop["ijspeert"][0.0]).max() < 1e-9
+    assert np.abs(loop["ijspeert"][0.3]).max() > 1e3
+    # Hoffmann's: the bump kept near the start, nothing explodes
+    assert reach["hoffmann"][0.05].max() > 0.3 and np.abs(loop["hoffmann"][0.3]).max() < 1
