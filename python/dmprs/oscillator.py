@@ -31,19 +31,23 @@ class AdaptiveOscillator:
     the signal's fundamental frequency and phase and learns its waveform, per coordinate::
 
         y_hat  = sum_{c=0}^{M} a_c cos(c phi) + b_c sin(c phi)
-        phi'   = Omega - K_phi Omega e_n sin(phi)
-        Omega' =       - K_Omega Omega^2 e_n sin(phi)
+        phi'   = Omega - K_phi Omega e_n u
+        Omega' =       - K_Omega Omega^2 e_n u
+        u      = (a_1 sin(phi) - b_1 cos(phi)) / sqrt(a_1^2 + b_1^2)
         a_c' = eta Omega e cos(c phi),   b_c' = eta Omega e sin(c phi)
 
     ``e = y - y_hat``; ``e_n`` is the driving coordinate's error less its running mean, over its
-    running RMS about the baseline ``a_0``. The gains scale with ``Omega`` so that a rhythm settles in the same number
-    of periods at any frequency and amplitude; the harmonics of the signal go into the series'
-    higher terms, so the oscillator locks onto the fundamental, not a harmonic.
+    running RMS about the baseline ``a_0``; ``u`` is minus the phase derivative of the driving
+    coordinate's learned fundamental at unit amplitude (Petrič et al. pull along ``sin(phi)``),
+    so the pull does not depend on the phase the signal starts at. The gains scale with
+    ``Omega`` so that a rhythm settles in the same number of periods at any frequency and
+    amplitude; the harmonics of the signal go into the series' higher terms, so the oscillator
+    locks onto the fundamental, not a harmonic.
 
-    With the default gains, a sine with 5 % noise is followed to within 1 % after five periods
-    from a guess between 1 and 1.6 times its frequency, after seven from a guess as low as 0.7
-    times it (docs/method.md §12.5): guess high rather than low. A guess near a strong
-    harmonic can lock onto it: give the rough frequency of the rhythm.
+    With the default gains, a sine with 5 % noise is followed to within 1 % within five periods
+    from any starting phase and a guess between 0.7 and 2 times its frequency (docs/method.md
+    §12.5). A guess near a strong harmonic can lock onto it: give the rough frequency of the
+    rhythm.
 
     Args:
         frequency: the initial guess (Hz).
@@ -67,8 +71,8 @@ class AdaptiveOscillator:
         harmonics: int = 10,
         drive: int = 0,
         frequency_range: tuple[float, float] | None = None,
-        phase_gain: float = 1.0,
-        frequency_gain: float = 0.25,
+        phase_gain: float = 0.5,
+        frequency_gain: float = 0.1,
         fourier_gain: float = 0.3,
     ) -> None:
         f = as_scalar(frequency, "frequency", positive=True)

@@ -8,19 +8,24 @@
 //! coordinate's error adapts its coefficients:
 //!
 //! ```text
-//! phi'   = Omega - K_phi Omega e_n sin(phi)
-//! Omega' =       - K_Omega Omega^2 e_n sin(phi)
+//! phi'   = Omega - K_phi Omega e_n u
+//! Omega' =       - K_Omega Omega^2 e_n u
+//! u      = (a_1 sin(phi) - b_1 cos(phi)) / sqrt(a_1^2 + b_1^2)
 //! a_c'   = eta Omega e cos(c phi),   b_c' = eta Omega e sin(c phi)
 //! ```
 //!
-//! Petrič et al. use constant gains; here each gain is multiplied by the power of `Omega` that
-//! makes the equations the same in the oscillator's own phase, and the error that moves the
-//! oscillator is normalized, `e_n = (e - e_mean) / s` with `s^2` the running mean square of the
-//! driving coordinate about its baseline `a_0` and `e_mean` the error's running mean (the offset
-//! `a_0` is still learning, which must not pull the phase). So a rhythm converges in the same number of periods
-//! whatever its frequency, amplitude or unit. Because the series represents every harmonic of
-//! `phi`, a signal's harmonics are absorbed by `a_c, b_c` for `c >= 2` instead of pulling the
-//! oscillator: it locks onto the fundamental.
+//! Petrič et al. (and Righetti et al. 2006 before them) pull along `u = sin(phi)`; here `u` is
+//! minus the phase derivative of the driving coordinate's learned fundamental at unit amplitude
+//! (the same when that fundamental is `a_1 cos(phi)`), so the frequency is pulled as hard at
+//! whatever phase offset the series learned the signal at, and a rhythm is acquired alike from
+//! every starting phase. Petrič et al. use constant gains; here each gain is multiplied by the
+//! power of `Omega` that makes the equations the same in the oscillator's own phase, and the
+//! error that moves the oscillator is normalized, `e_n = (e - e_mean) / s` with `s^2` the running
+//! mean square of the driving coordinate about its baseline `a_0` and `e_mean` the error's running
+//! mean (the offset `a_0` is still learning, which must not pull the phase). So a rhythm
+//! converges in the same number of periods whatever its frequency, amplitude or unit. Because the
+//! series represents every harmonic of `phi`, a signal's harmonics are absorbed by `a_c, b_c` for
+//! `c >= 2` instead of pulling the oscillator: it locks onto the fundamental.
 
 use std::f64::consts::{PI, TAU};
 
@@ -39,12 +44,13 @@ pub struct OscillatorGains {
 }
 
 impl Default for OscillatorGains {
-    /// Chosen on noisy sines of 0.5 and 3 Hz at six phases from guesses 0.7-1.6 times the true
-    /// frequency, and judged on others (tests/test_oscillator.py, docs/method.md §12.5).
+    /// Chosen on noisy sines of 0.5, 1, 2 and 3 Hz at six phases from guesses 0.7-1.6 times the
+    /// true frequency, and judged on other frequencies, phases and noise (tests/test_oscillator.py,
+    /// docs/method.md §12.5).
     fn default() -> Self {
         Self {
-            phase: 1.0,
-            frequency: 0.25,
+            phase: 0.5,
+            frequency: 0.1,
             fourier: 0.3,
         }
     }
@@ -239,7 +245,27 @@ impl AdaptiveOscillator {
         } else {
             0.0
         };
-        let pull = e_n * self.sin[1];
+        // The direction the error pulls along: minus the phase derivative of the driving
+        // coordinate's learned fundamental at unit amplitude,
+        // u = -d/dphi (a_1 cos phi + b_1 sin phi) / R_1 with R_1 = sqrt(a_1^2 + b_1^2), where
+        // Petrič et al. (2011) and Righetti et al. (2006) use sin(phi). The two agree when the
+        // fundamental is learned as R_1 cos(phi), where the plain oscillator locks. With sin(phi)
+        // the frequency is corrected with a gain proportional to sin of the phase offset at which
+        // the series learned the fundamental, which is wherever the start left it while the phase
+        // was still settling: from some starting phases the frequency took a long detour. Along
+        // u, a phase lag d of the signal gives e ~ -R_1 d u, so e u averages to -R_1 d / 2 at
+        // any offset (a gradient step on e^2 in phi through the fundamental): the loop is the
+        // same whatever phase the signal starts at. Only the fundamental steers, so harmonics
+        // still go into the higher terms. No fundamental learned yet (the first sample, a
+        // constant signal): no pull. (sqrt, not hypot: IEEE-exact, the same bits everywhere.)
+        let a1 = self.cosine_coefficients(drive)[1];
+        let b1 = self.sine_coefficients(drive)[1];
+        let r1 = (a1 * a1 + b1 * b1).sqrt();
+        let pull = if r1 > 0.0 {
+            e_n * (a1 * self.sin[1] - b1 * self.cos[1]) / r1
+        } else {
+            0.0
+        };
         let dphi = self.omega * (1.0 - self.gains.phase * pull);
         let domega = -self.gains.frequency * self.omega * self.omega * pull;
         self.phase = (self.phase + dt * dphi).rem_euclid(TAU);
