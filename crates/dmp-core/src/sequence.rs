@@ -18,8 +18,8 @@
 //! with `ydd_k` movement `k`'s next command and `ydd_{k+1}` movement `k + 1`'s first unaided.
 //! `s` is scaled time, so phase stopping holds the fading with the rest of the movement. By
 //! `s = 1` the term and the start's transient have faded (docs/method.md §2.9), and movement
-//! `k + 1` ends where its DMP's own rollout from rest at the same start ends (tested). The start of a later movement's DMP is not
-//! used: it starts where the one before hands over.
+//! `k + 1` ends where its DMP's own rollout from rest at the same start ends (tested). The start
+//! of a later movement's DMP is not used: it starts where the one before hands over.
 //!
 //! The rollout steps the stepper: one integrator for both. A sequence of one movement has no
 //! join, so its stepper is that DMP's stepper and its rollout that DMP's rollout, bit for bit.
