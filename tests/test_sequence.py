@@ -197,6 +197,34 @@ def test_reset_starts_the_sequence_again() -> None:
     assert all(np.array_equal(x, y) for x, y in zip(first, again, strict=True))
 
 
+def test_set_tau_and_set_goal_act_on_the_movement_that_runs() -> None:
+    stepper = Sequence(legs()).stepper(0.001, goal_filter=None)
+    # The first movement, 0.6 s -> 0.9 s from the second period on (as a JointStepper's): its
+    # first period at 0.6 s counts 1.5 of the new, so it hands over on sample 899, not 900.
+    stepper.set_tau(0.9)
+    active = []
+    for _ in range(900 + 450 + 10):
+        stepper.step()
+        active.append(stepper.active)
+    assert np.flatnonzero(np.diff(active)).tolist() == [898, 1348]
+    assert stepper.nominal_tau == pytest.approx(TAUS[2])
+    goal = WAYPOINTS[-1] + [0.1, -0.2, 0.05]
+    stepper.set_goal(goal)
+    np.testing.assert_array_equal(stepper.goal_target, goal)
+    while not stepper.done():
+        stepper.step()
+    np.testing.assert_allclose(stepper.output[0], goal, rtol=0, atol=1e-4)
+
+
+def test_a_duration_counts_from_the_first_start() -> None:
+    seq = Sequence(legs())
+    short, long = seq.rollout(0.001, 0.5), seq.rollout(0.001, 2.5)
+    assert short.n_samples == 501 and long.n_samples == 2501
+    full = seq.rollout(0.001)
+    np.testing.assert_array_equal(short.y, full.y[:501])
+    np.testing.assert_array_equal(long.y[: full.n_samples], full.y)
+
+
 def test_it_has_the_joint_steppers_surface() -> None:
     public = {name for name in dir(dmprs.JointStepper) if not name.startswith("_")}
     assert public <= set(dir(SequenceStepper))
