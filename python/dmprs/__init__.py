@@ -24,6 +24,7 @@ from dmprs.loop import LearningResult, learn
 from dmprs.oscillator import AdaptiveOscillator, RhythmLearner
 from dmprs.periodic import PeriodicCartesianDMP, PeriodicDMP, PeriodicOnlineFit
 from dmprs.periodic_stepper import PeriodicStepper
+from dmprs.sequence import Sequence, SequenceStepper
 from dmprs.stepper import CartesianStepper, JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -50,6 +51,8 @@ __all__ = [
     "PeriodicOnlineFit",
     "PeriodicStepper",
     "RhythmLearner",
+    "Sequence",
+    "SequenceStepper",
     "Trajectory",
     "__version__",
     "adapters",

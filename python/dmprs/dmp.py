@@ -183,7 +183,8 @@ class DMP(DiscretePrimitive):
         :class:`dmprs.stepper.JointStepper` (``substeps``, ``alpha_e``, ``goal_filter``,
         ``velocity_max``, ``acceleration_max``, ``position_min``, ``position_max``, ...). A DMP
         with a final velocity moves on at it past tau, so its stepper is never ``done()``: stop
-        at the phase ``exp(-alpha_x)`` (``t = tau``) or hand over to the next primitive.
+        at the phase ``exp(-alpha_x)`` (``t = tau``) or hand over to the next primitive
+        (:class:`dmprs.Sequence` does).
         """
         return JointStepper(self, dt, **options)
 

@@ -7,7 +7,8 @@
 //! interpolation), and the Cartesian (position + unit quaternion) DMP of Ude, Nemec, Petrič and
 //! Morimoto (2014) on the same phase and basis, and both executed online one control period at a
 //! time (steppers with phase stopping, a goal filter, temporal coupling for limits and coupling
-//! terms). Pure Rust on nalgebra; no Python, no learners.
+//! terms), joint DMPs also joined end to start in sequences. Pure Rust on nalgebra; no Python,
+//! no learners.
 
 pub mod basis;
 pub mod cartesian;
@@ -36,6 +37,7 @@ pub mod periodic_stepper;
 pub mod portable;
 pub mod quaternion;
 pub mod rollout;
+pub mod sequence;
 pub mod stepper;
 pub mod temporal_coupling;
 pub mod via_points;
@@ -59,5 +61,6 @@ pub use periodic_cartesian::{PeriodicCartesianDmp, rollout_batch_periodic_cartes
 pub use periodic_generalize::PeriodicGeneralizer;
 pub use periodic_stepper::{PeriodicStepper, PeriodicStepperOptions};
 pub use rollout::{RolloutOptions, Trajectory, rollout_batch};
+pub use sequence::SequenceStepper;
 pub use stepper::{Stepper, StepperOptions};
 pub use via_points::through_via_points;

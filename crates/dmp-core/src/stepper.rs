@@ -348,6 +348,17 @@ impl Clock {
     }
 }
 
+/// The error of a movement started in motion under velocity or acceleration limits.
+pub(crate) fn moving_start_refused() -> Error {
+    Error::InvalidParameter {
+        name: "velocity_max/acceleration_max",
+        value: "set".into(),
+        requirement: "are not taken by a movement started in motion, as the movements of a \
+                      sequence after the first are: temporal coupling's time scale at a start \
+                      assumes rest",
+    }
+}
+
 /// Phase stopping's slow-down `1 + sum_d alpha_e,d e_d^2` of the errors `e` between the measured
 /// and the commanded positions (Ijspeert et al. 2013), refused, naming `measured`, if it
 /// overflows.
@@ -614,6 +625,44 @@ impl Stepper {
         self.blocked = false;
         self.steps = 0;
         Ok(())
+    }
+
+    /// [`Stepper::reset`] to the state a preceding movement's stepper `from` hands over (in a
+    /// sequence): phase 1 at the position `from` has advanced to, moving with its velocity
+    /// (`z = tau v`, so position and velocity run on without a jump), and `from`'s last command
+    /// as this one's, against which phase stopping measures the robot. Refused with velocity or
+    /// acceleration limits: their time scale at a start assumes rest.
+    pub(crate) fn take_over(&mut self, from: &Stepper) -> Result<()> {
+        if self.clock.coupling.is_some() {
+            return Err(moving_start_refused());
+        }
+        let n = self.n;
+        if from.n != n {
+            return Err(Error::Shape {
+                name: "dmps",
+                expected: format!("({n},) coordinates in every movement"),
+                got: format!("({},)", from.n),
+            });
+        }
+        self.reset(Some(&from.y[..n]))?;
+        let (tau, inv_from) = (self.clock.tau, 1.0 / from.clock.tau);
+        for (z, zf) in self.z[..n].iter_mut().zip(&from.z[..n]) {
+            *z = zf * inv_from * tau;
+        }
+        self.out_y.copy_from_slice(&from.out_y);
+        self.out_yd.copy_from_slice(&from.out_yd);
+        self.out_ydd.copy_from_slice(&from.out_ydd);
+        Ok(())
+    }
+
+    /// The phase the next step starts from (the last command's is [`Stepper::phase`]).
+    pub(crate) fn next_phase(&self) -> f64 {
+        self.x
+    }
+
+    /// The tolerance of [`Stepper::done`].
+    pub(crate) fn rest_tol(&self) -> f64 {
+        self.rest_tol
     }
 
     /// A new goal: filtered (`tau dg/dt = alpha_g (g_new - g)`) or at once (module docs).

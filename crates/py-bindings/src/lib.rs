@@ -14,6 +14,7 @@ mod periodic_stepper;
 mod portable;
 mod primitive;
 mod ros2_robot;
+mod sequence;
 mod stepper;
 
 use pyo3::prelude::*;
@@ -49,6 +50,8 @@ mod _core {
     use super::periodic_stepper::PyPeriodicStepper;
     #[pymodule_export]
     use super::portable::{dls_step, portable_binary, portable_norm, portable_unary};
+    #[pymodule_export]
+    use super::sequence::{PySequenceStepper, py_sequence_rollout};
     #[pymodule_export]
     use super::stepper::{PyCartesianStepper, PyStepper};
 

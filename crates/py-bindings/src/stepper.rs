@@ -115,7 +115,7 @@ pub(crate) fn read_vector(
 /// validated there.
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
-struct SharedOptions {
+pub(crate) struct SharedOptions {
     substeps: Option<usize>,
     alpha_e: Vec<f64>,
     goal_filter: Option<f64>,
@@ -133,7 +133,7 @@ struct SharedOptions {
 
 impl SharedOptions {
     /// The core's options at control period `dt`.
-    fn at(self, dt: f64) -> StepperOptions {
+    pub(crate) fn at(self, dt: f64) -> StepperOptions {
         StepperOptions {
             dt,
             substeps: self.substeps,
@@ -488,6 +488,9 @@ macro_rules! stepper_methods {
         }
     };
 }
+
+/// For the sequence's stepper, which has the same surface (`crate::sequence`).
+pub(crate) use stepper_methods;
 
 stepper_methods!(
     PyStepper,

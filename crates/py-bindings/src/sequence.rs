@@ -1,0 +1,126 @@
+//! `dmprs._core.SequenceStepper` and `sequence_rollout`: joint DMPs joined end to start
+//! (`dmp_core::sequence`). `dmprs.sequence` (Python) builds them, validates the options and
+//! documents them; the stepper has the surface of `dmprs._core.Stepper` (the same methods,
+//! from `crate::stepper`'s `stepper_methods!`) and the movement that runs, `active`.
+
+use dmp_core::{Dmp, RolloutOptions, SequenceStepper};
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+
+use crate::dmp::{PyDmp, TrajectoryArrays, trajectory_arrays};
+use crate::errors::{IntoPyResult, invalid_input};
+use crate::stepper::{Outputs, SharedOptions, read_vector, stepper_methods};
+
+/// The core DMPs of a list of `dmprs._core.Dmp`.
+fn core_dmps(dmps: &[PyRef<'_, PyDmp>]) -> Vec<Dmp> {
+    dmps.iter().map(|d| d.inner.clone()).collect()
+}
+
+#[pyclass(name = "SequenceStepper", module = "dmprs._core", subclass)]
+pub struct PySequenceStepper {
+    inner: SequenceStepper,
+    out: Outputs,
+    measured: Vec<f64>,
+    coupling: Vec<f64>,
+}
+
+#[pymethods]
+impl PySequenceStepper {
+    /// `SequenceStepper(dmps, dt, options)`; `SequenceStepper.__new__(cls, stepper)` is a copy
+    /// of `stepper` as a `cls` (as `Stepper`'s).
+    #[new]
+    #[pyo3(signature = (dmps, dt=None, options=None))]
+    fn new(
+        py: Python<'_>,
+        dmps: &Bound<'_, PyAny>,
+        dt: Option<f64>,
+        options: Option<SharedOptions>,
+    ) -> PyResult<Self> {
+        let (dt, options) = match (dt, options) {
+            (Some(dt), Some(options)) => (dt, options),
+            (None, None) if dmps.is_instance_of::<Self>() => {
+                return dmps.cast::<Self>()?.borrow().duplicate(py);
+            }
+            _ => {
+                return Err(invalid_input(
+                    "SequenceStepper takes a list of DMPs, dt and the options",
+                ));
+            }
+        };
+        let dmps: Vec<PyRef<'_, PyDmp>> = dmps.extract()?;
+        let inner = SequenceStepper::new(&core_dmps(&dmps), &options.at(dt)).py_err()?;
+        let n = inner.n_dof();
+        let s = Self {
+            inner,
+            out: Outputs::new(py, [n; 3])?,
+            measured: Vec::with_capacity(n),
+            coupling: Vec::with_capacity(n),
+        };
+        s.publish(py)?;
+        Ok(s)
+    }
+
+    /// The movement that runs (0-based).
+    #[getter]
+    fn active(&self) -> usize {
+        self.inner.active()
+    }
+    #[getter]
+    fn n_dof(&self) -> usize {
+        self.inner.n_dof()
+    }
+}
+
+impl PySequenceStepper {
+    /// As `PyStepper::duplicate`.
+    fn duplicate(&self, py: Python<'_>) -> PyResult<Self> {
+        let n = self.inner.n_dof();
+        let s = Self {
+            inner: self.inner.clone(),
+            out: Outputs::new(py, [n; 3])?,
+            measured: Vec::with_capacity(n),
+            coupling: Vec::with_capacity(n),
+        };
+        s.publish(py)?;
+        Ok(s)
+    }
+
+    fn publish(&self, py: Python<'_>) -> PyResult<()> {
+        let (y, yd, ydd) = self.inner.output();
+        self.out.write(py, 0, y)?;
+        self.out.write(py, 1, yd)?;
+        self.out.write(py, 2, ydd)
+    }
+}
+
+stepper_methods!(
+    PySequenceStepper,
+    "One control period: `(y, yd, ydd)` of this period (read-only arrays that the next call \
+     overwrites), handing over to the next movement first when the one that runs has run its \
+     tau; then the state advances by dt."
+);
+
+/// The sequence of `dmps` rolled out open loop with the GIL released (one DMP: its rollout).
+#[pyfunction(name = "sequence_rollout")]
+#[pyo3(signature = (dmps, dt, duration=None, until_rest=false, rest_tol=1e-4))]
+pub fn py_sequence_rollout<'py>(
+    py: Python<'py>,
+    dmps: Vec<PyRef<'py, PyDmp>>,
+    dt: f64,
+    duration: Option<f64>,
+    until_rest: bool,
+    rest_tol: f64,
+) -> PyResult<TrajectoryArrays<'py>> {
+    let owned = core_dmps(&dmps);
+    let opts = RolloutOptions {
+        dt,
+        duration,
+        until_rest,
+        rest_tol,
+    };
+    let tr = py
+        .detach(|| dmp_core::sequence::rollout(&owned, &opts))
+        .py_err()?;
+    trajectory_arrays(py, tr)
+}
