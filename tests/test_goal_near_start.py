@@ -6,6 +6,8 @@ keeps the demonstration's shape.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -64,3 +66,13 @@ def test_the_step_response_converges_to_the_critically_damped_closed_form() -> N
         errors.append(np.abs(step_response(dmp, -1.0, len(tt), dt) - closed).max())
     assert errors[0] / errors[1] == pytest.approx(2.0, rel=0.1)
     assert errors[1] / errors[2] == pytest.approx(2.0, rel=0.1)
+
+
+def test_the_readmes_goal_near_start_example_runs_and_does_what_it_says() -> None:
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = readme.split("A goal at or near the start never", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    scope: dict = {"np": np, "dmprs": dmprs}
+    exec(block, scope)  # noqa: S102 - the README's own code
+    tr = scope["tr"]
+    assert np.isfinite(tr.y).all()
+    assert tr.y[:, 0].max() == pytest.approx(0.3, abs=0.01) and abs(tr.y[-1, 0]) < 0.01
