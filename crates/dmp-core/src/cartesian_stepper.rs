@@ -164,6 +164,16 @@ pub struct CartesianStepper {
 
 impl CartesianStepper {
     pub fn new(dmp: &CartesianDmp, opts: &CartesianStepperOptions) -> Result<Self> {
+        // Not yet: the stepper would pull to the fixed goal and silently drop the final
+        // velocity, so it is refused rather than run as another movement.
+        if dmp.final_velocity().is_some() {
+            return Err(Error::InvalidParameter {
+                name: "final_velocity",
+                value: "nonzero".into(),
+                requirement: "must be zero for the Cartesian stepper (not yet supported; roll \
+                              the DMP out instead; docs/cartesian.md)",
+            });
+        }
         let cfg = *dmp.config();
         let clock = Clock::new(&cfg, dmp.tau(), N, &opts.base)?;
         let limits = position_limits(&opts.base, 3, &cfg)?;
