@@ -2,8 +2,8 @@
 (docs/cartesian.md, "A final velocity"), against independent truth: the request itself at
 t = tau (met to rounding by the springs alone, to the integrator's first order by a fitted
 shape, shown by halving dt), a demonstration ending in motion known in closed form, the 1-D
-final-velocity DMP of the angle of a fixed-axis rotation, and today's Cartesian DMP bit for bit
-at zero.
+final-velocity DMP of the angle of a fixed-axis rotation, today's Cartesian DMP bit for bit at
+zero, and the rollout for the stepper.
 """
 
 from __future__ import annotations
@@ -165,9 +165,17 @@ def test_a_bad_final_velocity_is_refused_by_name(bad):
             build()
 
 
-def test_until_rest_and_the_stepper_are_refused_by_name():
-    dmp = shaped(final_velocity=TWIST)
+def test_until_rest_is_refused_by_name():
     with pytest.raises(InvalidInputError, match="until_rest"):
-        dmp.rollout(0.001, until_rest=True)
-    with pytest.raises((dmprs.DmprsError, ValueError), match="final_velocity"):
-        dmp.stepper(0.001)
+        shaped(final_velocity=TWIST).rollout(0.001, until_rest=True)
+
+
+def test_the_stepper_is_the_rollout_and_never_done():
+    dmp = shaped(final_velocity=TWIST)
+    tr = dmp.rollout(0.001, 1.5 * dmp.tau)
+    stepper = dmp.stepper(0.001)
+    for j in range(len(tr.t)):
+        pose, velocity, _ = stepper.step()
+        np.testing.assert_allclose(pose, tr.pose[j], rtol=0, atol=1e-11)
+        np.testing.assert_allclose(velocity, np.r_[tr.velocity[j], tr.angular_velocity[j]], rtol=0, atol=1e-11)
+        assert not stepper.done()

@@ -211,8 +211,9 @@ class CartesianDMP(DiscretePrimitive):
         """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
         period returning ``(pose, velocity, acceleration)``, with phase stopping, goal changes,
         limits, position limits and sphere ``obstacles``; ``options`` as
-        :class:`dmprs.stepper.CartesianStepper`. Not yet for a DMP with a final velocity
-        (refused, naming ``final_velocity``).
+        :class:`dmprs.stepper.CartesianStepper`. A DMP with a final velocity moves on at it past
+        tau, so its stepper is never ``done()``: stop at the phase ``exp(-alpha_x)`` (``t = tau``)
+        or hand over to the next primitive.
         """
         return CartesianStepper(self, dt, **options)
 

@@ -323,11 +323,6 @@ fn bad_input_is_refused_by_name() {
     };
     let err = dmp.rollout(&opts).unwrap_err().to_string();
     assert!(err.contains("until_rest"), "{err}");
-    // The stepper does not take a final velocity yet: refused, not dropped.
-    let err = CartesianStepper::new(&dmp, &CartesianStepperOptions::new(1e-3))
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("final_velocity"), "{err}");
     let err = shaped()
         .with_final_velocity([0.0, f64::NAN, 0.0], [0.0; 3])
         .unwrap_err()
@@ -344,4 +339,87 @@ fn bad_input_is_refused_by_name() {
         .to_string();
         assert!(err.contains("final_velocity"), "{err}");
     }
+}
+
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |m, (a, b)| m.max((a - b).abs()))
+}
+
+/// Open loop the stepper is the rollout to rounding, past tau too (its moving goals from the
+/// phase at the clock's sub-step: `k` sub-steps of `dt` are the rollout at `dt / k`), and it is
+/// never done.
+#[test]
+fn the_stepper_is_the_rollout() {
+    let dmp = shaped().with_final_velocity(LINEAR, ANGULAR).unwrap();
+    for k in [1, 2] {
+        let dt = 2e-3;
+        let tr = dmp
+            .rollout(&RolloutOptions {
+                duration: Some(1.5 * dmp.tau()),
+                ..RolloutOptions::new(dt / k as f64)
+            })
+            .unwrap();
+        let mut opts = CartesianStepperOptions::new(dt);
+        opts.base.substeps = Some(k);
+        let mut s = CartesianStepper::new(&dmp, &opts).unwrap();
+        for j in 0..(tr.n_samples() - 1) / k + 1 {
+            let (pose, v, _) = s.step(None).unwrap();
+            let r = j * k;
+            let worst = [
+                max_abs_diff(&pose[..3], &tr.position[3 * r..3 * r + 3]),
+                max_abs_diff(&pose[3..], &tr.quaternion[4 * r..4 * r + 4]),
+                max_abs_diff(&v[..3], &tr.velocity[3 * r..3 * r + 3]),
+                max_abs_diff(&v[3..], &tr.angular_velocity[3 * r..3 * r + 3]),
+            ];
+            assert!(
+                worst.iter().all(|&e| e < 1e-11),
+                "{worst:?} at {j}, k = {k}"
+            );
+            assert!(!s.done());
+        }
+    }
+}
+
+/// Phase stopping holds the moving goals with the rest of the movement: a stepper held at its
+/// start for a while still meets the goal pose and the final velocity once released, at the
+/// phase of tau.
+#[test]
+fn a_held_stepper_meets_the_request_once_released() {
+    let dmp = CartesianDmp::new(
+        config(25),
+        DMatrix::zeros(25, 6),
+        &shaped().goal(),
+        &shaped().start(),
+        0.9,
+    )
+    .unwrap()
+    .with_final_velocity(LINEAR, ANGULAR)
+    .unwrap();
+    let dt = 1e-3;
+    let mut s = CartesianStepper::new(&dmp, &CartesianStepperOptions::new(dt)).unwrap();
+    let start = dmp.start();
+    let mut held = start;
+    held[0] += 0.5; // far from the command: the phase all but stops
+    for _ in 0..300 {
+        s.step(Some(&held)).unwrap();
+    }
+    assert!(s.phase() > 0.95, "held at {}", s.phase());
+    let tau_phase = (-dmp.config().alpha_x).exp();
+    let mut last = None;
+    for _ in 0..20_000 {
+        let (pose, v) = s.step(None).map(|(p, v, _)| (*p, *v)).unwrap();
+        if s.phase() <= tau_phase * (1.0 + 1e-9) {
+            last = Some((pose, v));
+            break;
+        }
+    }
+    let (pose, v) = last.expect("the phase reaches tau");
+    let twist = dmp.final_velocity().unwrap();
+    let goal = dmp.goal();
+    assert!(max_abs_diff(&pose[..3], &goal[..3]) < 1e-3, "{pose:?}");
+    assert!(
+        norm(&rotation_to(&dmp.goal_quaternion(), &pose[3..])) < 1e-3,
+        "{pose:?}"
+    );
+    assert!(max_abs_diff(&v[..], &twist[..]) < 1e-2, "{v:?}");
 }
