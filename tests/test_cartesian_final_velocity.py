@@ -149,11 +149,13 @@ def test_it_survives_dict_pickle_and_the_derived_movements():
     np.testing.assert_array_equal(shaped().with_final_velocity(TWIST).final_velocity, TWIST)
 
 
-def test_rollouts_are_deterministic():
+def test_rollouts_are_deterministic_one_by_one_or_in_a_batch():
     dmp = shaped(final_velocity=TWIST)
     a, b = dmp.rollout(0.001, 2.0), dmp.rollout(0.001, 2.0)
-    np.testing.assert_array_equal(a.pose, b.pose)
-    np.testing.assert_array_equal(a.angular_velocity, b.angular_velocity)
+    (c,) = dmprs.rollout_batch([dmp], 0.001, 2.0)
+    for other in (b, c):
+        np.testing.assert_array_equal(a.pose, other.pose)
+        np.testing.assert_array_equal(a.angular_velocity, other.angular_velocity)
 
 
 @pytest.mark.parametrize("bad", [np.zeros(5), np.r_[0.0, np.nan, 0, 0, 0, 0], np.zeros((2, 3)), "stop"])
