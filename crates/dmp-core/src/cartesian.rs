@@ -393,7 +393,7 @@ impl CartesianDmp {
     /// angular velocity (docs/cartesian.md, "A final velocity"): `final_velocity` given as the
     /// six entries `vx, vy, vz` (m/s), `wx, wy, wz` (rad/s, world frame), or the demonstration's
     /// last ones. The position is fitted as [`Dmp::fit_with_final_velocity`]; the orientation's
-    /// coordinates are taken relative to the moving goal ([`PreparedPose::move_goal`]), which
+    /// coordinates are taken relative to the moving goal (`PreparedPose::move_goal`), which
     /// turns the same least squares into the fit of the orientation's moving-goal equation. A
     /// final velocity of zero is [`Self::fit`], bit for bit.
     pub fn fit_with_final_velocity(
