@@ -4,7 +4,7 @@ out by the Rust core (``crates/dmp-core/src/cartesian.rs``; docs/cartesian.md).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,6 +31,16 @@ def derivative_array(value: ArrayLike | None, name: str) -> NDArray[np.float64] 
     return None if value is None else as_float_array(value, name, 2)
 
 
+def twist_array(value: ArrayLike) -> NDArray[np.float64]:
+    """A final velocity ``(6,)``: ``vx, vy, vz`` (m/s), then ``wx, wy, wz`` (rad/s, world frame)."""
+    v = as_float_array(value, "final_velocity", 1)
+    if v.shape != (6,):
+        raise InvalidInputError(
+            f"final_velocity has shape {v.shape}, expected (6,): vx, vy, vz (m/s), then wx, wy, wz (rad/s)"
+        )
+    return v
+
+
 class CartesianDMP(DiscretePrimitive):
     r"""A DMP of an end-effector pose: position ``p`` (m) and orientation ``q``, a unit
     quaternion ``(w, x, y, z)``, sharing one phase, one basis and one tau.
@@ -53,6 +63,10 @@ class CartesianDMP(DiscretePrimitive):
 
         CartesianDMP(weights, goal, start, tau)   # weights (6, N): x, y, z, then 3 orientation rows
 
+    ``final_velocity`` ``(6,)``, ``vx, vy, vz`` (m/s) then ``wx, wy, wz`` (rad/s, world frame),
+    makes it reach the goal pose moving at that linear and angular velocity at ``t = tau``
+    (docs/cartesian.md, "A final velocity"; None: zero, the DMP above).
+
     Immutable; :meth:`with_goal`, :meth:`with_start` and :meth:`with_tau` return new ones.
     See docs/cartesian.md for the equations of the fit and the decisions behind them.
     """
@@ -61,6 +75,27 @@ class CartesianDMP(DiscretePrimitive):
     _CORE = _core.CartesianDmp
     _core: _core.CartesianDmp
     _DICT_TYPE = "dmprs.CartesianDMP"
+    _OPTIONAL = ("final_velocity",)
+
+    def __init__(self, *args: Any, final_velocity: ArrayLike | None = None, **kwargs: Any) -> None:
+        """As :class:`~dmprs.primitive.DiscretePrimitive` (weights, goal, start, tau and the
+        constants), and the final velocity ``(6,)`` it reaches its goal pose with (None: zero).
+        """
+        super().__init__(*args, **kwargs)
+        if final_velocity is not None:
+            object.__setattr__(self, "_core", self._core.with_final_velocity(twist_array(final_velocity)))
+
+    @property
+    def final_velocity(self) -> NDArray[np.float64]:
+        """The velocity ``(6,)`` the movement reaches its goal pose with at ``t = tau``: ``vx, vy,
+        vz`` (m/s), then ``wx, wy, wz`` (rad/s, world frame); zeros for the DMP without one.
+        """
+        v = self._core.final_velocity
+        return np.zeros(6) if v is None else v
+
+    def _optional_parameters(self) -> dict[str, Any]:
+        v = self._core.final_velocity
+        return {} if v is None else {"final_velocity": v.tolist()}
 
     @staticmethod
     def _parameters(weights: ArrayLike, goal: ArrayLike, start: ArrayLike) -> Parameters:
@@ -88,6 +123,7 @@ class CartesianDMP(DiscretePrimitive):
         beta_z: float | None = None,
         alpha_x: float = 2.0,
         width_factor: float = 2.0,
+        final_velocity: ArrayLike | Literal["demo"] | None = None,
     ) -> CartesianDMP:
         """Fits position and orientation to one pose demonstration by batch least squares.
 
@@ -116,7 +152,16 @@ class CartesianDMP(DiscretePrimitive):
             beta_z: its damping, ``alpha_z / 4`` when None.
             alpha_x: the phase decay, at most ln 1e8.
             width_factor: kernel width relative to the spacing of the kernel centres.
+            final_velocity: the velocity ``(6,)`` the DMP reaches its goal pose with at
+                ``t = tau``, ``vx, vy, vz`` (m/s) then ``wx, wy, wz`` (rad/s, world frame);
+                ``"demo"`` for the demonstration's last linear and angular velocity; None for
+                zero. With one, both parts are fitted against their moving goals
+                (docs/cartesian.md, "A final velocity").
         """
+        from_demo = isinstance(final_velocity, str)
+        if from_demo and final_velocity != "demo":
+            raise InvalidInputError(f"final_velocity must be an array, 'demo' or None; got {final_velocity!r}")
+        given = None if final_velocity is None or from_demo else twist_array(final_velocity)
         derivatives = {
             "velocity": derivative_array(velocity, "velocity"),
             "acceleration": derivative_array(acceleration, "acceleration"),
@@ -125,7 +170,7 @@ class CartesianDMP(DiscretePrimitive):
         }
         core = _core.CartesianDmp.fit(as_float_array(t, "t", 1), as_float_array(pose, "pose", 2), derivatives,
                                       bool(normalize), as_count(n_basis, "n_basis", 2),
-                                      constants(alpha_z, beta_z, alpha_x, width_factor))
+                                      constants(alpha_z, beta_z, alpha_x, width_factor), given, from_demo)
         return cls._wrap(core)
 
     @classmethod
@@ -156,7 +201,8 @@ class CartesianDMP(DiscretePrimitive):
         Returns a :class:`~dmprs.CartesianTrajectory` sampled at ``t_j = j * dt`` up to
         ``duration`` (default tau), with velocities and accelerations. ``until_rest=True`` goes
         on until the position is within ``rest_tol`` (m) and the orientation within ``rest_tol``
-        (rad) of the goal, at rest, and no longer driven by the forcing term.
+        (rad) of the goal, at rest, and no longer driven by the forcing term. A DMP with a final
+        velocity moves on at it past tau and never rests: ``until_rest`` is refused for it.
         """
         opts = rollout_options(dt, duration, until_rest, rest_tol)
         return CartesianTrajectory._trusted(*self._core.rollout(**opts))
@@ -165,9 +211,19 @@ class CartesianDMP(DiscretePrimitive):
         """An online stepper for a control loop of period ``dt`` (s): one ``step(measured)`` per
         period returning ``(pose, velocity, acceleration)``, with phase stopping, goal changes,
         limits, position limits and sphere ``obstacles``; ``options`` as
-        :class:`dmprs.stepper.CartesianStepper`.
+        :class:`dmprs.stepper.CartesianStepper`. A DMP with a final velocity moves on at it past
+        tau, so its stepper is never ``done()``: stop at the phase ``exp(-alpha_x)`` (``t = tau``)
+        or hand over to the next primitive.
         """
         return CartesianStepper(self, dt, **options)
+
+    def with_final_velocity(self, final_velocity: ArrayLike) -> CartesianDMP:
+        """The same movement reaching its goal pose with ``final_velocity`` ``(6,)`` at ``t = tau``:
+        ``vx, vy, vz`` (m/s), then ``wx, wy, wz`` (rad/s, world frame). Position and orientation
+        pull to goals moving at those velocities that arrive at the goal pose at tau. Zeros give
+        the DMP without one, bit for bit.
+        """
+        return CartesianDMP._wrap(self._core.with_final_velocity(twist_array(final_velocity)))
 
     def with_goal(self, pose: ArrayLike) -> CartesianDMP:
         """The same movement towards a new goal pose (7,). The quaternion's sign is taken on the

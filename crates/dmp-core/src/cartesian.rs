@@ -36,11 +36,13 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 use rayon::prelude::*;
 
-use crate::dmp::{Demonstration, Dmp, DmpConfig};
+use crate::dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity, phase_clock, phase_to_go};
 use crate::error::{Error, Result, check_finite_matrix, check_increasing};
 use crate::finite_difference as diff;
 use crate::quaternion::{self, Quaternion};
-use crate::rollout::{MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, check_work, n_steps};
+use crate::rollout::{
+    MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, check_work, moving_spring, n_steps,
+};
 
 /// A pose is `[x, y, z, qw, qx, qy, qz]`: position (m), then a scalar-first unit quaternion.
 pub const POSE_WIDTH: usize = 7;
@@ -177,6 +179,24 @@ impl PreparedPose {
         self.quaternions[0]
     }
 
+    /// The orientation coordinates of a fit with the final angular velocity `omega_g`
+    /// (docs/cartesian.md, "A final velocity"): `y_j = -2 log(g_m(t_j) * conj(q_j)) - omega_g
+    /// (tau - t_j)`, with `g_m(t) = exp(-(tau - t)/2 omega_g) * g_o`, so that the joint fit's
+    /// moving-goal target `beta_z (g - gd (tau - t_j) - y_j)` (goal 0, `gd = omega_g`) is the
+    /// orientation's `beta_z 2 log(g_m(t_j) * conj(q_j))`. `y_T` is still exactly 0.
+    pub fn move_goal(&mut self, t: &[f64], omega_g: &[f64; 3]) {
+        let (t0, tau) = (t[0], t[t.len() - 1] - t[0]);
+        let goal = self.goal();
+        for (j, q) in self.quaternions.iter().enumerate() {
+            let to_go = tau - (t[j] - t0);
+            let g_m = moving_goal(&goal, omega_g, -0.5 * to_go);
+            let e = quaternion::log(&quaternion::product(&g_m, &quaternion::conjugate(q)));
+            for d in 0..3 {
+                self.y[(3 + d, j)] = -2.0 * e[d] - omega_g[d] * to_go;
+            }
+        }
+    }
+
     pub fn goal(&self) -> Quaternion {
         self.quaternions[self.quaternions.len() - 1]
     }
@@ -274,6 +294,34 @@ pub(crate) fn join_pose(p: &[f64], q: &Quaternion) -> [f64; POSE_WIDTH] {
     [p[0], p[1], p[2], q[0], q[1], q[2], q[3]]
 }
 
+/// `exp(k omega) * g`: the goal `g` turned by the rotation vector `2 k omega` in the world frame.
+/// With `k = -(tau - t)/2` it is the orientation's moving goal `g_m(t)`, which turns at `omega`
+/// (`d g_m/dt = 1/2 omega * g_m`, the rollout's `tau dq/dt = 1/2 eta * q` with `eta = tau
+/// omega`) and is `g` at `t = tau` (docs/cartesian.md, "A final velocity").
+#[inline]
+pub(crate) fn moving_goal(g: &Quaternion, omega: &[f64; 3], k: f64) -> Quaternion {
+    quaternion::product(&quaternion::exp(&omega.map(|c| c * k)), g)
+}
+
+/// A given final velocity: `vx, vy, vz, wx, wy, wz`, finite.
+fn checked_twist(v: DVector<f64>) -> Result<DVector<f64>> {
+    if v.len() != N_COORDS {
+        return Err(Error::Shape {
+            name: "final_velocity",
+            expected: "(6,): vx, vy, vz (m/s), then wx, wy, wz (rad/s, world frame)".into(),
+            got: format!("({},)", v.len()),
+        });
+    }
+    if let Some((i, &x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(Error::NonFinite {
+            name: "final_velocity",
+            location: format!("[{i}]"),
+            value: x,
+        });
+    }
+    Ok(v)
+}
+
 /// A Cartesian DMP: position and orientation on one phase (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CartesianDmp {
@@ -341,21 +389,87 @@ impl CartesianDmp {
         Self::from_coordinates(dmp, prepared.goal(), prepared.start())
     }
 
+    /// [`Self::fit`] of a Cartesian DMP that reaches its goal pose with a final linear and
+    /// angular velocity (docs/cartesian.md, "A final velocity"): `final_velocity` given as the
+    /// six entries `vx, vy, vz` (m/s), `wx, wy, wz` (rad/s, world frame), or the demonstration's
+    /// last ones. The position is fitted as [`Dmp::fit_with_final_velocity`]; the orientation's
+    /// coordinates are taken relative to the moving goal (`PreparedPose::move_goal`), which
+    /// turns the same least squares into the fit of the orientation's moving-goal equation. A
+    /// final velocity of zero is [`Self::fit`], bit for bit.
+    pub fn fit_with_final_velocity(
+        demo: &CartesianDemonstration<'_>,
+        config: DmpConfig,
+        final_velocity: FinalVelocity,
+    ) -> Result<Self> {
+        config.validate_for_fit()?;
+        let mut prepared = PreparedPose::new(demo)?;
+        let twist = match final_velocity {
+            FinalVelocity::FromDemo => prepared.yd.column(demo.t.len() - 1).into_owned(),
+            FinalVelocity::Given(v) => checked_twist(v)?,
+        };
+        let omega_g = [twist[3], twist[4], twist[5]];
+        if omega_g.iter().any(|&w| w != 0.0) {
+            prepared.move_goal(demo.t, &omega_g);
+        }
+        let dmp = Dmp::fit_with_final_velocity(
+            &prepared.demonstration(demo.t),
+            config,
+            FinalVelocity::Given(twist),
+        )?;
+        Self::from_coordinates(dmp, prepared.goal(), prepared.start())
+    }
+
     /// From the 6-coordinate DMP of a fit or a generalization: the orientation coordinates'
     /// start (`-2 log(g_o * conj(q_0))` in a fit) is carried by the start quaternion instead.
+    /// Its final velocity is kept.
     pub(crate) fn from_coordinates(dmp: Dmp, goal: Quaternion, start: Quaternion) -> Result<Self> {
         let mut goal_p = dmp.goal().clone();
         let mut start_p = dmp.y0().clone();
         goal_p.rows_mut(3, 3).fill(0.0);
         start_p.rows_mut(3, 3).fill(0.0);
-        let dmp = Dmp::new(
+        let rebuilt = Dmp::new(
             *dmp.config(),
             dmp.weights().clone(),
             goal_p,
             start_p,
             dmp.tau(),
         )?;
+        let dmp = match dmp.final_velocity() {
+            Some(v) => rebuilt.with_final_velocity(v.clone())?,
+            None => rebuilt,
+        };
         Ok(Self { dmp, goal, start })
+    }
+
+    /// The same movement reaching its goal pose with linear velocity `linear` (m/s) and angular
+    /// velocity `angular` (rad/s, world frame) at `t = tau` (weights unchanged; docs/cartesian.md,
+    /// "A final velocity"). All zeros give today's Cartesian DMP, bit for bit.
+    pub fn with_final_velocity(&self, linear: [f64; 3], angular: [f64; 3]) -> Result<Self> {
+        let twist = DVector::from_iterator(6, linear.into_iter().chain(angular));
+        Ok(Self {
+            dmp: self.dmp.with_final_velocity(twist)?,
+            ..self.clone()
+        })
+    }
+
+    /// The final velocity `[vx, vy, vz, wx, wy, wz]` (m/s, then rad/s in the world frame);
+    /// `None` when it is zero.
+    pub fn final_velocity(&self) -> Option<[f64; N_COORDS]> {
+        self.dmp
+            .final_velocity()
+            .map(|v| [0, 1, 2, 3, 4, 5].map(|d| v[d]))
+    }
+
+    /// A Cartesian DMP built by [`Self::new`] from this one's parameters keeps its final velocity.
+    fn keeping_final_velocity(&self, built: Result<Self>) -> Result<Self> {
+        let built = built?;
+        match self.dmp.final_velocity() {
+            Some(v) => Ok(Self {
+                dmp: built.dmp.with_final_velocity(v.clone())?,
+                ..built
+            }),
+            None => Ok(built),
+        }
     }
 
     pub fn config(&self) -> &DmpConfig {
@@ -394,27 +508,27 @@ impl CartesianDmp {
     pub fn with_goal(&self, goal: &[f64; POSE_WIDTH]) -> Result<Self> {
         let (_, q) = split_pose("goal", goal)?;
         let q = quaternion::same_hemisphere(&q, &self.goal);
-        Self::new(
+        self.keeping_final_velocity(Self::new(
             *self.config(),
             self.weights().clone(),
             &join_pose(goal, &q),
             &self.start(),
             self.tau(),
-        )
+        ))
     }
     /// The same movement from a new start pose (quaternion on the side of the current start).
     pub fn with_start(&self, start: &[f64; POSE_WIDTH]) -> Result<Self> {
         let (_, q) = split_pose("start", start)?;
         let q = quaternion::same_hemisphere(&q, &self.start);
-        Self::new(
+        self.keeping_final_velocity(Self::new(
             *self.config(),
             self.weights().clone(),
             &self.goal(),
             &join_pose(start, &q),
             self.tau(),
-        )
+        ))
     }
-    /// The same path at another speed.
+    /// The same path at another speed (a final velocity scales by the old tau over the new).
     pub fn with_tau(&self, tau: f64) -> Result<Self> {
         Ok(Self {
             dmp: self.dmp.with_tau(tau)?,
@@ -428,14 +542,33 @@ impl CartesianDmp {
     /// on past `duration` until the position is within `rest_tol` (m) of its goal, the
     /// orientation within `rest_tol` (rad), both at rest to `rest_tol`, and the forcing term can
     /// no longer move them by more than that.
+    ///
+    /// With a final velocity both parts pull to their moving goals, `t` taken from the phase
+    /// (docs/cartesian.md, "A final velocity"); such a movement never rests, so `until_rest` is
+    /// refused for it.
     pub fn rollout(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
         // Compiled for AVX2 where the CPU has it (wider kernel-weight updates); Rust never fuses
-        // a multiply and an add on its own, so both copies give the same bits.
-        crate::linalg::simd(|| self.integrate(opts))
+        // a multiply and an add on its own, so both copies give the same bits. The loop is chosen
+        // once per rollout, so that of a DMP without a final velocity is today's.
+        if self.dmp.final_velocity().is_some() {
+            if opts.until_rest {
+                return Err(Error::InvalidParameter {
+                    name: "until_rest",
+                    value: "true".into(),
+                    requirement: "must be false for a Cartesian DMP with a final velocity: it \
+                                  moves on at that velocity past tau and never rests \
+                                  (docs/method.md §2.8)",
+                });
+            }
+            crate::linalg::simd(|| self.integrate::<true>(opts))
+        } else {
+            crate::linalg::simd(|| self.integrate::<false>(opts))
+        }
     }
 
+    /// [`Self::rollout`]; `MOVING`: the goals move with the final velocity.
     #[inline(always)]
-    fn integrate(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
+    fn integrate<const MOVING: bool>(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
         opts.validate()?;
         let tau = self.tau();
         let steps = n_steps(opts.duration.unwrap_or(tau), opts.dt);
@@ -482,8 +615,17 @@ impl CartesianDmp {
         let mut eta = [0.0; 3];
         let mut x = 1.0;
         let mut psi = vec![0.0; n];
+        // The goals' velocities per unit of scaled time, `tau gd` and `tau omega_g`, and the
+        // clock that turns the integrator's phase into the scaled time to go (docs/method.md
+        // §2.8; empty and unused without a final velocity).
+        let twist: Vec<f64> = self
+            .dmp
+            .final_velocity()
+            .map_or(vec![], |v| (v * tau).data.into());
+        let clock = phase_clock(tau, cfg.alpha_x, dt);
         let mut step = 0usize;
         loop {
+            let to_go = if MOVING { phase_to_go(x, clock) } else { 0.0 };
             let range = self.basis().normalized_activations(x, &mut psi);
             let act = &psi[range.clone()];
             let mut f = [0.0; N_COORDS];
@@ -498,19 +640,36 @@ impl CartesianDmp {
             // capacity checks than a push per value).
             let (mut v, mut acc) = ([0.0; 3], [0.0; 3]);
             for d in 0..3 {
-                let dz = (cfg.alpha_z * (cfg.beta_z * (goal_p[d] - p[d]) - z[d]) + f[d]) * inv_tau;
+                let spring = if MOVING {
+                    moving_spring(&cfg, goal_p[d], twist[d], to_go, p[d], z[d])
+                } else {
+                    cfg.alpha_z * (cfg.beta_z * (goal_p[d] - p[d]) - z[d])
+                };
+                let dz = (spring + f[d]) * inv_tau;
                 v[d] = z[d] * inv_tau;
                 acc[d] = dz * inv_tau;
                 at_rest &= (goal_p[d] - p[d]).abs() <= opts.rest_tol && z[d].abs() <= opts.rest_tol;
                 z[d] += dz * dt;
             }
-            // Half the rotation vector from q to the goal.
-            let e = quaternion::log(&quaternion::product(&goal_q, &quaternion::conjugate(&q)));
+            // Half the rotation vector from q to the goal: the moving goal `g_m = exp(-(tau -
+            // t)/2 omega_g) * g_o = exp(-s/2 tau omega_g) * g_o`, `s` the scaled time to go.
+            let target = if MOVING {
+                moving_goal(&goal_q, &[twist[3], twist[4], twist[5]], -0.5 * to_go)
+            } else {
+                goal_q
+            };
+            let e = quaternion::log(&quaternion::product(&target, &quaternion::conjugate(&q)));
             let turn = quaternion::exp(&eta.map(|c| c * half_step));
             let (mut omega, mut omega_dot) = ([0.0; 3], [0.0; 3]);
             for d in 0..3 {
                 let to_goal = 2.0 * e[d];
-                let deta = (cfg.alpha_z * (cfg.beta_z * to_goal - eta[d]) + f[3 + d]) * inv_tau;
+                // Damped towards the goal's own `eta = tau omega_g` with a final velocity.
+                let spring = if MOVING {
+                    cfg.alpha_z * (cfg.beta_z * to_goal + twist[3 + d] - eta[d])
+                } else {
+                    cfg.alpha_z * (cfg.beta_z * to_goal - eta[d])
+                };
+                let deta = (spring + f[3 + d]) * inv_tau;
                 omega[d] = eta[d] * inv_tau;
                 omega_dot[d] = deta * inv_tau;
                 at_rest &= to_goal.abs() <= opts.rest_tol && eta[d].abs() <= opts.rest_tol;

@@ -17,15 +17,15 @@
 //! `g_o <- exp(alpha_g h / tau * log(g_new * conj(g_o))) * g_o`. Position limits (a box) and
 //! sphere obstacles ([`crate::coupling`]) act on the position.
 
-use crate::cartesian::{CartesianDmp, POSE_WIDTH, UNIT_TOLERANCE};
+use crate::cartesian::{CartesianDmp, POSE_WIDTH, UNIT_TOLERANCE, moving_goal};
 use crate::coupling::{
     OBSTACLE_PUSH_MAX, OBSTACLE_SPEED_UP_MAX, ObstacleGains, PositionLimits, SphereObstacle,
 };
-use crate::dmp::DmpConfig;
+use crate::dmp::{DmpConfig, phase_clock, phase_to_go};
 use crate::error::{Error, Result, fmt_g};
 use crate::forcing::{Forcing, padded};
 use crate::quaternion::{self, Quaternion};
-use crate::rollout::MAX_SUBSTEPS;
+use crate::rollout::{MAX_SUBSTEPS, moving_spring};
 use crate::stepper::{
     Clock, StepperOptions, acceleration_at, check_coordinates, check_state, implicit_step,
     position_limits,
@@ -143,6 +143,9 @@ pub struct CartesianStepper {
     target_p: [f64; 3],
     target_q: Quaternion,
     goal_moving: bool,
+    /// The final velocity per unit of scaled time, `tau [v, omega_g]` with the DMP's tau
+    /// (docs/cartesian.md, "A final velocity"); `None` for zero.
+    final_velocity: Option<[f64; N]>,
     /// `f(x)`, padded as the forcing term writes it.
     f: [f64; padded(N)],
     h: [f64; N],
@@ -207,6 +210,7 @@ impl CartesianStepper {
             target_p: [goal[0], goal[1], goal[2]],
             target_q: dmp.goal_quaternion(),
             goal_moving: false,
+            final_velocity: dmp.final_velocity().map(|v| v.map(|c| c * dmp.tau())),
             f: [0.0; padded(N)],
             h: [0.0; N],
             stiffness: [0.0; 3],
@@ -570,21 +574,10 @@ impl CartesianStepper {
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
     fn derivative(&mut self, coupled: bool) -> [f64; N] {
-        let cfg = &self.cfg;
-        let mut h = [0.0; N];
-        for d in 0..3 {
-            h[d] =
-                cfg.alpha_z * (cfg.beta_z * (self.goal_p[d] - self.p[d]) - self.z[d]) + self.f[d];
-        }
-        // Half the rotation vector from q to the goal.
-        let e = quaternion::log(&quaternion::product(
-            &self.goal_q,
-            &quaternion::conjugate(&self.q),
-        ));
-        for d in 0..3 {
-            let to_goal = 2.0 * e[d];
-            h[3 + d] = cfg.alpha_z * (cfg.beta_z * to_goal - self.z[3 + d]) + self.f[3 + d];
-        }
+        let mut h = match &self.final_velocity {
+            None => self.spring(),
+            Some(v) => self.moving_spring(v),
+        };
         if let Some(lim) = &self.limits {
             for d in 0..3 {
                 self.stiffness[d] = match lim.repulsion(d, self.p[d]) {
@@ -627,13 +620,66 @@ impl CartesianStepper {
         h
     }
 
+    /// `tau dz/dt` of the springs and the forcing term towards the (filtered) goal.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn spring(&self) -> [f64; N] {
+        let cfg = &self.cfg;
+        let mut h = [0.0; N];
+        for d in 0..3 {
+            h[d] =
+                cfg.alpha_z * (cfg.beta_z * (self.goal_p[d] - self.p[d]) - self.z[d]) + self.f[d];
+        }
+        // Half the rotation vector from q to the goal.
+        let e = quaternion::log(&quaternion::product(
+            &self.goal_q,
+            &quaternion::conjugate(&self.q),
+        ));
+        for d in 0..3 {
+            let to_goal = 2.0 * e[d];
+            h[3 + d] = cfg.alpha_z * (cfg.beta_z * to_goal - self.z[3 + d]) + self.f[3 + d];
+        }
+        h
+    }
+
+    /// [`Self::spring`] towards the goals moving with the final velocity, `v` per unit of scaled
+    /// time, as the rollout's (docs/cartesian.md, "A final velocity"): the scaled time to go from
+    /// the phase at the current time scale and the clock's sub-step, the moving goals from the
+    /// filtered goal pose.
+    #[allow(clippy::needless_range_loop)]
+    #[inline(always)]
+    fn moving_spring(&self, v: &[f64; N]) -> [f64; N] {
+        let cfg = &self.cfg;
+        let hs = self.clock.dt / self.clock.substeps as f64;
+        let to_go = phase_to_go(self.x, phase_clock(self.clock.tau, cfg.alpha_x, hs));
+        let mut h = [0.0; N];
+        for d in 0..3 {
+            h[d] =
+                moving_spring(cfg, self.goal_p[d], v[d], to_go, self.p[d], self.z[d]) + self.f[d];
+        }
+        let target = moving_goal(&self.goal_q, &[v[3], v[4], v[5]], -0.5 * to_go);
+        let e = quaternion::log(&quaternion::product(
+            &target,
+            &quaternion::conjugate(&self.q),
+        ));
+        for d in 0..3 {
+            let to_goal = 2.0 * e[d];
+            let spring = cfg.alpha_z * (cfg.beta_z * to_goal + v[3 + d] - self.z[3 + d]);
+            h[3 + d] = spring + self.f[3 + d];
+        }
+        h
+    }
+
     /// The Cartesian rollout's `until_rest` criterion at the current state, towards the target
-    /// goal, with the goal filter settled.
+    /// goal, with the goal filter settled. Never with a final velocity: the movement goes on.
     #[inline(always)]
     fn rest(&self) -> bool {
         let cfg = &self.cfg;
         let tol = self.rest_tol;
-        if self.goal_moving || self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) > tol {
+        if self.goal_moving
+            || self.final_velocity.is_some()
+            || self.x * self.max_w / (cfg.alpha_z * cfg.beta_z) > tol
+        {
             return false;
         }
         let e = quaternion::log(&quaternion::product(
@@ -658,6 +704,7 @@ impl CartesianStepper {
         let tol = self.rest_tol;
         let spring = cfg.alpha_z * cfg.beta_z;
         !self.goal_moving
+            && self.final_velocity.is_none()
             && self.x * self.max_w / spring <= tol
             && self.z.iter().all(|z| z.abs() <= tol)
             && self.h.iter().all(|h| h.abs() <= spring * tol)

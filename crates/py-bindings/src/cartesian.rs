@@ -3,17 +3,17 @@
 
 use dmp_core::cartesian::POSE_WIDTH;
 use dmp_core::{
-    CartesianDemonstration, CartesianDmp, CartesianGeneralizer, CartesianTrajectory,
+    CartesianDemonstration, CartesianDmp, CartesianGeneralizer, CartesianTrajectory, FinalVelocity,
     RolloutOptions, rollout_batch_cartesian,
 };
-use nalgebra::{DMatrix, DMatrixView};
+use nalgebra::{DMatrix, DMatrixView, DVector};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
     PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
-use crate::dmp::{contiguous, time_major};
+use crate::dmp::{contiguous, time_major, vector};
 use crate::errors::{IntoPyResult, invalid_input};
 use crate::generalize::{GeneralizerOptions, generalizer_methods, parse_method, parse_queries};
 use crate::primitive::{Constants, parameter_getters};
@@ -134,8 +134,11 @@ impl PyCartesianDmp {
         })
     }
 
+    /// `final_velocity`: `(6,)` `vx, vy, vz, wx, wy, wz` the fitted DMP reaches its goal with;
+    /// when `None`, the demonstration's last velocities if `final_velocity_from_demo`, else zero.
     #[staticmethod]
-    #[pyo3(signature = (t, pose, derivatives, normalize, n_basis, constants))]
+    #[pyo3(signature = (t, pose, derivatives, normalize, n_basis, constants, final_velocity=None, final_velocity_from_demo=false))]
+    #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
         t: PyReadonlyArray1<'_, f64>,
@@ -144,12 +147,51 @@ impl PyCartesianDmp {
         normalize: bool,
         n_basis: usize,
         constants: Constants,
+        final_velocity: Option<PyReadonlyArray1<'_, f64>>,
+        final_velocity_from_demo: bool,
     ) -> PyResult<Self> {
         let demo = pose_demonstration(&t, &pose, &derivatives, normalize)?;
+        let config = constants.config(n_basis);
+        let given = final_velocity
+            .map(|v| vector("final_velocity", &v))
+            .transpose()?;
         let inner = py
-            .detach(|| CartesianDmp::fit(&demo, constants.config(n_basis)))
+            .detach(|| match (given, final_velocity_from_demo) {
+                (Some(v), _) => {
+                    CartesianDmp::fit_with_final_velocity(&demo, config, FinalVelocity::Given(v))
+                }
+                (None, true) => {
+                    CartesianDmp::fit_with_final_velocity(&demo, config, FinalVelocity::FromDemo)
+                }
+                (None, false) => CartesianDmp::fit(&demo, config),
+            })
             .py_err()?;
         Ok(Self { inner })
+    }
+
+    /// `final_velocity` `(6,)`: `vx, vy, vz` (m/s), then `wx, wy, wz` (rad/s, world frame).
+    fn with_final_velocity(&self, final_velocity: PyReadonlyArray1<'_, f64>) -> PyResult<Self> {
+        let v: DVector<f64> = vector("final_velocity", &final_velocity)?;
+        if v.len() != 6 {
+            return Err(invalid_input(format!(
+                "final_velocity has shape ({},), expected (6,): vx, vy, vz, wx, wy, wz",
+                v.len()
+            )));
+        }
+        Ok(Self {
+            inner: self
+                .inner
+                .with_final_velocity([v[0], v[1], v[2]], [v[3], v[4], v[5]])
+                .py_err()?,
+        })
+    }
+
+    /// `(6,)`, or `None` when it is zero.
+    #[getter]
+    fn final_velocity<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .final_velocity()
+            .map(|v| v.to_vec().into_pyarray(py))
     }
 
     #[pyo3(signature = (dt, duration=None, until_rest=false, rest_tol=1e-4))]
