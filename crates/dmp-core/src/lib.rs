@@ -14,6 +14,7 @@ pub mod basis;
 pub mod cartesian;
 pub mod cartesian_generalize;
 pub mod cartesian_stepper;
+pub mod chain;
 pub mod coupling;
 pub mod design_matrix;
 pub mod dmp;
