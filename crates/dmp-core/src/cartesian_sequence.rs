@@ -3,7 +3,7 @@
 //!
 //! Movement `k + 1` starts where `k`'s integrator has arrived, position and quaternion, with
 //! `k`'s linear velocity (`z = tau_{k+1} v`) and angular velocity (`eta = tau_{k+1} omega`)
-//! ([`CartesianStepper::take_over`]). The join's coupling term is added to the position's
+//! (`CartesianStepper::take_over`). The join's coupling term is added to the position's
 //! `tau dz/dt` and to the orientation's
 //! `tau d(eta)/dt = alpha_z (beta_z 2 log(g_o * conj(q)) - eta) + f_o + C`, with
 //! `C_0 = tau_{k+1}^2 (a_k - a_{k+1})` on the linear and the angular acceleration alike, fading

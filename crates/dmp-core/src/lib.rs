@@ -8,8 +8,7 @@
 //! Morimoto (2014) on the same phase and basis, and both executed online one control period at a
 //! time (steppers with phase stopping, a goal filter, temporal coupling for limits and coupling
 //! terms), joint and Cartesian DMPs also joined end to start in sequences. Pure Rust on
-//! nalgebra; no Python,
-//! no learners.
+//! nalgebra; no Python, no learners.
 
 pub mod basis;
 pub mod cartesian;
