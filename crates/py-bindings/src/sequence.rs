@@ -106,6 +106,23 @@ stepper_methods!(
      tau; then the state advances by dt."
 );
 
+/// `rollout(dmps)` with the GIL released, at the Python call's `(dt, duration, until_rest,
+/// rest_tol)`.
+fn released<D: Sync, T: Send>(
+    py: Python<'_>,
+    dmps: &[D],
+    (dt, duration, until_rest, rest_tol): (f64, Option<f64>, bool, f64),
+    rollout: fn(&[D], &RolloutOptions) -> dmp_core::Result<T>,
+) -> PyResult<T> {
+    let opts = RolloutOptions {
+        dt,
+        duration,
+        until_rest,
+        rest_tol,
+    };
+    py.detach(|| rollout(dmps, &opts)).py_err()
+}
+
 /// The sequence of `dmps` rolled out open loop with the GIL released (one DMP: its rollout).
 #[pyfunction(name = "sequence_rollout")]
 #[pyo3(signature = (dmps, dt, duration=None, until_rest=false, rest_tol=1e-4))]
@@ -117,16 +134,8 @@ pub fn py_sequence_rollout<'py>(
     until_rest: bool,
     rest_tol: f64,
 ) -> PyResult<TrajectoryArrays<'py>> {
-    let owned = core_dmps(&dmps);
-    let opts = RolloutOptions {
-        dt,
-        duration,
-        until_rest,
-        rest_tol,
-    };
-    let tr = py
-        .detach(|| dmp_core::sequence::rollout(&owned, &opts))
-        .py_err()?;
+    let options = (dt, duration, until_rest, rest_tol);
+    let tr = released(py, &core_dmps(&dmps), options, dmp_core::sequence::rollout)?;
     trajectory_arrays(py, tr)
 }
 
@@ -231,15 +240,12 @@ pub fn py_cartesian_sequence_rollout<'py>(
     until_rest: bool,
     rest_tol: f64,
 ) -> PyResult<CartesianArrays<'py>> {
-    let owned = core_cartesian(&dmps);
-    let opts = RolloutOptions {
-        dt,
-        duration,
-        until_rest,
-        rest_tol,
-    };
-    let tr = py
-        .detach(|| dmp_core::cartesian_sequence::rollout(&owned, &opts))
-        .py_err()?;
+    let options = (dt, duration, until_rest, rest_tol);
+    let tr = released(
+        py,
+        &core_cartesian(&dmps),
+        options,
+        dmp_core::cartesian_sequence::rollout,
+    )?;
     crate::cartesian::trajectory_arrays(py, tr)
 }
