@@ -24,7 +24,7 @@ from dmprs.loop import LearningResult, learn
 from dmprs.oscillator import AdaptiveOscillator, RhythmLearner
 from dmprs.periodic import PeriodicCartesianDMP, PeriodicDMP, PeriodicOnlineFit
 from dmprs.periodic_stepper import PeriodicStepper
-from dmprs.sequence import Sequence, SequenceStepper
+from dmprs.sequence import CartesianSequenceStepper, Sequence, SequenceStepper
 from dmprs.stepper import CartesianStepper, JointStepper
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
@@ -32,6 +32,7 @@ __all__ = [
     "DMP",
     "AdaptiveOscillator",
     "CartesianDMP",
+    "CartesianSequenceStepper",
     "CartesianStepper",
     "CartesianTrajectory",
     "Database",

@@ -236,6 +236,14 @@ class JointStepper(_core.Stepper):
         return super().__new__(cls, core, period, opts)
 
 
+def _obstacle_options(obstacles: ArrayLike | None, gain: float, beta: float) -> tuple[Any, float, float]:
+    """The obstacles, ``obstacle_gain`` and ``obstacle_beta`` validated, as the core takes them."""
+    beta = as_scalar(beta, "obstacle_beta")
+    if beta < 1:
+        raise InvalidInputError(f"obstacle_beta = {beta:g} is invalid: must be >= 1")
+    return _obstacles(obstacles), as_scalar(gain, "obstacle_gain", positive=True), beta
+
+
 class CartesianStepper(_core.CartesianStepper):
     """Executes a :class:`dmprs.CartesianDMP` one control period at a time (module docs).
 
@@ -290,13 +298,7 @@ class CartesianStepper(_core.CartesianStepper):
             6, 3, _COORDINATES, dt, substeps, alpha_e, goal_filter, velocity_max, acceleration_max,
             position_min, position_max, limit_margin, limit_gain, gamma_nominal, gamma_a, eps, rest_tol,
         )
-        beta = as_scalar(obstacle_beta, "obstacle_beta")
-        if beta < 1:
-            raise InvalidInputError(f"obstacle_beta = {beta:g} is invalid: must be >= 1")
-        return super().__new__(
-            cls, core, period, opts, _obstacles(obstacles),
-            as_scalar(obstacle_gain, "obstacle_gain", positive=True), beta,
-        )
+        return super().__new__(cls, core, period, opts, *_obstacle_options(obstacles, obstacle_gain, obstacle_beta))
 
     def set_obstacles(self, obstacles: ArrayLike | None) -> None:
         """Replaces the sphere obstacles, ``(M, 4)`` rows ``x, y, z, radius`` (None: none); a

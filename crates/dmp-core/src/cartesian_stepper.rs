@@ -28,7 +28,7 @@ use crate::quaternion::{self, Quaternion};
 use crate::rollout::{MAX_SUBSTEPS, moving_spring};
 use crate::stepper::{
     Clock, StepperOptions, acceleration_at, check_coordinates, check_state, implicit_step,
-    position_limits,
+    moving_start_refused, position_limits,
 };
 
 /// The coordinates of the underlying DMP: x, y, z, then the three of the orientation.
@@ -78,7 +78,7 @@ fn unit(name: &'static str, q: &[f64]) -> Result<Quaternion> {
     })
 }
 
-fn check_pose(name: &'static str, pose: &[f64]) -> Result<Quaternion> {
+pub(crate) fn check_pose(name: &'static str, pose: &[f64]) -> Result<Quaternion> {
     check_coordinates(name, pose, POSE_WIDTH)?;
     unit(name, &pose[3..])
 }
@@ -281,6 +281,49 @@ impl CartesianStepper {
         self.over_limit = false;
         self.steps = 0;
         Ok(())
+    }
+
+    /// Starts this movement where `from`'s integrator has arrived, in motion: its position and
+    /// orientation, its linear velocity as `z = tau v` and its angular velocity as
+    /// `eta = tau omega` (this movement's tau), and `from`'s last command as this one's, against
+    /// which phase stopping measures the robot (docs/method.md §2.9). The quaternion keeps
+    /// `from`'s sign, so the commanded one runs on without a jump; the goal is taken on the side
+    /// that makes `log(g_o * conj(q))` what a reset to this pose gives, so the movement turns
+    /// the way its DMP does. Refused with velocity or acceleration limits, as
+    /// [`crate::stepper::Stepper`]'s.
+    pub(crate) fn take_over(&mut self, from: &CartesianStepper) -> Result<()> {
+        if self.clock.coupling.is_some() {
+            return Err(moving_start_refused());
+        }
+        // The goal on its DMP goal's side first, so that repeated hand-overs (a sequence
+        // reset and run again) start from the same goal sign.
+        self.target_q = quaternion::same_hemisphere(&self.target_q, &self.dmp.goal_quaternion());
+        let (p, q) = (from.p, from.q);
+        self.reset(Some(&[p[0], p[1], p[2], q[0], q[1], q[2], q[3]]))?;
+        if quaternion::dot(&self.q, &q) < 0.0 {
+            // `reset` took the start on its DMP start's side; turn the goal with it instead.
+            self.q = q;
+            self.goal_q = self.goal_q.map(|c| -c);
+            self.target_q = self.target_q.map(|c| -c);
+        }
+        let (tau, inv_from) = (self.clock.tau, 1.0 / from.clock.tau);
+        for (z, zf) in self.z.iter_mut().zip(&from.z) {
+            *z = zf * inv_from * tau;
+        }
+        self.out_pose = from.out_pose;
+        self.out_velocity = from.out_velocity;
+        self.out_acceleration = from.out_acceleration;
+        Ok(())
+    }
+
+    /// The phase the next step starts from (the last command's is [`CartesianStepper::phase`]).
+    pub(crate) fn next_phase(&self) -> f64 {
+        self.x
+    }
+
+    /// The tolerance of [`CartesianStepper::done`].
+    pub(crate) fn rest_tol(&self) -> f64 {
+        self.rest_tol
     }
 
     /// A new goal pose, filtered or at once; its quaternion is taken on the side of the current

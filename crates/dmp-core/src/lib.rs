@@ -7,13 +7,15 @@
 //! interpolation), and the Cartesian (position + unit quaternion) DMP of Ude, Nemec, Petrič and
 //! Morimoto (2014) on the same phase and basis, and both executed online one control period at a
 //! time (steppers with phase stopping, a goal filter, temporal coupling for limits and coupling
-//! terms), joint DMPs also joined end to start in sequences. Pure Rust on nalgebra; no Python,
-//! no learners.
+//! terms), joint and Cartesian DMPs also joined end to start in sequences. Pure Rust on
+//! nalgebra; no Python, no learners.
 
 pub mod basis;
 pub mod cartesian;
 pub mod cartesian_generalize;
+pub mod cartesian_sequence;
 pub mod cartesian_stepper;
+pub mod chain;
 pub mod coupling;
 pub mod design_matrix;
 pub mod dmp;
@@ -47,6 +49,7 @@ pub use cartesian::{
     CartesianDemonstration, CartesianDmp, CartesianTrajectory, rollout_batch_cartesian,
 };
 pub use cartesian_generalize::CartesianGeneralizer;
+pub use cartesian_sequence::CartesianSequenceStepper;
 pub use cartesian_stepper::{CartesianStepper, CartesianStepperOptions};
 pub use dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity};
 pub use error::{Error, Result};

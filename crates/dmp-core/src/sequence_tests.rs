@@ -5,6 +5,7 @@ use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 
 use super::*;
+use crate::chain::testing::{self, bits, halved};
 use crate::dmp::DmpConfig;
 
 /// A DMP with a shape of its own (`seed`) from `start` to `goal`, not at rest at tau.
@@ -40,22 +41,9 @@ fn open_loop(dt: f64) -> StepperOptions {
     }
 }
 
-fn bits(v: &[f64]) -> Vec<u64> {
-    v.iter().map(|v| v.to_bits()).collect()
-}
-
 /// The samples at which a movement after the first begins, found by stepping.
 fn joins(dmps: &[Dmp], dt: f64, samples: usize) -> Vec<usize> {
-    let mut s = SequenceStepper::new(dmps, &open_loop(dt)).unwrap();
-    let mut out = Vec::new();
-    for j in 0..samples {
-        let before = s.active();
-        s.step(None).unwrap();
-        if s.active() != before {
-            out.push(j);
-        }
-    }
-    out
+    testing::joins(SequenceStepper::new(dmps, &open_loop(dt)).unwrap(), samples)
 }
 
 /// The largest jump of `v` (time-major, `n` per sample) from sample `j - 1` to `j`.
@@ -144,11 +132,7 @@ fn joins_are_continuous_to_the_integrators_order() {
             jumps.push(jump(&tr.ydd, n, j));
         }
         if let Some(before) = last.replace(jumps.clone()) {
-            let before: Vec<f64> = before;
-            for (a, b) in before.iter().zip(&jumps) {
-                let ratio = a / b;
-                assert!((1.7..2.3).contains(&ratio), "{a} -> {b} at dt {dt}");
-            }
+            halved(&before, &jumps, dt);
         }
     }
 }
@@ -158,19 +142,14 @@ fn an_unaided_start_would_jump() {
     let dmps = three();
     let dt = 1e-3;
     let tr = rollout(&dmps, &RolloutOptions::new(dt)).unwrap();
-    let mut s = SequenceStepper::new(&dmps, &open_loop(dt)).unwrap();
-    for j in 0..tr.n_samples() {
-        let before = s.active();
-        s.step(None).unwrap();
-        if s.active() != before {
-            // The join's term at its first sample is the jump it removes.
-            let tau = s.nominal_tau();
-            let unaided = (0..3)
-                .map(|d| (s.coupling[d] / (tau * tau)).abs())
-                .fold(0.0, f64::max);
-            let joined = jump(&tr.ydd, 3, j);
-            assert!(unaided > 100.0 * joined, "{unaided} vs {joined} at {j}");
-        }
+    let s = SequenceStepper::new(&dmps, &open_loop(dt)).unwrap();
+    let at = testing::unaided_jumps(s, tr.n_samples());
+    assert_eq!(at.len(), 2);
+    for (j, unaided) in at {
+        // The join's term at its first sample is the jump it removes.
+        let unaided = unaided.iter().fold(0.0, |m: f64, a| m.max(*a));
+        let joined = jump(&tr.ydd, 3, j);
+        assert!(unaided > 100.0 * joined, "{unaided} vs {joined} at {j}");
     }
 }
 

@@ -51,7 +51,10 @@ mod _core {
     #[pymodule_export]
     use super::portable::{dls_step, portable_binary, portable_norm, portable_unary};
     #[pymodule_export]
-    use super::sequence::{PySequenceStepper, py_sequence_rollout};
+    use super::sequence::{
+        PyCartesianSequenceStepper, PySequenceStepper, py_cartesian_sequence_rollout,
+        py_sequence_rollout,
+    };
     #[pymodule_export]
     use super::stepper::{PyCartesianStepper, PyStepper};
 

@@ -278,6 +278,37 @@ fn spheres(obstacles: Option<PyReadonlyArray2<'_, f64>>) -> PyResult<Vec<SphereO
         .collect())
 }
 
+/// The Cartesian stepper's options at control period `dt`, as `dmprs.stepper` passes them.
+pub(crate) fn cartesian_options(
+    dt: f64,
+    options: SharedOptions,
+    obstacles: Option<PyReadonlyArray2<'_, f64>>,
+    obstacle_gain: f64,
+    obstacle_beta: f64,
+) -> PyResult<CartesianStepperOptions> {
+    Ok(CartesianStepperOptions {
+        base: options.at(dt),
+        obstacles: spheres(obstacles)?,
+        obstacle_gains: ObstacleGains {
+            lambda: obstacle_gain,
+            beta: obstacle_beta,
+        },
+    })
+}
+
+/// The obstacles as `CartesianStepper.obstacles` gives them: `(M, 4)` rows `x, y, z, radius`.
+pub(crate) fn obstacle_rows<'py>(
+    py: Python<'py>,
+    obstacles: &[SphereObstacle],
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let rows: Vec<f64> = obstacles
+        .iter()
+        .flat_map(|o| [o.center[0], o.center[1], o.center[2], o.radius])
+        .collect();
+    let m = rows.len() / 4;
+    PyArray1::from_vec(py, rows).reshape([m, 4])
+}
+
 #[pymethods]
 impl PyCartesianStepper {
     /// As [`PyStepper::new`]: `CartesianStepper.__new__(cls, stepper)` is a copy.
@@ -306,14 +337,7 @@ impl PyCartesianStepper {
                 }
             };
         let dmp: PyRef<'_, PyCartesianDmp> = dmp.extract()?;
-        let opts = CartesianStepperOptions {
-            base: options.at(dt),
-            obstacles: spheres(obstacles)?,
-            obstacle_gains: ObstacleGains {
-                lambda: obstacle_gain,
-                beta: obstacle_beta,
-            },
-        };
+        let opts = cartesian_options(dt, options, obstacles, obstacle_gain, obstacle_beta)?;
         let inner = CartesianStepper::new(&dmp.inner, &opts).py_err()?;
         let s = Self {
             inner,
@@ -331,14 +355,7 @@ impl PyCartesianStepper {
 
     #[getter]
     fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
-        let rows: Vec<f64> = self
-            .inner
-            .obstacles()
-            .iter()
-            .flat_map(|o| [o.center[0], o.center[1], o.center[2], o.radius])
-            .collect();
-        let m = rows.len() / 4;
-        PyArray1::from_vec(py, rows).reshape([m, 4])
+        obstacle_rows(py, self.inner.obstacles())
     }
 }
 
