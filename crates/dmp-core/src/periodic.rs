@@ -275,7 +275,6 @@ pub struct PeriodicState {
 #[derive(Debug, Clone, PartialEq)]
 pub struct PeriodicDmp {
     config: PeriodicConfig,
-    basis: PeriodicBasis,
     /// `N x D`: column d holds the weights of DOF d, in units of y per unit amplitude.
     weights: DMatrix<f64>,
     /// The forcing term's shape, evaluated a phase at a time.
@@ -327,8 +326,7 @@ impl PeriodicDmp {
         }
         Ok(Self {
             config,
-            forcing: PeriodicForcing::new(&basis, &weights),
-            basis,
+            forcing: PeriodicForcing::new(basis, &weights),
             weights,
             goal,
             amplitude,
@@ -437,7 +435,7 @@ impl PeriodicDmp {
         &self.config
     }
     pub fn basis(&self) -> &PeriodicBasis {
-        &self.basis
+        self.forcing.basis()
     }
     /// `N x D`, column d = the weights of DOF d.
     pub fn weights(&self) -> &DMatrix<f64> {

@@ -49,12 +49,12 @@ pub(crate) struct ForcingScratch {
 }
 
 impl PeriodicForcing {
-    /// `weights` is `N x n_dof` (column d = coordinate d), as a [`crate::PeriodicDmp`] holds
-    /// them.
-    pub fn new(basis: &PeriodicBasis, weights: &DMatrix<f64>) -> Self {
+    /// The forcing term of `basis` with `weights`, `N x n_dof` (column d = coordinate d), as a
+    /// [`crate::PeriodicDmp`] holds them.
+    pub fn new(basis: PeriodicBasis, weights: &DMatrix<f64>) -> Self {
         let (n, n_dof) = weights.shape();
         let stride = n_dof.next_multiple_of(LANES);
-        let half = window_half_width(basis);
+        let half = window_half_width(&basis);
         let window = half.map_or(0, |h| 2 * h + 1);
         let len = window.next_multiple_of(LANES);
         // unwrapped index j holds kernel (j + N - half) mod N; the window about centre m (its
@@ -71,15 +71,19 @@ impl PeriodicForcing {
             .collect();
         let (cos_all, sin_all) = basis.trig();
         Self {
-            basis: basis.clone(),
+            cos_c: (0..n + len).map(|j| cos_all[kernel(j)]).collect(),
+            sin_c: (0..n + len).map(|j| sin_all[kernel(j)]).collect(),
+            basis,
             weights,
             stride,
             n_dof,
             half,
-            cos_c: (0..n + len).map(|j| cos_all[kernel(j)]).collect(),
-            sin_c: (0..n + len).map(|j| sin_all[kernel(j)]).collect(),
             len,
         }
+    }
+
+    pub fn basis(&self) -> &PeriodicBasis {
+        &self.basis
     }
 
     pub fn scratch(&self) -> ForcingScratch {
@@ -260,7 +264,7 @@ mod tests {
         ] {
             let basis = PeriodicBasis::new(n, width).unwrap();
             let w = weights(n, n_dof);
-            let f = PeriodicForcing::new(&basis, &w);
+            let f = PeriodicForcing::new(basis.clone(), &w);
             let mut scratch = f.scratch();
             let mut out = vec![0.0; f.stride()];
             for j in 0..20_011 {

@@ -45,7 +45,8 @@ impl PySequenceStepper {
         let (dt, options) = match (dt, options) {
             (Some(dt), Some(options)) => (dt, options),
             (None, None) if dmps.is_instance_of::<Self>() => {
-                return dmps.cast::<Self>()?.borrow().duplicate(py);
+                let this = dmps.cast::<Self>()?.borrow();
+                return Self::of(py, this.inner.clone());
             }
             _ => {
                 return Err(invalid_input(
@@ -54,16 +55,10 @@ impl PySequenceStepper {
             }
         };
         let dmps: Vec<PyRef<'_, PyDmp>> = dmps.extract()?;
-        let inner = SequenceStepper::new(&core_dmps(&dmps), &options.at(dt)).py_err()?;
-        let n = inner.n_dof();
-        let s = Self {
-            inner,
-            out: Outputs::new(py, [n; 3])?,
-            measured: Vec::with_capacity(n),
-            coupling: Vec::with_capacity(n),
-        };
-        s.publish(py)?;
-        Ok(s)
+        Self::of(
+            py,
+            SequenceStepper::new(&core_dmps(&dmps), &options.at(dt)).py_err()?,
+        )
     }
 
     /// The movement that runs (0-based).
@@ -78,11 +73,11 @@ impl PySequenceStepper {
 }
 
 impl PySequenceStepper {
-    /// As `PyStepper::duplicate`.
-    fn duplicate(&self, py: Python<'_>) -> PyResult<Self> {
-        let n = self.inner.n_dof();
+    /// A Python stepper over `inner`, its output arrays holding its last command.
+    fn of(py: Python<'_>, inner: SequenceStepper) -> PyResult<Self> {
+        let n = inner.n_dof();
         let s = Self {
-            inner: self.inner.clone(),
+            inner,
             out: Outputs::new(py, [n; 3])?,
             measured: Vec::with_capacity(n),
             coupling: Vec::with_capacity(n),
