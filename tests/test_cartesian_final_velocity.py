@@ -181,3 +181,47 @@ def test_the_stepper_is_the_rollout_and_never_done():
         np.testing.assert_allclose(pose, tr.pose[j], rtol=0, atol=1e-11)
         np.testing.assert_allclose(velocity, np.r_[tr.velocity[j], tr.angular_velocity[j]], rtol=0, atol=1e-11)
         assert not stepper.done()
+
+
+def poses_ending_in_motion(scales) -> dmprs.Database:
+    """Pose demonstrations labelled by ``scale``, each ``moving_demo`` ending at ``scale x TWIST``."""
+    db = dmprs.Database(("scale",))
+    for scale in scales:
+        t, pose = moving_demo(scale * TWIST, n=601)
+        db.add([scale], dmprs.CartesianTrajectory(t, pose[:, :3], pose[:, 3:]))
+    return db
+
+
+@pytest.mark.parametrize(("method", "scales", "options"),
+                         [("linear", [0.5, 1.5], {}), ("lwr-gp", [0.5, 1.0, 1.5], {"trend": "affine"})])
+def test_pose_final_velocities_are_generalized_with_the_other_parameters(method, scales, options):
+    """Each demo's own fit (its last twist as its final velocity) at its query; between them the
+    demonstrated end twist is linear in the query, and the rollout meets the generalized twist
+    to the integrator's first order (halving dt halves the error).
+    """
+    db = poses_ending_in_motion(scales)
+    gen = dmprs.Generalizer(db, method, 30, final_velocity=True, **options)
+    assert gen.n_parameters == 6 * 30 + 1 + 18
+    for demo in db:
+        tr = demo.trajectory
+        own = dmprs.CartesianDMP.fit(tr.t, tr.pose, 30, final_velocity="demo")
+        at_demo = gen.predict(demo.query)
+        np.testing.assert_allclose(at_demo.final_velocity, own.final_velocity, rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(gen.parameters(demo.query)[-6:], own.final_velocity, rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(at_demo.weights, own.weights, rtol=1e-5, atol=1e-6 * np.abs(own.weights).max())
+    between = gen.predict([1.25])
+    np.testing.assert_allclose(between.final_velocity, 1.25 * TWIST, atol=2e-3)
+    coarse, fine = final_errors(between, 0.002), final_errors(between, 0.001)
+    assert coarse[1] < 0.05 and coarse[3] < 0.05
+    np.testing.assert_allclose(fine[[1, 3]] / coarse[[1, 3]], 0.5, atol=0.08)
+
+
+def test_pose_generalizers_without_final_velocities_are_todays():
+    db = poses_ending_in_motion([0.5, 1.5])
+    today, moving = dmprs.Generalizer(db, "linear", 30), dmprs.Generalizer(db, "linear", 30, final_velocity=True)
+    assert today.n_parameters == 6 * 30 + 1 + 12
+    # tau, goal and start are the demos' own either way; only the shape and the twist differ
+    np.testing.assert_array_equal(today.parameters([1.0])[6 * 30:], moving.parameters([1.0])[6 * 30:-6])
+    assert not np.any(today.predict([1.0]).final_velocity)
+    with pytest.raises(InvalidInputError, match="final_velocity"):
+        dmprs.Generalizer(db, "linear", 30, final_velocity=True, periodic=True)

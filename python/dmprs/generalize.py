@@ -232,9 +232,9 @@ class Generalizer:
             raise InvalidInputError(f"periodic = {periodic!r} is invalid: use True or False")
         if not isinstance(final_velocity, bool):
             raise InvalidInputError(f"final_velocity = {final_velocity!r} is invalid: use True or False")
-        if final_velocity and (periodic or db.is_cartesian):
-            raise InvalidInputError("final_velocity=True generalizes joint-space discrete demonstrations only "
-                                    "(docs/method.md §2.8)")
+        if final_velocity and periodic:
+            raise InvalidInputError("final_velocity=True generalizes discrete demonstrations only: a rhythm "
+                                    "never reaches a goal (docs/method.md §2.8)")
         if periodic:
             self._core = _periodic_core(db, method, n_basis, spring(alpha_z, beta_z, width_factor), alpha_x,
                                         triangulate, options)
@@ -264,7 +264,7 @@ class Generalizer:
                 for tr in (d.trajectory for d in db)
                 if isinstance(tr, CartesianTrajectory)
             ]
-            self._core = _core.CartesianGeneralizer(db.queries, poses, method, n, constants, options)
+            self._core = _core.CartesianGeneralizer(db.queries, poses, method, n, constants, options, final_velocity)
         else:
             demos = [
                 (tr.t, tr.y, tr.yd, tr.ydd)
@@ -300,7 +300,8 @@ class Generalizer:
         vector (3)]``, the rotation vectors in the tangent space of demonstration 0's goal and
         start orientations (docs/cartesian.md). Periodic: ``[w.ravel() (D*N), tau, goal (D),
         amplitude (D), y0 (D)]``. With ``final_velocity=True``: ``[w.ravel() (D*N), tau,
-        goal (D), y0 (D), final velocity (D)]``.
+        goal (D), y0 (D), final velocity (D)]``, for poses the final linear (3) and angular (3,
+        world frame) velocity after the start rotation vector.
         """
         return self._core.parameters(self._query(q))
 
@@ -347,7 +348,7 @@ class Generalizer:
     @property
     def n_parameters(self) -> int:
         """``D * N + 1 + 2 * D``; for poses ``6 * N + 1 + 12``, periodic ``D * N + 1 + 3 * D``,
-        with final velocities ``D * N + 1 + 3 * D`` (see :meth:`parameters`).
+        with final velocities ``D * N + 1 + 3 * D`` (poses ``6 * N + 1 + 18``; see :meth:`parameters`).
         """
         return self._core.n_parameters
 

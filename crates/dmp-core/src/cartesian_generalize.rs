@@ -19,6 +19,13 @@
 //! * 6..9: the constant `v_k` (zero velocity and acceleration): weights exactly 0, start `v_k`.
 //!
 //! So LWR, the GPs, the tau check and the Jacobian are the joint generalizer's, unchanged.
+//!
+//! With final velocities ([`CartesianGeneralizer::with_final_velocity`], docs/cartesian.md, "A
+//! final velocity"), each demo's orientation coordinates are taken relative to its moving goal
+//! (`PreparedPose::move_goal` with the demo's last angular velocity), as
+//! [`CartesianDmp::fit_with_final_velocity`] takes them, and the inner generalizer is the joint
+//! one with final velocities: the last linear and angular velocity join the generalized scalars
+//! (coordinates 6..9 end at rest, so their final velocity is 0).
 
 use nalgebra::{DMatrix, DVector};
 
@@ -47,13 +54,41 @@ impl CartesianGeneralizer {
         config: DmpConfig,
         method: Method,
     ) -> Result<Self> {
+        Self::build(queries, demos, config, method, false)
+    }
+
+    /// [`Self::new`] for pose demonstrations that end in motion: each is fitted as
+    /// [`CartesianDmp::fit_with_final_velocity`] with its last linear and angular velocity, and
+    /// both join the generalized scalars (module docs).
+    pub fn with_final_velocity(
+        queries: &[Vec<f64>],
+        demos: &[CartesianDemonstration<'_>],
+        config: DmpConfig,
+        method: Method,
+    ) -> Result<Self> {
+        Self::build(queries, demos, config, method, true)
+    }
+
+    fn build(
+        queries: &[Vec<f64>],
+        demos: &[CartesianDemonstration<'_>],
+        config: DmpConfig,
+        method: Method,
+        final_velocity: bool,
+    ) -> Result<Self> {
         config.validate_for_fit()?;
         let mut prepared = Vec::with_capacity(demos.len());
         for (k, demo) in demos.iter().enumerate() {
-            prepared.push(PreparedPose::new(demo).map_err(|e| Error::InDemo {
+            let mut p = PreparedPose::new(demo).map_err(|e| Error::InDemo {
                 index: k,
                 source: Box::new(e),
-            })?);
+            })?;
+            let last = p.yd.column(demo.t.len() - 1);
+            let omega_g = [last[3], last[4], last[5]];
+            if final_velocity && omega_g.iter().any(|&w| w != 0.0) {
+                p.move_goal(demo.t, &omega_g);
+            }
+            prepared.push(p);
         }
         let Some(first) = prepared.first() else {
             return Err(Error::DemoCount {
@@ -99,8 +134,13 @@ impl CartesianGeneralizer {
                 ydd: Some(ydd.as_view()),
             })
             .collect();
-        let inner = Generalizer::new(queries, &views, config, method)?;
-        // Each demo's own DMP: the inner one's first six coordinates, with its quaternions.
+        let inner = if final_velocity {
+            Generalizer::with_final_velocity(queries, &views, config, method)?
+        } else {
+            Generalizer::new(queries, &views, config, method)?
+        };
+        // Each demo's own DMP: the inner one's first six coordinates, with its quaternions and
+        // final velocity.
         let demo_dmps = inner
             .demo_dmps()
             .iter()
@@ -109,13 +149,14 @@ impl CartesianGeneralizer {
                 let w = d.weights().columns(0, 6).into_owned();
                 let pose =
                     |p: &DVector<f64>, q: &Quaternion| [p[0], p[1], p[2], q[0], q[1], q[2], q[3]];
-                CartesianDmp::new(
+                let dmp = CartesianDmp::new(
                     config,
                     w,
                     &pose(d.goal(), &goal),
                     &pose(d.y0(), &start),
                     d.tau(),
-                )
+                )?;
+                with_twist(dmp, d.final_velocity())
             })
             .collect::<Result<_>>()?;
         Ok(Self {
@@ -142,18 +183,20 @@ impl CartesianGeneralizer {
         let (goal, y0) = (d.goal(), d.y0());
         let g = at_tangent(&[goal[3], goal[4], goal[5]], &self.goal_ref);
         let s = at_tangent(&[goal[6], goal[7], goal[8]], &self.start_ref);
-        CartesianDmp::new(
+        let dmp = CartesianDmp::new(
             *d.config(),
             d.weights().columns(0, 6).into_owned(),
             &[goal[0], goal[1], goal[2], g[0], g[1], g[2], g[3]],
             &[y0[0], y0[1], y0[2], s[0], s[1], s[2], s[3]],
             d.tau(),
-        )
+        )?;
+        with_twist(dmp, d.final_velocity())
     }
 
     /// Rows of the inner generalizer's flat parameters that make up ours:
     /// `[w (6 x N, coordinate-major), tau, goal position (3), goal tangent u (3),
-    /// start position (3), start tangent v (3)]`.
+    /// start position (3), start tangent v (3)]`, then with final velocities the final linear
+    /// (3) and angular (3) velocity.
     fn rows(&self) -> Vec<usize> {
         let nw = N_INNER * self.inner.config().n_basis;
         let goal = nw + 1;
@@ -163,6 +206,10 @@ impl CartesianGeneralizer {
         rows.extend(goal..goal + 6);
         rows.extend(y0..y0 + 3);
         rows.extend(goal + 6..goal + 9);
+        if self.has_final_velocity() {
+            let gd = y0 + N_INNER;
+            rows.extend(gd..gd + 6);
+        }
         rows
     }
 
@@ -194,9 +241,13 @@ impl CartesianGeneralizer {
     pub fn config(&self) -> &DmpConfig {
         self.inner.config()
     }
-    /// `6 N + 1 + 12`.
+    /// `6 N + 1 + 12`, `+ 6` with final velocities.
     pub fn n_parameters(&self) -> usize {
-        6 * self.inner.config().n_basis + 1 + 12
+        6 * self.inner.config().n_basis + 1 + if self.has_final_velocity() { 18 } else { 12 }
+    }
+    /// Whether the final velocities are generalized ([`Self::with_final_velocity`]).
+    pub fn has_final_velocity(&self) -> bool {
+        self.inner.has_final_velocity()
     }
     pub fn tau_bounds(&self) -> (f64, f64) {
         self.inner.tau_bounds()
@@ -207,6 +258,15 @@ impl CartesianGeneralizer {
     /// The reference orientations of the tangent spaces (demonstration 0's goal and start).
     pub fn references(&self) -> (Quaternion, Quaternion) {
         (self.goal_ref, self.start_ref)
+    }
+}
+
+/// `dmp` reaching its goal with the first six entries of the inner DMP's final velocity
+/// `[v (3), omega (3), 0 (3)]`; unchanged without one.
+fn with_twist(dmp: CartesianDmp, gd: Option<&DVector<f64>>) -> Result<CartesianDmp> {
+    match gd {
+        Some(v) => dmp.with_final_velocity([v[0], v[1], v[2]], [v[3], v[4], v[5]]),
+        None => Ok(dmp),
     }
 }
 
@@ -223,6 +283,7 @@ fn at_tangent(v: &[f64; 3], reference: &Quaternion) -> Quaternion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dmp::FinalVelocity;
     use crate::generalize::LwrGpOptions;
 
     const N: usize = 300;
@@ -334,6 +395,88 @@ mod tests {
             assert!((got.weights() - want.weights()).amax() < 1e-5 * scale);
             assert!((got.tau() - want.tau()).abs() < 1e-5);
         }
+    }
+
+    /// Like [`demo`], but ending in motion: the profile's end slope is `end_rate` per unit of
+    /// `s`, so the pose ends with a query-dependent linear and angular velocity.
+    fn moving_demo(q: f64) -> (Vec<f64>, DMatrix<f64>) {
+        let tau = 1.0 + 0.3 * q;
+        let end_rate = 0.8 + 0.5 * q;
+        let t: Vec<f64> = (0..N).map(|j| tau * j as f64 / (N - 1) as f64).collect();
+        let pose = DMatrix::from_fn(7, N, |r, j| {
+            let s = j as f64 / (N - 1) as f64;
+            let a = 10.0 * s.powi(3) - 15.0 * s.powi(4)
+                + 6.0 * s.powi(5)
+                + end_rate * (s.powi(5) - s.powi(4));
+            let turn = [0.3 * q * a, 0.1, (1.0 + q) * a];
+            let h = quaternion::exp(&turn.map(|c| 0.5 * c));
+            match r {
+                0 => (1.0 + q) * a,
+                1 => 0.2 * q,
+                2 => 0.5 * a,
+                c => h[c - 3] * if q > 0.5 { -1.0 } else { 1.0 },
+            }
+        });
+        (t, pose)
+    }
+
+    fn pose_demo<'a>(t: &'a [f64], pose: &'a DMatrix<f64>) -> CartesianDemonstration<'a> {
+        CartesianDemonstration {
+            t,
+            pose: pose.as_view(),
+            velocity: None,
+            acceleration: None,
+            angular_velocity: None,
+            angular_acceleration: None,
+            normalize: false,
+        }
+    }
+
+    #[test]
+    fn with_final_velocity_reproduces_each_demos_own_fit_and_interpolates_the_twist() {
+        let qs = [0.0, 1.0];
+        let data: Vec<_> = qs.iter().map(|&q| moving_demo(q)).collect();
+        let demos: Vec<_> = data.iter().map(|(t, p)| pose_demo(t, p)).collect();
+        let queries: Vec<Vec<f64>> = qs.iter().map(|&q| vec![q]).collect();
+        let config = DmpConfig {
+            n_basis: 15,
+            ..DmpConfig::default()
+        };
+        let g = CartesianGeneralizer::with_final_velocity(&queries, &demos, config, Method::Linear)
+            .unwrap();
+        assert!(g.has_final_velocity());
+        assert_eq!(g.n_parameters(), 6 * 15 + 1 + 18);
+        let mut twists = Vec::new();
+        for (k, demo) in demos.iter().enumerate() {
+            let own = CartesianDmp::fit_with_final_velocity(demo, config, FinalVelocity::FromDemo)
+                .unwrap();
+            let got = g.predict(&[qs[k]]).unwrap();
+            let (want_v, got_v) = (own.final_velocity().unwrap(), got.final_velocity().unwrap());
+            assert_eq!(want_v, got_v, "demo {k}");
+            assert!(
+                want_v[3..].iter().any(|w| w.abs() > 0.1),
+                "the demo turns at its end"
+            );
+            // The orientation weights are fitted against the moving goal, as the own fit's.
+            assert!((got.weights() - own.weights()).amax() < 1e-11 * own.weights().amax());
+            assert!(angle(&got.goal_quaternion(), &own.goal_quaternion()) < 1e-15);
+            twists.push(want_v);
+        }
+        // "linear" is affine in the query: halfway, the mean twist, also in the parameters.
+        let mid = g.predict(&[0.5]).unwrap().final_velocity().unwrap();
+        let params = g.parameters(&[0.5]).unwrap();
+        for d in 0..6 {
+            let want = 0.5 * (twists[0][d] + twists[1][d]);
+            assert!((mid[d] - want).abs() < 1e-12, "coordinate {d}");
+            assert!(
+                (params[6 * 15 + 13 + d] - want).abs() < 1e-12,
+                "parameter {d}"
+            );
+        }
+        // Without final velocities the layout and the orientation weights are today's.
+        let plain = CartesianGeneralizer::new(&queries, &demos, config, Method::Linear).unwrap();
+        assert_eq!(plain.n_parameters(), 6 * 15 + 13);
+        assert!(plain.predict(&[0.5]).unwrap().final_velocity().is_none());
     }
 
     #[test]

@@ -278,9 +278,12 @@ pub struct PyCartesianGeneralizer {
 
 #[pymethods]
 impl PyCartesianGeneralizer {
-    /// `queries` `(M, n)`; `demos` a list of [`PoseDemoArrays`] with `pose` `(T, 7)`.
+    /// `queries` `(M, n)`; `demos` a list of [`PoseDemoArrays`] with `pose` `(T, 7)`;
+    /// `final_velocity`: each demo's last linear and angular velocity is its DMP's final
+    /// velocity, generalized.
     #[new]
-    #[pyo3(signature = (queries, demos, method, n_basis, constants, options))]
+    #[pyo3(signature = (queries, demos, method, n_basis, constants, options, final_velocity=false))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         queries: PyReadonlyArray2<'_, f64>,
@@ -289,6 +292,7 @@ impl PyCartesianGeneralizer {
         n_basis: usize,
         constants: Constants,
         options: GeneralizerOptions,
+        final_velocity: bool,
     ) -> PyResult<Self> {
         let method = parse_method(method, &options)?;
         let qs = parse_queries(&queries)?;
@@ -306,9 +310,12 @@ impl PyCartesianGeneralizer {
             });
         }
         let config = constants.config(n_basis);
-        let inner = py
-            .detach(|| CartesianGeneralizer::new(&qs, &views, config, method))
-            .py_err()?;
+        let build = if final_velocity {
+            CartesianGeneralizer::with_final_velocity
+        } else {
+            CartesianGeneralizer::new
+        };
+        let inner = py.detach(|| build(&qs, &views, config, method)).py_err()?;
         Ok(Self { inner })
     }
 
