@@ -36,6 +36,7 @@ from dmprs.reproduce.run import (
     pinned_numerics,
     prepare_pouring,
     run_learning,
+    seconds_left,
 )
 
 
@@ -63,7 +64,7 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
 
     ``progress(done, total, result)`` follows every run; ``part_done(part, elapsed, remaining)``
     every part as its last run finishes, with the job's elapsed seconds and an estimate of the
-    seconds left (the runs left at the pace so far). The report keeps each part's time
+    seconds left (:func:`~dmprs.reproduce.run.seconds_left`). The report keeps each part's time
     (``timing``: its runs, their summed run time, when it finished).
     """
     out = Path(out)
@@ -88,7 +89,9 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
         if left[part] == 0:
             parts[part].finished_at = round(elapsed, 1)
             if part_done:
-                part_done(parts[part], elapsed, elapsed / done[0] * (len(specs) - done[0]))
+                measured = {name: p.seconds for name, p in parts.items()}
+                finished = {name: p.runs - left[name] for name, p in parts.items()}
+                part_done(parts[part], elapsed, seconds_left(elapsed, measured, finished, left))
         if progress:
             progress(done[0], len(specs), r)
 

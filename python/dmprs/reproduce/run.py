@@ -6,7 +6,7 @@ import contextlib
 import importlib
 import os
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -99,6 +99,26 @@ def part_of(spec: Any) -> str:
 def longest_first(specs: list[Any]) -> list[int]:
     """The specs' indices, the longest runs first (:data:`RUN_SECONDS`), in plan order otherwise."""
     return sorted(range(len(specs)), key=lambda i: -RUN_SECONDS.get(part_of(specs[i]), 1.0))
+
+
+def seconds_left(elapsed: float, measured: Mapping[str, float], finished: Mapping[str, int],
+                 left: Mapping[str, int]) -> float:
+    """Wall-clock seconds the runs ``left`` (per part) should still take, after ``elapsed``
+    seconds in which each part's ``finished`` runs took ``measured`` seconds in the workers.
+
+    A run left is expected to take its part's mean so far, or :data:`RUN_SECONDS` while none
+    of its part's has finished; the elapsed time per worker-second so far turns that into
+    wall-clock time. The runs go longest first, so a count of runs alone would take the first,
+    slowest ones as the pace of all the rest.
+    """
+    def mean(part: str) -> float:
+        n = finished.get(part, 0)
+        return measured.get(part, 0.0) / n if n else RUN_SECONDS.get(part, 1.0)
+
+    done = sum(measured.values())
+    if done <= 0.0:
+        return 0.0
+    return elapsed / done * sum(n * mean(part) for part, n in left.items() if n > 0)
 
 
 def dispatch(spec: Any) -> dict[str, Any]:
