@@ -131,3 +131,34 @@ def test_bad_options_are_refused_by_name() -> None:
         split(Trajectory(short.t[:500], short.y[:500]))
     with pytest.raises(InvalidInputError, match="dmp"):
         braking(np.zeros(7))
+
+
+def test_the_reproduction_part_puts_todays_throw_beside_the_final_velocity_throw() -> None:
+    """The part repeats the throwing part's baskets with the final-velocity throw; its table reads
+    today's trials from the throwing part's runs of the same reproduction, basket for basket, and
+    it comes after every earlier part.
+    """
+    from dmprs.reproduce import release_throwing, throwing
+    from dmprs.reproduce.parts import BY_KIND, PARTS
+    from dmprs.reproduce.run import dispatch
+
+    assert PARTS[-1] is release_throwing.PART and BY_KIND[release_throwing.KIND] is release_throwing.PART
+    assert [p.kind for p in PARTS[:-1]] == ["growing", "noisy", "throwing", "juggling", "online", "versus"]
+    mine, theirs = release_throwing.plan_release(quick=True), throwing.plan_throwing(quick=True)
+    assert [(s.target, s.region, s.generalizer, s.learner, s.tol) for s in mine] == \
+        [(s.target, s.region, s.generalizer, s.learner, s.tol) for s in theirs]
+    results = [dispatch(s) for s in theirs + mine]
+    assert {r["kind"] for r in results} == {"throwing", release_throwing.KIND}
+    data = release_throwing.summarize_release(results)
+    for row in data["rows"]:
+        today = [r["trials_to_success"] for r in results if r["kind"] == "throwing" and r["region"] == row["region"]]
+        final = [r["trials_to_success"] for r in results
+                 if r["kind"] == release_throwing.KIND and r["region"] == row["region"]]
+        assert row["today"]["runs"] == len(today) and row["today"]["successes"] == sum(v is not None for v in today)
+        assert row["final_velocity"]["runs"] == len(final)
+    assert 0.0 < data["demos"]["max_shift"] < 0.04
+    md = release_throwing.markdown_release(data)
+    assert "| today's throw | final-velocity throw |" in md and "not run" not in md
+    alone = release_throwing.summarize_release([r for r in results if r["kind"] != "throwing"])
+    assert all(row["today"] is None for row in alone["rows"])
+    assert "not run" in release_throwing.markdown_release(alone)
