@@ -213,9 +213,29 @@ def test_without_final_velocities_the_generalizer_is_todays():
     today = dmprs.Generalizer(db, "linear", 30)
     assert today.n_parameters == 30 + 1 + 2
     np.testing.assert_array_equal(today.predict([1.25]).final_velocity, [0.0])
-    for refused in ({"final_velocity": 1}, {"final_velocity": True}):  # the latter needs a triangulation
-        with pytest.raises(InvalidInputError, match="final_velocity"):
-            dmprs.Generalizer(db, "linear", 30, **refused)
+    with pytest.raises(InvalidInputError, match="final_velocity"):
+        dmprs.Generalizer(db, "linear", 30, final_velocity=1)
+
+
+def test_the_triangulation_generalizes_final_velocities_as_the_core():
+    """Piecewise-linear (more than n + 1 demos, or triangulate=True) blends the final velocity
+    with the other parameters: on two demos it is the core's "linear", to rounding; on three it
+    reproduces each demo's and is affine between them.
+    """
+    two = throws([0.5, 1.5])
+    core = dmprs.Generalizer(two, "linear", 30, final_velocity=True)
+    tri = dmprs.Generalizer(two, "linear", 30, final_velocity=True, triangulate=True)
+    assert tri.n_parameters == core.n_parameters == 30 + 1 + 3
+    for q in ([0.5], [1.0], [1.7]):
+        np.testing.assert_allclose(tri.parameters(q), core.parameters(q), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(tri.predict(q).final_velocity, core.predict(q).final_velocity, rtol=1e-12)
+    three = throws([0.5, 1.0, 1.5])
+    gen = dmprs.Generalizer(three, "linear", 30, final_velocity=True)
+    for demo in three:
+        own = dmprs.DMP.fit(demo.trajectory.t, demo.trajectory.y, 30, final_velocity="demo")
+        np.testing.assert_array_equal(gen.predict(demo.query).final_velocity, own.final_velocity)
+    np.testing.assert_allclose(gen.predict([1.25]).final_velocity, [1.25], atol=1e-3)
+    np.testing.assert_array_equal(dmprs.Generalizer(three, "linear", 30).predict([1.25]).final_velocity, [0.0])
 
 
 def test_via_points_keep_the_final_velocity():

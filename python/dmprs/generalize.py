@@ -241,20 +241,16 @@ class Generalizer:
             return
         alpha_x = 2.0 if alpha_x is None else alpha_x
         if method == "linear" and (triangulate or (triangulate is None and _needs_triangulation(db.queries))):
-            if final_velocity:
-                raise InvalidInputError(
-                    f"final_velocity=True with method 'linear' over {len(db)} demonstrations needs a "
-                    "triangulation, which does not generalize final velocities yet; use at most "
-                    f"{db.queries.shape[1] + 1} distinct queries or method 'lwr-gp'")
             if db.is_cartesian:
                 raise InvalidInputError(
                     f"method 'linear' over {len(db)} pose demonstrations needs a triangulation, which "
                     f"is implemented for joint-space demonstrations only; use at most "
                     f"{db.queries.shape[1] + 1} distinct queries or method 'lwr-gp'")
             dmps = [DMP.fit(tr.t, tr.y, as_count(n_basis, "n_basis", 2), tr.yd, tr.ydd, alpha_z=alpha_z,
-                            beta_z=beta_z, alpha_x=alpha_x, width_factor=width_factor)
+                            beta_z=beta_z, alpha_x=alpha_x, width_factor=width_factor,
+                            final_velocity="demo" if final_velocity else None)
                     for tr in (d.trajectory for d in db) if isinstance(tr, Trajectory)]
-            self._core = PiecewiseLinear(db.queries, dmps)
+            self._core = PiecewiseLinear(db.queries, dmps, final_velocity)
             return
         n = as_count(n_basis, "n_basis", 2)
         constants = _constants(alpha_z, beta_z, alpha_x, width_factor)

@@ -3,7 +3,8 @@
 demos for an n-D query.
 
 Each demo is a DMP parameter vector ``theta_k = [w, tau, g, y0]`` (a periodic DMP's
-``[w, tau, g, r, y0]``, with its amplitude r) at its query ``q_k``. The
+``[w, tau, g, r, y0]``, with its amplitude r; with final velocities ``[w, tau, g, y0, gd]``, the
+core's order, docs/method.md §2.8) at its query ``q_k``. The
 queries are triangulated (1-D: sorted intervals; n-D: the Delaunay triangulation of
 :class:`scipy.spatial.Delaunay`) and inside a simplex with vertices ``q_0 .. q_n``
 
@@ -47,28 +48,37 @@ TAU_LOW, TAU_HIGH = 0.2, 5.0
 LOCAL_SEARCH_FROM = 256
 
 
-def _flatten(dmp: DMP | PeriodicDMP) -> NDArray[np.float64]:
-    """``[w, tau, g, y0]``; a periodic DMP's amplitude comes after its baseline g."""
+def _flatten(dmp: DMP | PeriodicDMP, final_velocity: bool = False) -> NDArray[np.float64]:
+    """``[w, tau, g, y0]``; a periodic DMP's amplitude comes after its baseline g; with
+    ``final_velocity``, a discrete DMP's final velocity gd last.
+    """
     amplitude = [dmp.amplitude] if isinstance(dmp, PeriodicDMP) else []
-    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, *amplitude, dmp.start])
+    velocity = [dmp.final_velocity] if final_velocity and isinstance(dmp, DMP) else []
+    return np.concatenate([dmp.weights.ravel(), [dmp.tau], dmp.goal, *amplitude, dmp.start, *velocity])
 
 
 class PiecewiseLinear:
     """The generalizer with the core ``Generalizer``'s interface (``predict``, ``parameters``,
     ``jacobian``, ...; DMPs as core objects), over ``queries`` (M, n) and the demos' fitted
-    DMPs (all discrete or all periodic), so :class:`dmprs.Generalizer` can hold either.
+    DMPs (all discrete or all periodic), so :class:`dmprs.Generalizer` can hold either. With
+    ``final_velocity`` (discrete DMPs only) each demo's final velocity is blended with the other
+    parameters and the predicted DMPs reach their goals with it.
     """
 
     method = "linear"
 
-    def __init__(self, queries: NDArray[np.float64], demo_dmps: Sequence[DMP] | Sequence[PeriodicDMP]) -> None:
+    def __init__(self, queries: NDArray[np.float64], demo_dmps: Sequence[DMP] | Sequence[PeriodicDMP],
+                 final_velocity: bool = False) -> None:
         queries = np.asarray(queries, dtype=np.float64)
         if queries.ndim != 2 or queries.shape[0] != len(demo_dmps):
             raise InvalidInputError(f"queries has shape {queries.shape}; expected ({len(demo_dmps)}, n)")
         self._dmps: list[DMP | PeriodicDMP] = list(demo_dmps)
         self._queries = queries
         self._template: DMP | PeriodicDMP = self._dmps[0]
-        thetas = np.array([_flatten(d) for d in self._dmps])
+        if final_velocity and not isinstance(self._template, DMP):
+            raise InvalidInputError("final_velocity=True blends discrete DMPs only (docs/method.md §2.8)")
+        self._final_velocity = bool(final_velocity)
+        thetas = np.array([_flatten(d, self._final_velocity) for d in self._dmps])
         nodes, inverse = np.unique(queries, axis=0, return_inverse=True)
         if len(nodes) < 2:
             raise InvalidInputError(
@@ -180,7 +190,9 @@ class PiecewiseLinear:
         return as_query(q, "q", names)
 
     def parameters(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``[w.ravel(), tau, goal, y0]`` at ``q``, without the tau check."""
+        """``[w.ravel(), tau, goal, y0]`` (``[..., y0, gd]`` with final velocities) at ``q``,
+        without the tau check.
+        """
         q = self._check_query(q)
         idx, b = self._coordinates(q)
         with np.errstate(all="ignore"):
@@ -215,8 +227,10 @@ class PiecewiseLinear:
                     "is too far from the demonstrations")
             return PeriodicDMP(w, goal, theta[d * n + 1 + 2 * d:], tau, amplitude=amplitude, alpha_z=t.alpha_z,
                                beta_z=t.beta_z, width_factor=t.width_factor)._core
-        return DMP(w, goal, theta[d * n + 1 + d:], tau, alpha_z=t.alpha_z, beta_z=t.beta_z, alpha_x=t.alpha_x,
-                   width_factor=t.width_factor)._core
+        start = theta[d * n + 1 + d: d * n + 1 + 2 * d]
+        velocity = theta[d * n + 1 + 2 * d:] if self._final_velocity else None
+        return DMP(w, goal, start, tau, alpha_z=t.alpha_z, beta_z=t.beta_z, alpha_x=t.alpha_x,
+                   width_factor=t.width_factor, final_velocity=velocity)._core
 
     def jacobian(self, q: NDArray[np.float64], rel_step: float) -> NDArray[np.float64]:
         """Central differences, step ``rel_step x`` the demos' query range per dimension (as the
@@ -266,8 +280,10 @@ class PiecewiseLinear:
 
     @property
     def n_parameters(self) -> int:
-        """Length of the parameter vector (weights, tau, goal, start; a periodic DMP's amplitude too)."""
-        return len(_flatten(self._template))
+        """Length of the parameter vector (weights, tau, goal, start; a periodic DMP's amplitude too,
+        the final velocity with ``final_velocity``).
+        """
+        return len(_flatten(self._template, self._final_velocity))
 
     @property
     def tau_bounds(self) -> tuple[float, float]:

@@ -1,8 +1,10 @@
 """Throwing into a basket with the 7-DOF arm in MuJoCo, a 2-D query (docs/throwing.md): five
 scripted demonstration throws labelled with where they landed, generalized over the landing point
 (x, y) with ``"linear"`` (piecewise linear on the Delaunay triangulation of the five landing
-points), ``"lwr-gp"`` or ``"lwr-gp-affine"``, learned with the n-D query learners. Needs the
-``robot`` extra.
+points), ``"lwr-gp"`` or ``"lwr-gp-affine"``, learned with the n-D query learners. With
+``release=True`` the final-velocity throw: each demonstration up to its release, a DMP with a
+final velocity generalized with the rest, and a braking movement after it
+(:mod:`dmprs.tasks.arm_throwing.release`). Needs the ``robot`` extra.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from dmprs.dmp import DMP
 from dmprs.errors import DmprsError, InvalidInputError
 from dmprs.experiments.base import ExperimentSetup, LearnerSettings, build, ros2_domain
 from dmprs.tasks.arm_throwing import DEMOS, SUCCESS_TOLERANCE, ArmThrowing, throw_trajectory
+from dmprs.tasks.arm_throwing.release import split
 from dmprs.tasks.noise import Noise
 from dmprs.trajectory import Trajectory
 
@@ -39,19 +42,27 @@ SETTINGS = LearnerSettings(weight_scale=0.3, probe=0.05, trust_radius=0.5, weigh
                            cma_sigma=0.1)
 
 
-@functools.lru_cache(maxsize=2)
-def demonstrations(n_basis: int = N_BASIS) -> tuple[tuple[NDArray[np.float64], Trajectory], ...]:
+@functools.lru_cache(maxsize=4)
+def demonstrations(n_basis: int = N_BASIS, release: bool = False) -> tuple[tuple[NDArray[np.float64], Trajectory], ...]:
     """((landing point, scripted joint trajectory), ...) for :data:`~dmprs.tasks.arm_throwing.DEMOS`.
     The label is **measured**: where the ball lands when the arm executes the demonstration's DMP
     (``n_basis`` kernels, the DMP every generalizer returns at the demo's own query), noise off.
+    With ``release=True`` the trajectory is the scripted throw up to its release
+    (:func:`~dmprs.tasks.arm_throwing.release.split`) and its DMP has the release velocity as its
+    final velocity; the arm executes it with its braking (:meth:`ArmThrowing.trajectory`).
     Raises if a demonstration does not land.
     """
+    if not isinstance(release, bool):
+        raise InvalidInputError(f"release = {short(release)} is invalid: use True or False")
     task = ArmThrowing()
     out = []
     with task.adapter as adapter:
         for strength, yaw in DEMOS:
             scripted = throw_trajectory(strength, yaw)
-            dmp = DMP.fit(scripted.t, scripted.y, n_basis, scripted.yd, scripted.ydd)
+            if release:
+                scripted = split(scripted)[0]
+            dmp = DMP.fit(scripted.t, scripted.y, n_basis, scripted.yd, scripted.ydd,
+                          final_velocity="demo" if release else None)
             adapter.reset(seed=0)
             outcome = adapter.execute(task.trajectory(dmp))
             if not outcome.ok:
@@ -65,7 +76,7 @@ def demonstrations(n_basis: int = N_BASIS) -> tuple[tuple[NDArray[np.float64], T
 
 def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: float = SUCCESS_TOLERANCE,
           noise: Noise | None = None, n_basis: int = N_BASIS, max_trials: int = 50, robot: str = "sim",
-          domain_id: int | None = None) -> ExperimentSetup:
+          domain_id: int | None = None, release: bool = False) -> ExperimentSetup:
     """Throw the ball into a basket at ``target`` = (x, y) m on the floor (docs/throwing.md).
 
     Five scripted throws labelled with their measured landing points; ``generalizer``:
@@ -78,10 +89,15 @@ def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: floa
     m) for the trials; the demonstrations are measured without it. ``robot``: ``"sim"`` (the
     scene in this process) or ``"ros2"`` (a ROS 2 robot on ``domain_id``, e.g. ``dmprs robot
     serve arm-throwing``, through :func:`dmprs.ros2.served.throwing_adapter`; needs the ``ros2``
-    extra); the demonstrations are measured in the scene either way.
+    extra); the demonstrations are measured in the scene either way. ``release``: the
+    final-velocity throw (docs/throwing.md): the demonstrations up to their release, generalized
+    with their release velocities (``Generalizer(..., final_velocity=True)``), each generalized
+    DMP executed with its braking movement.
     """
     if not isinstance(generalizer, str) or generalizer not in GENERALIZERS:
         raise InvalidInputError(f"generalizer = {short(generalizer)} is invalid: use one of {tuple(GENERALIZERS)}")
+    if not isinstance(release, bool):
+        raise InvalidInputError(f"release = {short(release)} is invalid: use True or False")
     n_basis = as_count(n_basis, "n_basis", 2)
     settings = dataclasses.replace(SETTINGS, max_trials=as_count(max_trials, "max_trials", 1))
     task = ArmThrowing(tol, noise=noise)
@@ -93,5 +109,6 @@ def setup(target: ArrayLike = (1.0, 0.0), generalizer: str = "linear", tol: floa
         from dmprs.ros2.served import throwing_adapter
 
         task.adapter = throwing_adapter(domain)
-    return build(task, lambda: demonstrations(n_basis), target, generalizer={"n_basis": n_basis, **GENERALIZERS[generalizer]},
+    options = {"n_basis": n_basis, **GENERALIZERS[generalizer], **({"final_velocity": True} if release else {})}
+    return build(task, lambda: demonstrations(n_basis, release), target, generalizer=options,
                  paper_learner="secant", learner_names=LEARNER_NAMES, settings=settings, desired_name="target")

@@ -17,6 +17,8 @@ from typing import Any
 from dmprs._io import strict_json, write_atomic
 from dmprs.errors import InvalidInputError
 from dmprs.reproduce.check import without_timings
+from dmprs.reproduce.release_throwing import KIND as RELEASE_KIND
+from dmprs.reproduce.release_throwing import markdown_release
 from dmprs.reproduce.stats import cell
 from dmprs.reproduce.versus_bo import markdown_versus
 
@@ -148,9 +150,20 @@ def versus_bo(summary: dict[str, Any]) -> str:
     return markdown_versus(_section(summary, "versus"))
 
 
+def throwing_release(summary: dict[str, Any]) -> str:
+    """docs/throwing.md's final-velocity throw beside today's, as the report gives it; a note
+    while the summary predates that part.
+    """
+    for s in summary.get("sections", []):
+        if s["kind"] == RELEASE_KIND:
+            return markdown_release(s["data"])
+    return (f"*The stored summary has no {RELEASE_KIND!r} section yet: a full `dmprs reproduce --update-docs .` "
+            "writes this table.*\n")
+
+
 #: every table a Markdown file may hold, by the name its :data:`BEGIN` line gives
 TABLES: dict[str, Callable[[dict[str, Any]], str]] = {"readme": readme, "arm-pouring": arm_pouring,
-                                                      "versus-bo": versus_bo}
+                                                      "versus-bo": versus_bo, "throwing-release": throwing_release}
 
 
 def render(text: str, summary: dict[str, Any]) -> str:

@@ -56,7 +56,7 @@ class ThrowingSpec:
     def label(self) -> str:
         """The run's name in progress lines and errors."""
         noise = "" if self.noise_seed is None else f" / noise seed {self.noise_seed}"
-        return f"throwing {self.region} {self.target} / {self.generalizer} / {self.learner} / tol {self.tol}{noise}"
+        return f"{self.kind} {self.region} {self.target} / {self.generalizer} / {self.learner} / tol {self.tol}{noise}"
 
 
 def baskets(n: int, seed: int = 0) -> dict[str, list[tuple[float, float]]]:
@@ -101,20 +101,22 @@ def plan_throwing(quick: bool = False) -> list[ThrowingSpec]:
     return specs
 
 
-def run_throwing(spec: ThrowingSpec) -> dict[str, Any]:
-    """Learns ``spec``; plain data (every trial's query, landing and error)."""
+def run_throwing(spec: ThrowingSpec, release: bool = False) -> dict[str, Any]:
+    """Learns ``spec``; plain data (every trial's query, landing and error). ``release``: the
+    final-velocity throw (``arm_throwing.setup(..., release=True)``, :mod:`dmprs.reproduce.release_throwing`).
+    """
     noise = None if spec.noise_seed is None else Noise(execution=NOISE[0], measurement=NOISE[1])
-    setup = arm_throwing.setup(spec.target, spec.generalizer, tol=spec.tol, noise=noise)
+    setup = arm_throwing.setup(spec.target, spec.generalizer, tol=spec.tol, noise=noise, release=release)
     r = learn(setup.task, setup.generalizer, setup.desired_query, setup.make_learner(spec.learner),
               max_trials=spec.max_trials, seed=0 if spec.noise_seed is None else 1000 * spec.noise_seed)
     trials = [{"query": t.query.tolist(), "status": t.status, "success": t.success,
                "landing": None if "landing_x" not in t.signals else [t.signals["landing_x"], t.signals["landing_y"]],
                "miss": None if t.eps is None else norm(t.eps)} for t in r.trials]
-    return {"kind": "throwing", "target": list(spec.target), "region": spec.region,
+    return {"kind": spec.kind, "target": list(spec.target), "region": spec.region,
             "generalizer": spec.generalizer, "learner": spec.learner, "noise_seed": spec.noise_seed,
             "noise": None if noise is None else list(NOISE), "tol": spec.tol, "max_trials": spec.max_trials,
             "converged": r.converged, "trials_to_success": r.trials_to_success, "stop_reason": r.stop_reason,
-            "demos": [label.tolist() for label, _ in arm_throwing.demonstrations()], "trials": trials}
+            "demos": [label.tolist() for label, _ in arm_throwing.demonstrations(release=release)], "trials": trials}
 
 
 def summarize_throwing(results: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -8,6 +8,8 @@ ball lands on the floor (x, y), m (:mod:`dmprs.sim.throw_scene`, docs/throwing.m
 * :class:`ArmThrowing` scores it: ``eps = target - landing`` (m), success within 5 cm.
 * :func:`throw_trajectory` is the scripted demonstrator (base turn, then a minimum-jerk swing of
   A2, A4, A6); :data:`DEMOS` the demonstrations' (strength, yaw).
+* :mod:`dmprs.tasks.arm_throwing.release`: the final-velocity throw, a throw split at its release
+  into a DMP with a final velocity and a braking movement (docs/throwing.md).
 """
 
 from dmprs.tasks.arm_throwing.adapter import CONTROL_PERIOD, ArmThrowingAdapter

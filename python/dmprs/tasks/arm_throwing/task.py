@@ -4,17 +4,25 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmprs._arrays import as_scalar
 from dmprs.adapters import Outcome
+from dmprs.dmp import DMP
 from dmprs.errors import InvalidInputError
 from dmprs.portable import norm
 from dmprs.sim.throw_scene import reach
 from dmprs.tasks.arm_throwing.adapter import ArmThrowingAdapter
+from dmprs.tasks.arm_throwing.release import release_sequence
 from dmprs.tasks.base import Task
 from dmprs.tasks.noise import Noise
+
+if TYPE_CHECKING:
+    from dmprs.generalize import GeneralizedDMP
+    from dmprs.trajectory import AnyTrajectory
 
 #: m: a throw hits the basket when it lands within this of the target (a basket 10 cm across)
 SUCCESS_TOLERANCE = 0.05
@@ -26,7 +34,9 @@ class ArmThrowing(Task):
     Query: the landing point (x, y) in m; ``eps = target - landing`` (``sign = +1``: the query is
     in outcome units, as for the matchbox); success when the landing is within ``tol`` (5 cm) of
     the target (the Euclidean distance, a round basket); a target the ball cannot reach is refused
-    (:meth:`validate_query`). ``noise`` goes to the adapter.
+    (:meth:`validate_query`). ``noise`` goes to the adapter. A DMP with a final velocity is the
+    movement up to the release of the final-velocity throw: :meth:`trajectory` appends its
+    braking (:mod:`dmprs.tasks.arm_throwing.release`).
     """
 
     name = "arm-throwing"
@@ -51,6 +61,15 @@ class ArmThrowing(Task):
                 f"at most a {span.release_speed:.3g} m/s release, the iiwa's joint speed limits, from "
                 f"{span.release_height:.3g} m up, without drag)")
         return q
+
+    def trajectory(self, dmp: GeneralizedDMP) -> AnyTrajectory:
+        """The rollout of ``dmp`` at the adapter's control period; a DMP with a final velocity
+        (the final-velocity throw up to its release) hands over to its braking movement, and the
+        :class:`dmprs.Sequence` of both is rolled out (:func:`~dmprs.tasks.arm_throwing.release.release_sequence`).
+        """
+        if isinstance(dmp, DMP) and np.any(dmp.final_velocity != 0.0):
+            return release_sequence(dmp).rollout(dt=self.adapter.spec.control_period)
+        return super().trajectory(dmp)
 
     def measure(self, outcome: Outcome) -> NDArray[np.float64]:
         """The landing point (x, y) in m."""
