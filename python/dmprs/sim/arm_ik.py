@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmprs import _core
-from dmprs.portable import norm
+from dmprs.portable import matvec_rows, norm
 from dmprs.sim import arm_model
 
 #: damping lambda of the least-squares step (m or rad): small enough not to slow convergence
@@ -81,13 +81,21 @@ class ArmKinematics:
         self._mj.mju_mat2Quat(self._quat, self.data.site_xmat[self.site])
         return np.concatenate([self.data.site_xpos[self.site], self._quat])
 
-    def error_and_jacobian(self, q: NDArray[np.float64], target: NDArray[np.float64],
-                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The pose error e (6,) of ``q`` against ``target`` and the Jacobian J (6, 7)."""
+    def jacobian(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The mouth's Jacobian J (6, 7) at ``q``: its linear, then its angular velocity (world
+        frame) per unit of joint velocity.
+        """
         mj, m, d = self._mj, self.model, self.data
         self._set(q)
         mj.mj_comPos(m, d)
         mj.mj_jacSite(m, d, self._jacp, self._jacr, self.site)
+        return np.ascontiguousarray(np.vstack([self._jacp[:, :7], self._jacr[:, :7]]))
+
+    def error_and_jacobian(self, q: NDArray[np.float64], target: NDArray[np.float64],
+                           ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The pose error e (6,) of ``q`` against ``target`` and the Jacobian J (6, 7)."""
+        mj, d = self._mj, self.data
+        jac = self.jacobian(q)
         xmat = d.site_xmat[self.site]
         mj.mju_mat2Quat(self._quat, xmat)
         mj.mju_subQuat(self._err, np.ascontiguousarray(target[3:]), self._quat)  # in the site frame
@@ -95,7 +103,7 @@ class ArmKinematics:
         e = np.empty(6)
         e[:3] = target[:3] - d.site_xpos[self.site]
         e[3:] = self._rot_err
-        return e, np.ascontiguousarray(np.vstack([self._jacp[:, :7], self._jacr[:, :7]]))
+        return e, jac
 
     def limit_gradient(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """grad H of the joint-limit cost H = 1/2 sum ((q - middle) / half_range)^2."""
@@ -135,15 +143,39 @@ class ArmKinematics:
         rot_err = np.empty(n)
         q = np.array(q0, dtype=float)
         for k in range(n):
-            dt = float(t[k] - t[k - 1]) if k else 0.0
-            for i in range(max_steps):
-                q_next, e = self.step(q, poses[k], null_step=LIMIT_GAIN * dt if i == 0 else 0.0)
-                pe, re = norm(e[:3]), norm(e[3:])
-                if pe < POSITION_TOL and re < ORIENTATION_TOL and i > 0:
-                    break
-                q = q_next
-            else:
-                e, _ = self.error_and_jacobian(q, poses[k])
-                pe, re = norm(e[:3]), norm(e[3:])
-            q_out[k], pos_err[k], rot_err[k] = q, pe, re
+            q, pos_err[k], rot_err[k] = self.follow(q, poses[k], float(t[k] - t[k - 1]) if k else 0.0,
+                                                    max_steps=max_steps)
+            q_out[k] = q
         return IKResult(np.asarray(t, dtype=float), q_out, pos_err, rot_err)
+
+    def follow(self, q: NDArray[np.float64], target: NDArray[np.float64], dt: float, *, max_steps: int = 4,
+               ) -> tuple[NDArray[np.float64], float, float]:
+        """One sample of :meth:`track`: the joint positions reaching ``target`` from the previous
+        sample's ``q``, ``dt`` s before (the first step descends the limit cost for that long),
+        with their position (m) and orientation (rad) errors.
+        """
+        for i in range(max_steps):
+            q_next, e = self.step(q, target, null_step=LIMIT_GAIN * dt if i == 0 else 0.0)
+            pe, re = norm(e[:3]), norm(e[3:])
+            if pe < POSITION_TOL and re < ORIENTATION_TOL and i > 0:
+                break
+            q = q_next
+        else:
+            e, _ = self.error_and_jacobian(q, target)
+            pe, re = norm(e[:3]), norm(e[3:])
+        return q, pe, re
+
+    def joint_velocity(self, q: NDArray[np.float64], twist: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The joint velocity (7,) that moves the mouth at ``twist`` (6,: linear, then angular,
+        world frame) from ``q``: :meth:`step` per unit of time, the damped least-squares solution
+        of ``J qd = twist`` with the limit cost descended at :data:`LIMIT_GAIN` in the null space,
+        so that following a pose stream with :meth:`follow` moves the joints at this velocity.
+        """
+        return _core.dls_step(self.jacobian(q), np.ascontiguousarray(twist, dtype=np.float64),
+                              -LIMIT_GAIN * self.limit_gradient(q), DAMPING)
+
+    def twist(self, q: NDArray[np.float64], qd: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The mouth's velocity (6,: linear, then angular, world frame) at joint positions ``q``
+        moving at ``qd``: ``J qd``, summed in joint order (no BLAS, as the step).
+        """
+        return matvec_rows(np.asarray(qd, dtype=np.float64)[None, :], self.jacobian(q))[0]
