@@ -12,7 +12,8 @@ bottle holds (:mod:`dmprs.sim.arm_scene`, model in :mod:`dmprs.sim.arm_model`, d
 * :class:`ArmPouring` scores it like the 2-D :class:`~dmprs.tasks.pouring.Pouring`: query = the
   (assumed) bottle volume in l, ``eps = V_poured - V*`` (``sign = -1``).
 * :func:`pour_poses` is the scripted "kinesthetic" demonstrator: reach over the glass, tilt about
-  the mouth, hold, tilt back, as a pose trajectory; :func:`calibrate_peak_tilt` finds the peak
+  the mouth, hold, tilt back, as a pose trajectory (:func:`pour_and_return_poses`: and back home,
+  the phases overlapping); :func:`calibrate_peak_tilt` finds the peak
   tilt that pours a given volume with the library's Illinois root finder.
 """
 
@@ -27,6 +28,8 @@ from dmprs.tasks.arm_pouring.demonstrator import (
     DEMO_VOLUMES,
     POUR_POSITION,
     demonstration_tangent,
+    pour_and_return_cuts,
+    pour_and_return_poses,
     pour_poses,
 )
 from dmprs.tasks.arm_pouring.poses import pose_to_tangent, tangent_to_pose
@@ -48,6 +51,8 @@ __all__ = [
     "calibrate_peak_tilt",
     "demonstration_tangent",
     "pose_to_tangent",
+    "pour_and_return_cuts",
+    "pour_and_return_poses",
     "pour_poses",
     "poured_volume",
     "tangent_to_pose",
