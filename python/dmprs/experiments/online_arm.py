@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -90,7 +90,27 @@ class ServoRun:
         return float(np.abs(self.q[1:] - self.command[:-1]).max())
 
 
-def run_servo(model: Any, data: Any, stepper: JointStepper, *, end_phase: float = 0.0, after_end: float = 0.0,
+class ServoStepper(Protocol):
+    """What :func:`run_servo` drives: a :class:`~dmprs.stepper.JointStepper`, or anything with its
+    period, phase, ``step(measured)`` giving the joint command and velocity first, and ``done``.
+    """
+
+    @property
+    def dt(self) -> float:
+        """The control period (s)."""
+
+    @property
+    def phase(self) -> float:
+        """The phase of the movement that runs."""
+
+    def step(self, measured: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64], Any]:
+        """The next command ``(q, qd, ...)`` given the measured joint positions."""
+
+    def done(self) -> bool:
+        """Whether the movement has ended."""
+
+
+def run_servo(model: Any, data: Any, stepper: ServoStepper, *, end_phase: float = 0.0, after_end: float = 0.0,
               before_step: Callable[[float], None] | None = None,
               stop: Callable[[], bool] | None = None, max_time: float = MAX_TIME) -> ServoRun:
     """Runs the servo loop from ``data``'s state: each physics step asks ``stepper.step`` for the
@@ -219,10 +239,17 @@ def held_pour(dmp: DMP, *, alpha_e: float, hold: tuple[float, float] | None = (H
     stepper = dmp.stepper(model.opt.timestep, alpha_e=alpha_e)
     run = run_servo(model, data, stepper, end_phase=math.exp(-dmp.alpha_x), after_end=POUR_SETTLE,
                     before_step=before_step)
-    mujoco.mj_kinematics(model, data)
-    n_glass = int(granular.in_glass(data.qpos[7:].reshape(n, 7)[:, :3]).sum())
+    n_glass = spheres_in_glass(model, data, n)
     drift = float(np.abs(np.array(held) - held[0]).max()) if held else 0.0
     return PourRun(run, n_glass, n_glass * PARTICLE_VOLUME, drift, hold)
+
+
+def spheres_in_glass(model: Any, data: Any, n: int) -> int:
+    """How many of the ``n`` spheres of the liquid scene's ``data`` are in the glass now."""
+    import mujoco
+
+    mujoco.mj_kinematics(model, data)
+    return int(granular.in_glass(data.qpos[7:].reshape(n, 7)[:, :3]).sum())
 
 
 # --- b) the moving basket --------------------------------------------------------------------------
