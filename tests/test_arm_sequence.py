@@ -7,6 +7,8 @@ where the same movements with stops rest, and a pour within the task's tolerance
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -16,6 +18,7 @@ from dmprs.experiments import arm_sequence as asq
 from dmprs.experiments import online_arm as oa
 from dmprs.portable import norms
 from dmprs.profiles import min_jerk
+from dmprs.reproduce import arm_sequence as part
 from dmprs.sim import arm_model as am
 from dmprs.sim.arm_ik import ArmKinematics
 from dmprs.sim.arm_scene import HOME_POSE
@@ -151,6 +154,26 @@ def test_the_joint_commands_are_the_poses_through_the_ik(runs) -> None:
     central = (q[2:] - q[:-2]) / (2 * DT)
     assert np.abs(central - qd[1:-1]).max() < 0.01 * np.abs(qd).max()
     assert (np.abs(qd) < np.asarray(am.VELOCITY_LIMITS)).all()
+
+
+def test_the_part_reports_the_truths_and_fails_a_sequence_that_stops(runs) -> None:
+    from dmprs.reproduce.parts import BY_KIND, PARTS
+
+    assert PARTS[-1] is part.PART and BY_KIND[part.KIND] is part.PART
+    assert [(s.execution, s.liquid_seed) for s in part.plan_sequence(quick=True)] == [("sequence", 0), ("stops", 0)]
+    results = [{**part.result_of(run, part.SequenceSpec(name)), "kind": part.KIND} for name, run in runs.items()]
+    rows = part.summarize_sequence(results)
+    assert [r["execution"] for r in rows] == ["sequence", "stops"] and rows[0]["met"] is True
+    assert rows[0]["acceleration_change"][0] <= rows[0]["acceleration_change_inside"][0]
+    md = part.markdown_sequence(rows)
+    assert md.count("\n") == 4 and "| yes |" in md
+    stopped = copy.deepcopy(results[0])
+    for join in stopped["joins"]:
+        join["commanded"] = join["measured"] = [0.0, 0.0]
+    assert not part.held(stopped)
+    rough = copy.deepcopy(results[0])
+    rough["joins"][0]["velocity_step"] = 1e-3
+    assert not part.held(rough)
 
 
 def test_bad_input_is_refused_by_name() -> None:

@@ -24,8 +24,8 @@ PORTABLE_BLAS_KERNEL = "Prescott"
 #: s: roughly how long one run of a part takes (the report's "Where the time went"), so that the
 #: longest runs go to the workers first and no worker is left with a long one at the end; a part
 #: not listed counts as one second. Only the order of the runs depends on it, never a result.
-RUN_SECONDS = {"arm_pouring": 30.0, "growing": 17.0, "pouring": 5.0, "versus": 5.0, "online": 2.0,
-               "noisy": 1.0, "baselines": 0.5}
+RUN_SECONDS = {"arm_pouring": 30.0, "growing": 17.0, "pouring": 5.0, "versus": 5.0, "arm-sequence": 5.0,
+               "online": 2.0, "noisy": 1.0, "baselines": 0.5}
 
 
 def _numpy_dispatch_targets() -> str:
