@@ -1,4 +1,4 @@
-"""Reproduction part "the final-velocity throw beside today's" (issue 41): the arm learns the same
+"""Reproduction part "the final-velocity throw beside today's": the arm learns the same
 unseen baskets as :mod:`dmprs.reproduce.throwing` with the final-velocity throw
 (:mod:`dmprs.tasks.arm_throwing.release`: the movement up to the release a DMP with a final
 velocity, generalized with its release state, then a braking movement), with the same
