@@ -181,3 +181,19 @@ def test_bad_input_is_refused_by_name() -> None:
         asq.pour("together")
     with pytest.raises(InvalidInputError, match="stages"):
         asq.IKStepper([], [], 2.0, ArmKinematics(), np.zeros(7))
+
+
+def test_the_readmes_sequence_example_runs_and_does_what_it_says() -> None:
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    block = readme.split("The arm reaches, pours and returns without stopping", 1)[1]
+    block = block.split("```python\n", 1)[1].split("```", 1)[0]
+    scope: dict = {}
+    exec(block, scope)  # noqa: S102 - the README's own code
+    run = scope["run"]
+    assert [d.tau for d in (scope["reach"], scope["pour"], scope["back"])] == pytest.approx([0.3, 3.3, 0.3])
+    assert (norms(scope["run"].commands.velocity[run.joins]) > 0.55).all()
+    assert (norms(run.commands.angular_velocity[run.joins]) > 0.55).all()
+    assert run.end_time == pytest.approx(3.9, abs=2e-3)
+    assert abs(run.poured_volume - TARGET_VOLUME) < SUCCESS_TOLERANCE

@@ -16,6 +16,8 @@ from typing import Any
 
 from dmprs._io import strict_json, write_atomic
 from dmprs.errors import InvalidInputError
+from dmprs.reproduce.arm_sequence import KIND as SEQUENCE_KIND
+from dmprs.reproduce.arm_sequence import markdown_sequence
 from dmprs.reproduce.check import without_timings
 from dmprs.reproduce.release_throwing import KIND as RELEASE_KIND
 from dmprs.reproduce.release_throwing import markdown_release
@@ -150,20 +152,28 @@ def versus_bo(summary: dict[str, Any]) -> str:
     return markdown_versus(_section(summary, "versus"))
 
 
-def throwing_release(summary: dict[str, Any]) -> str:
-    """docs/throwing.md's final-velocity throw beside today's, as the report gives it; a note
-    while the summary predates that part.
-    """
+def _part_table(summary: dict[str, Any], kind: str, markdown_of: Callable[[Any], str]) -> str:
+    """A part's table as the report gives it; a note while the summary predates that part."""
     for s in summary.get("sections", []):
-        if s["kind"] == RELEASE_KIND:
-            return markdown_release(s["data"])
-    return (f"*The stored summary has no {RELEASE_KIND!r} section yet: a full `dmprs reproduce --update-docs .` "
-            "writes this table.*\n")
+        if s["kind"] == kind:
+            return markdown_of(s["data"])
+    return f"*The stored summary has no {kind!r} section yet: a full `dmprs reproduce --update-docs .` writes this table.*\n"
+
+
+def throwing_release(summary: dict[str, Any]) -> str:
+    """docs/throwing.md's final-velocity throw beside today's."""
+    return _part_table(summary, RELEASE_KIND, markdown_release)
+
+
+def arm_sequence(summary: dict[str, Any]) -> str:
+    """docs/arm.md's reach, pour and return as one sequence beside the same movements with stops."""
+    return _part_table(summary, SEQUENCE_KIND, markdown_sequence)
 
 
 #: every table a Markdown file may hold, by the name its :data:`BEGIN` line gives
 TABLES: dict[str, Callable[[dict[str, Any]], str]] = {"readme": readme, "arm-pouring": arm_pouring,
-                                                      "versus-bo": versus_bo, "throwing-release": throwing_release}
+                                                      "versus-bo": versus_bo, "throwing-release": throwing_release,
+                                                      "arm-sequence": arm_sequence}
 
 
 def render(text: str, summary: dict[str, Any]) -> str:
