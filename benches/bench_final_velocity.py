@@ -5,7 +5,11 @@ Workload: a 2-DOF, 1.2 s demonstration ending in motion (min-jerk plus ``v T (s^
 closed form, 1201 samples; end velocities 0.9 and 0.4), 40 basis functions, the same spring
 constants for both (alpha_z = 48, beta_z = 12), fitted with the demonstrated final velocity and
 rolled out at dt = 1 ms; then the final position and velocity errors at t = tau at dt = 2, 1 and
-0.5 ms (movement_primitives integrates at int_dt = dt), everything called from Python.
+0.5 ms (movement_primitives integrates at int_dt = dt), everything called from Python; beside
+dmprs's errors the same demonstration fitted without a final velocity, and the velocity error the
+explicit-Euler phase's lag predicts (the forcing term is played alpha_x dt / 2 early at tau, so
+the velocity is off by ydd(tau) alpha_x dt / 2; docs/method.md §2.3), and dmprs's steps emulated in
+Python with the forcing term on time.
 
     pip install ".[bench]" && python benches/bench_final_velocity.py
 
@@ -26,6 +30,11 @@ from _timing import timed
 
 T_DEMO, N_SAMPLES, N_BASIS, DT = 1.2, 1201, 40, 0.001
 END_VELOCITY = np.array([0.9, 0.4])
+#: the demonstration's acceleration at its end: v T (s^5 - s^4) gives v (20 - 12) / T, min-jerk 0
+END_ACCELERATION = 8 * END_VELOCITY / T_DEMO
+DTS = (0.002, 0.001, 0.0005)
+#: the phase's rate, dmprs's default (the fits below leave it)
+ALPHA_X = 2.0
 REPEATS = 50
 
 
@@ -36,21 +45,62 @@ def moving_demo() -> tuple[np.ndarray, np.ndarray]:
     return t, np.stack([base + END_VELOCITY[0] * moving, 0.3 - base + END_VELOCITY[1] * moving], axis=1)
 
 
+def final_errors(dmp, y):
+    """The final position and velocity errors at t = tau for every dt of DTS."""
+    errors = {}
+    for dt in DTS:
+        end = dmp.rollout(dt)
+        errors[dt] = (np.max(np.abs(end.y[-1] - y[-1])), np.max(np.abs(end.yd[-1] - END_VELOCITY)))
+    return errors
+
+
 def ours(t, y):
     dmp = dmprs.DMP.fit(t, y, N_BASIS, final_velocity=END_VELOCITY)
     roll, tr = timed(lambda: dmp.rollout(DT), REPEATS)
-    errors = {}
-    for dt in (0.002, 0.001, 0.0005):
-        end = dmp.rollout(dt)
-        errors[dt] = (np.max(np.abs(end.y[-1] - y[-1])), np.max(np.abs(end.yd[-1] - END_VELOCITY)))
-    return roll / tr.n_samples, errors
+    return roll / tr.n_samples, final_errors(dmp, y)
 
 
 def todays(t, y):
-    """The same demonstration fitted without a final velocity: what the moving goal costs."""
+    """The same demonstration fitted without a final velocity: what the moving goal costs, and
+    its errors at tau (the same integrator's).
+    """
     dmp = dmprs.DMP.fit(t, y, N_BASIS)
     roll, tr = timed(lambda: dmp.rollout(DT), REPEATS)
-    return roll / tr.n_samples
+    return roll / tr.n_samples, final_errors(dmp, y)
+
+
+def euler(dmp, dt, on_time):
+    """dmprs's rollout of a final-velocity DMP to t = tau (docs/method.md §2.4, §2.8) in Python:
+    the same explicit-Euler steps with the moving goal at the integrator's time t_k = k dt, the
+    forcing term at the integrator's phase, or (``on_time``) at the phase of its time,
+    exp(-alpha_x t_k / tau), which removes the phase's lag. Returns the final (y, yd).
+    """
+    w, c, h = np.asarray(dmp.weights), np.asarray(dmp.centers), np.asarray(dmp.widths)
+    g, gd, tau = np.asarray(dmp.goal), np.asarray(dmp.final_velocity), dmp.tau
+    y, z, x = np.asarray(dmp.start, dtype=float), np.zeros(dmp.n_dof), 1.0
+    for k in range(round(tau / dt)):
+        t = k * dt
+        phase = np.exp(-dmp.alpha_x * t / tau) if on_time else x
+        psi = np.exp(-h * (phase - c) ** 2)
+        f = phase * (w @ psi) / psi.sum()
+        dz = (dmp.alpha_z * (dmp.beta_z * (g - gd * (tau - t) - y) + tau * gd - z) + f) / tau
+        y, z, x = y + z / tau * dt, z + dz * dt, x - dmp.alpha_x * x / tau * dt
+    return y, z / tau
+
+
+def on_time(t, y):
+    """The velocity errors with the forcing term on time (:func:`euler`), after checking that the
+    emulation without the change is dmprs's rollout.
+    """
+    dmp = dmprs.DMP.fit(t, y, N_BASIS, final_velocity=END_VELOCITY)
+    errors = {}
+    for dt in DTS:
+        end = dmp.rollout(dt)
+        lagging = euler(dmp, dt, on_time=False)
+        assert np.abs(lagging[0] - end.y[-1]).max() < 1e-12 and np.abs(lagging[1] - end.yd[-1]).max() < 1e-12
+        yy, yd = euler(dmp, dt, on_time=True)
+        errors[dt] = (np.max(np.abs(yy - y[-1])), np.max(np.abs(yd - END_VELOCITY)))
+    return errors
 
 
 def theirs(t, y):
@@ -66,7 +116,7 @@ def theirs(t, y):
     d = make(DT)
     roll, (T, _) = timed(lambda: d.open_loop(), 5)
     errors = {}
-    for dt in (0.002, 0.001, 0.0005):
+    for dt in DTS:
         d = make(dt)
         yy, yd = y[0].copy(), np.zeros(2)
         for _ in range(round(T_DEMO / dt)):
@@ -89,14 +139,20 @@ def main() -> None:
     print("|---|---:|---:|")
     for name, roll, _ in rows:
         print(f"| {name} | {roll * 1e9:.1f} | {roll / base[1]:.0f}x |")
-    today = todays(t, y)
-    print(f"| dmprs without a final velocity | {today * 1e9:.1f} | {today / base[1]:.2f}x |")
+    today = ("dmprs without a final velocity", *todays(t, y))
+    fixed = on_time(t, y)
+    print(f"| {today[0]} | {today[1] * 1e9:.1f} | {today[1] / base[1]:.2f}x |")
     print("\n| dt (ms) | library | final position error | final velocity error | velocity error vs dmprs |")
     print("|---:|---|---:|---:|---:|")
-    for dt in base[2]:
-        for name, _, errors in rows:
+    for dt in DTS:
+        for name, _, errors in [*rows, today]:
             ep, ev = errors[dt]
             print(f"| {dt * 1e3:g} | {name} | {ep:.2e} | {ev:.2e} | {ev / base[2][dt][1]:.2f}x |")
+        lag = np.max(np.abs(END_ACCELERATION)) * ALPHA_X * dt / 2
+        print(f"| {dt * 1e3:g} | the Euler phase's lag, ydd(tau) alpha_x dt / 2 | | {lag:.2e} | {lag / base[2][dt][1]:.2f}x |")
+        ep, ev = fixed[dt]
+        print(f"| {dt * 1e3:g} | dmprs's steps, the forcing term on time (emulated) | {ep:.2e} | {ev:.2e} | "
+              f"{ev / base[2][dt][1]:.2f}x |")
 
 
 if __name__ == "__main__":
