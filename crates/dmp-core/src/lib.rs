@@ -20,6 +20,7 @@ pub mod coupling;
 pub mod design_matrix;
 pub mod dmp;
 pub mod error;
+pub mod exp;
 pub mod finite_difference;
 mod forcing;
 pub mod generalize;
