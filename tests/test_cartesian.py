@@ -222,7 +222,21 @@ def test_bad_goal_and_start_poses_are_refused() -> None:
         dmp.with_goal([0, 0, np.nan, 1.0, 0, 0, 0])
 
 
-def test_a_diverging_rollout_is_an_error_not_a_nan_trajectory() -> None:
+def test_a_coarse_dt_is_sub_stepped_as_the_stepper_does() -> None:
     dmp = dmprs.CartesianDMP.fit(*pose_demo(), 10)
-    with pytest.raises(dmprs.NumericalError, match="diverged"):
-        dmp.rollout(dt=0.2, duration=500.0)
+    tr = dmp.rollout(dt=0.2, duration=500.0)
+    assert np.isfinite(tr.position).all() and np.isfinite(tr.quaternion).all()
+    np.testing.assert_allclose(tr.position[-1], dmp.goal[:3], atol=1e-9)
+    stepper = dmp.stepper(0.2, alpha_e=0.0, goal_filter=None)
+    assert stepper.substeps > 1
+    for j in range(50):
+        pose, _, _ = stepper.step()
+        np.testing.assert_array_equal(pose, np.concatenate([tr.position[j], tr.quaternion[j]]))
+
+
+def test_an_overflowing_rollout_is_an_error_not_a_nan_trajectory() -> None:
+    dmp = dmprs.CartesianDMP.fit(*pose_demo(), 10)
+    goal = dmp.goal.copy()
+    goal[0] = 1.7e308
+    with pytest.raises(dmprs.NumericalError, match="overflowed"):
+        dmp.with_goal(goal).rollout(dt=0.001)

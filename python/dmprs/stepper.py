@@ -3,7 +3,8 @@ loop, one control period per :meth:`~JointStepper.step` (Rust core:
 ``crates/dmp-core/src/stepper.rs``, ``cartesian_stepper.rs``; docs/method.md §2.5).
 
 Open loop and without coupling, the k-th call of ``step()`` returns sample k of the DMP's
-``rollout(dt)`` (t = k dt) to rounding (within 1e-12). Online, the stepper adds:
+``rollout(dt)`` (t = k dt) bit for bit: the rollout is this stepper run open loop. Online, the
+stepper adds:
 
 * **phase stopping** (Ijspeert et al. 2002, 2013): ``step(measured)`` with the robot's position
   slows the clock by ``1 + sum_d alpha_e[d] (measured[d] - y[d])^2`` (``y`` the last command),

@@ -1,8 +1,8 @@
 //! Time of one `step()` of the online steppers in Rust (benches/README.md, "Online steppers"):
 //! a 7-DOF joint DMP with 25 and 50 kernels and a Cartesian DMP with 50, open loop, and the
 //! joint one with a measured state (a robot that tracks perfectly) and with velocity and
-//! acceleration limits; a 7-DOF periodic DMP with 50 kernels, open loop, and one step of its
-//! rollout.
+//! acceleration limits; a 7-DOF periodic DMP with 50 kernels, open loop; and one sample of the
+//! rollouts of the same joint, Cartesian and periodic DMPs.
 //!
 //! `cargo run --release -p dmp-core --example bench_stepper`: the median over 2000 rounds of
 //! 500 steps (about 20 us each, mostly shorter than a scheduler's time slice, so that the median
@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use dmp_core::{
     CartesianDmp, CartesianStepper, CartesianStepperOptions, Dmp, DmpConfig, PeriodicConfig,
-    PeriodicDmp, PeriodicStepper, PeriodicStepperOptions, Stepper, StepperOptions,
+    PeriodicDmp, PeriodicStepper, PeriodicStepperOptions, RolloutOptions, Stepper, StepperOptions,
 };
 use nalgebra::{DMatrix, DVector};
 
@@ -46,14 +46,7 @@ fn median_ns(mut round: impl FnMut(bool) -> f64) -> f64 {
 }
 
 fn joint(n_basis: usize, opts: &StepperOptions, measured: bool) -> f64 {
-    let dmp = Dmp::new(
-        config(n_basis),
-        weights(n_basis, 7),
-        DVector::from_element(7, 1.0),
-        DVector::from_element(7, 0.0),
-        1.0,
-    )
-    .unwrap();
+    let dmp = joint_dmp(n_basis);
     let mut s = Stepper::new(&dmp, opts).unwrap();
     // A robot that tracks perfectly: the measured position is the last command.
     let mut y = vec![0.0; 7];
@@ -75,7 +68,18 @@ fn joint(n_basis: usize, opts: &StepperOptions, measured: bool) -> f64 {
     })
 }
 
-fn cartesian(n_basis: usize) -> f64 {
+fn joint_dmp(n_basis: usize) -> Dmp {
+    Dmp::new(
+        config(n_basis),
+        weights(n_basis, 7),
+        DVector::from_element(7, 1.0),
+        DVector::from_element(7, 0.0),
+        1.0,
+    )
+    .unwrap()
+}
+
+fn cartesian_dmp(n_basis: usize) -> CartesianDmp {
     let goal = [
         0.4,
         0.1,
@@ -86,7 +90,11 @@ fn cartesian(n_basis: usize) -> f64 {
         0.0,
     ];
     let start = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
-    let dmp = CartesianDmp::new(config(n_basis), weights(n_basis, 6), &goal, &start, 1.0).unwrap();
+    CartesianDmp::new(config(n_basis), weights(n_basis, 6), &goal, &start, 1.0).unwrap()
+}
+
+fn cartesian(n_basis: usize) -> f64 {
+    let dmp = cartesian_dmp(n_basis);
     let mut s = CartesianStepper::new(&dmp, &CartesianStepperOptions::new(1e-3)).unwrap();
     median_ns(|restart| {
         if restart {
@@ -133,14 +141,13 @@ fn periodic(n_basis: usize) -> f64 {
     })
 }
 
-/// ns per sample of the periodic rollout (one period at 1 ms, 6,284 samples), the median of 200.
-fn periodic_rollout(n_basis: usize) -> f64 {
-    let dmp = periodic_dmp(n_basis);
+/// ns per sample of `rollout` (returning its number of samples), the median of 200 calls.
+fn per_sample(mut rollout: impl FnMut() -> usize) -> f64 {
     let mut times: Vec<f64> = (0..200)
         .map(|_| {
             let t = Instant::now();
-            let tr = black_box(dmp.rollout(1e-3, None, 0.0).unwrap());
-            t.elapsed().as_secs_f64() * 1e9 / tr.t.len() as f64
+            let samples = black_box(rollout());
+            t.elapsed().as_secs_f64() * 1e9 / samples as f64
         })
         .collect();
     times.sort_by(f64::total_cmp);
@@ -175,8 +182,20 @@ fn main() {
         "| periodic, 7 DOF, N = 50, open loop | {:.1} |",
         periodic(50)
     );
+    let opts = RolloutOptions::new(1e-3);
+    let joint = joint_dmp(50);
     println!(
-        "| periodic rollout, 7 DOF, N = 50, per sample | {:.1} |",
-        periodic_rollout(50)
+        "| joint rollout, 7 DOF, N = 50, 1 s, per sample | {:.1} |",
+        per_sample(|| joint.rollout(&opts).unwrap().t.len())
+    );
+    let pose = cartesian_dmp(50);
+    println!(
+        "| Cartesian rollout, N = 50, 1 s, per sample | {:.1} |",
+        per_sample(|| pose.rollout(&opts).unwrap().t.len())
+    );
+    let rhythm = periodic_dmp(50);
+    println!(
+        "| periodic rollout, 7 DOF, N = 50, one period, per sample | {:.1} |",
+        per_sample(|| rhythm.rollout(1e-3, None, 0.0).unwrap().t.len())
     );
 }

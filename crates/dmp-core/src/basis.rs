@@ -70,56 +70,14 @@ impl Basis {
     ///
     /// The kernels are evaluated relative to the most active one: the ratio is unchanged, but it
     /// never underflows to 0/0, even far past tau where x -> 0 and every `Psi_k` is below
-    /// `f64::MIN_POSITIVE` for large N.
-    ///
-    /// Because the centres are geometric (`c_k = r^k`) and the widths scale with the spacing,
-    /// `h_k (x - c_k)^2` grows monotonically away from the two centres that bracket `x`. So the
-    /// most active kernel is one of those two, and the active set is found by walking outwards
-    /// from them: about ten kernels are touched instead of all N.
+    /// `f64::MIN_POSITIVE` for large N. The exponentials are [`crate::exp::exp`]'s, the C
+    /// library's bits; the rollouts' and steppers' forcing term gives these same bits.
     pub fn normalized_activations(&self, x: f64, out: &mut [f64]) -> std::ops::Range<usize> {
-        let n = self.centers.len();
-        debug_assert_eq!(out.len(), n);
-        let arg = |k: usize| {
-            let d = x - self.centers[k];
-            self.widths[k] * d * d
-        };
-        // c_k0 >= x >= c_{k0+1}: k0 = floor(ln(1/x) / ln(1/r)), clamped to the basis.
-        let steps = -(x.max(f64::MIN_POSITIVE)).ln() / self.log_ratio;
-        let k0 = if steps.is_finite() && steps > 0.0 {
-            (steps as usize).min(n - 2)
-        } else {
-            0
-        };
-        let (a0, a1) = (arg(k0), arg(k0 + 1));
-        let min_arg = a0.min(a1);
-        let limit = min_arg + ACTIVATION_CUTOFF;
-        let mut lo = k0 + 1;
-        while lo > 0 {
-            let a = arg(lo - 1);
-            if a > limit {
-                break;
-            }
-            out[lo - 1] = a;
-            lo -= 1;
-        }
-        let mut hi = k0 + 1;
-        while hi < n {
-            let a = if hi == k0 + 1 { a1 } else { arg(hi) };
-            if a > limit {
-                break;
-            }
-            out[hi] = a;
-            hi += 1;
-        }
-        if lo == hi {
-            // Only reachable if a rounding error made both bracketing kernels exceed the limit.
-            out[k0] = a0;
-            lo = k0;
-            hi = k0 + 1;
-        }
+        debug_assert_eq!(out.len(), self.centers.len());
+        let (lo, hi, min_arg) = self.active(x, self.bracket(x));
         let mut sum = 0.0;
-        for v in &mut out[lo..hi] {
-            *v = (min_arg - *v).exp();
+        for (k, v) in (lo..hi).zip(&mut out[lo..hi]) {
+            *v = crate::exp::exp(min_arg - self.arg(x, k));
             sum += *v;
         }
         let inv = 1.0 / sum;
@@ -127,6 +85,55 @@ impl Basis {
             *v *= inv;
         }
         lo..hi
+    }
+
+    /// The exponent `h_k (x - c_k)^2` of kernel k.
+    #[inline(always)]
+    pub(crate) fn arg(&self, x: f64, k: usize) -> f64 {
+        let d = x - self.centers[k];
+        self.widths[k] * d * d
+    }
+
+    /// The kernel `k0` with `c_k0 >= x >= c_{k0+1}`: `floor(ln(1/x) / ln(1/r))`, clamped to the
+    /// basis (a phase within rounding of a centre may land on either side of it; every caller
+    /// takes this rule's side, which fixes the most active kernel and so the bits).
+    #[inline]
+    pub(crate) fn bracket(&self, x: f64) -> usize {
+        let steps = -(x.max(f64::MIN_POSITIVE)).ln() / self.log_ratio;
+        if steps.is_finite() && steps > 0.0 {
+            (steps as usize).min(self.centers.len() - 2)
+        } else {
+            0
+        }
+    }
+
+    /// The active kernels `lo..hi` at phase `x`, whose bracket is `k0` ([`Basis::bracket`]),
+    /// and the smallest exponent `min_arg`; the kernels below `exp(-ACTIVATION_CUTOFF)` of the
+    /// most active are left out.
+    ///
+    /// Because the centres are geometric (`c_k = r^k`) and the widths scale with the spacing,
+    /// `h_k (x - c_k)^2` grows monotonically away from the two centres that bracket `x`. So the
+    /// most active kernel is one of those two, and the active set is found by walking outwards
+    /// from them: about ten kernels are touched instead of all N.
+    #[inline(always)]
+    pub(crate) fn active(&self, x: f64, k0: usize) -> (usize, usize, f64) {
+        let n = self.centers.len();
+        let (a0, a1) = (self.arg(x, k0), self.arg(x, k0 + 1));
+        let min_arg = a0.min(a1);
+        let limit = min_arg + ACTIVATION_CUTOFF;
+        let mut lo = k0 + 1;
+        while lo > 0 && self.arg(x, lo - 1) <= limit {
+            lo -= 1;
+        }
+        let mut hi = k0 + 1;
+        while hi < n && (if hi == k0 + 1 { a1 } else { self.arg(x, hi) }) <= limit {
+            hi += 1;
+        }
+        if lo == hi {
+            // Only reachable if a rounding error made both bracketing kernels exceed the limit.
+            return (k0, k0 + 1, min_arg);
+        }
+        (lo, hi, min_arg)
     }
 }
 

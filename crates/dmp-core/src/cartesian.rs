@@ -34,15 +34,11 @@
 //! For a rotation about one fixed axis this is the discrete DMP of the angle, step for step.
 
 use nalgebra::{DMatrix, DMatrixView, DVector};
-use rayon::prelude::*;
 
-use crate::dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity, phase_clock, phase_to_go};
+use crate::dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity};
 use crate::error::{Error, Result, check_finite_matrix, check_increasing};
 use crate::finite_difference as diff;
 use crate::quaternion::{self, Quaternion};
-use crate::rollout::{
-    MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, check_work, moving_spring, n_steps,
-};
 
 /// A pose is `[x, y, z, qw, qx, qy, qz]`: position (m), then a scalar-first unit quaternion.
 pub const POSE_WIDTH: usize = 7;
@@ -50,7 +46,7 @@ pub const POSE_WIDTH: usize = 7;
 /// them to be normalized: such a sample is more likely a bug than rounding.
 pub const UNIT_TOLERANCE: f64 = 1e-6;
 /// The coordinates of the underlying DMP: x, y, z, then the three of the orientation.
-const N_COORDS: usize = 6;
+pub(crate) const N_COORDS: usize = 6;
 
 /// A pose demonstration: `pose` is `7 x T` (one column per sample; a C-ordered `(T, 7)` numpy
 /// array is exactly this layout), derivatives `3 x T` when measured.
@@ -536,197 +532,4 @@ impl CartesianDmp {
             start: self.start,
         })
     }
-
-    /// Integrates the position and orientation equations with explicit Euler (module docs) and
-    /// returns poses, velocities and accelerations at `t_j = j dt`. With `until_rest`, it goes
-    /// on past `duration` until the position is within `rest_tol` (m) of its goal, the
-    /// orientation within `rest_tol` (rad), both at rest to `rest_tol`, and the forcing term can
-    /// no longer move them by more than that.
-    ///
-    /// With a final velocity both parts pull to their moving goals, `t` taken from the phase
-    /// (docs/cartesian.md, "A final velocity"); such a movement never rests, so `until_rest` is
-    /// refused for it.
-    pub fn rollout(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
-        // Compiled for AVX2 where the CPU has it (wider kernel-weight updates); Rust never fuses
-        // a multiply and an add on its own, so both copies give the same bits. The loop is chosen
-        // once per rollout, so that of a DMP without a final velocity is today's.
-        if self.dmp.final_velocity().is_some() {
-            if opts.until_rest {
-                return Err(Error::InvalidParameter {
-                    name: "until_rest",
-                    value: "true".into(),
-                    requirement: "must be false for a Cartesian DMP with a final velocity: it \
-                                  moves on at that velocity past tau and never rests \
-                                  (docs/method.md §2.8)",
-                });
-            }
-            crate::linalg::simd(|| self.integrate::<true>(opts))
-        } else {
-            crate::linalg::simd(|| self.integrate::<false>(opts))
-        }
-    }
-
-    /// [`Self::rollout`]; `MOVING`: the goals move with the final velocity.
-    #[inline(always)]
-    fn integrate<const MOVING: bool>(&self, opts: &RolloutOptions) -> Result<CartesianTrajectory> {
-        opts.validate()?;
-        let tau = self.tau();
-        let steps = n_steps(opts.duration.unwrap_or(tau), opts.dt);
-        let max_steps = if opts.until_rest {
-            steps + n_steps(REST_HORIZON_TAUS * tau, opts.dt)
-        } else {
-            steps
-        };
-        let values = (steps + 1.0) * POSE_WIDTH as f64;
-        if values.is_nan() || values > MAX_VALUES as f64 {
-            return Err(Error::InvalidParameter {
-                name: "dt",
-                value: opts.dt.to_string(),
-                requirement: "is too small for the duration: the rollout would exceed 20 million values",
-            });
-        }
-        check_work(steps + 1.0, N_COORDS, "Cartesian DMP rollout")?;
-        let cap = steps as usize + 1;
-        let mut out = CartesianTrajectory {
-            t: Vec::with_capacity(cap),
-            position: Vec::with_capacity(3 * cap),
-            quaternion: Vec::with_capacity(4 * cap),
-            velocity: Vec::with_capacity(3 * cap),
-            acceleration: Vec::with_capacity(3 * cap),
-            angular_velocity: Vec::with_capacity(3 * cap),
-            angular_acceleration: Vec::with_capacity(3 * cap),
-        };
-        let cfg = *self.config();
-        let (dt, inv_tau) = (opts.dt, 1.0 / tau);
-        let half_step = 0.5 * dt * inv_tau;
-        let n = cfg.n_basis;
-        let w = self.weights();
-        let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
-        // Kernel-major copy: the six weights of kernel k side by side, so that one pass over the
-        // active kernels updates all six forcing terms (independent sums, same order per term).
-        let wk: Vec<[f64; N_COORDS]> = (0..n)
-            .map(|k| [0, 1, 2, 3, 4, 5].map(|d| w[(k, d)]))
-            .collect();
-        let goal_p = self.dmp.goal().as_slice();
-        let goal_q = self.goal;
-        let mut p: [f64; 3] = [0, 1, 2].map(|d| self.dmp.y0()[d]);
-        let mut z = [0.0; 3];
-        let mut q = self.start;
-        let mut eta = [0.0; 3];
-        let mut x = 1.0;
-        let mut psi = vec![0.0; n];
-        // The goals' velocities per unit of scaled time, `tau gd` and `tau omega_g`, and the
-        // clock that turns the integrator's phase into the scaled time to go (docs/method.md
-        // §2.8; empty and unused without a final velocity).
-        let twist: Vec<f64> = self
-            .dmp
-            .final_velocity()
-            .map_or(vec![], |v| (v * tau).data.into());
-        let clock = phase_clock(tau, cfg.alpha_x, dt);
-        let mut step = 0usize;
-        loop {
-            let to_go = if MOVING { phase_to_go(x, clock) } else { 0.0 };
-            let range = self.basis().normalized_activations(x, &mut psi);
-            let act = &psi[range.clone()];
-            let mut f = [0.0; N_COORDS];
-            for (wk, a) in wk[range.clone()].iter().zip(act) {
-                for d in 0..N_COORDS {
-                    f[d] += wk[d] * a;
-                }
-            }
-            let f = f.map(|s| x * s);
-            let mut at_rest = x * max_w / (cfg.alpha_z * cfg.beta_z) <= opts.rest_tol;
-            // One step of both systems into small arrays, appended once per field (fewer
-            // capacity checks than a push per value).
-            let (mut v, mut acc) = ([0.0; 3], [0.0; 3]);
-            for d in 0..3 {
-                let spring = if MOVING {
-                    moving_spring(&cfg, goal_p[d], twist[d], to_go, p[d], z[d])
-                } else {
-                    cfg.alpha_z * (cfg.beta_z * (goal_p[d] - p[d]) - z[d])
-                };
-                let dz = (spring + f[d]) * inv_tau;
-                v[d] = z[d] * inv_tau;
-                acc[d] = dz * inv_tau;
-                at_rest &= (goal_p[d] - p[d]).abs() <= opts.rest_tol && z[d].abs() <= opts.rest_tol;
-                z[d] += dz * dt;
-            }
-            // Half the rotation vector from q to the goal: the moving goal `g_m = exp(-(tau -
-            // t)/2 omega_g) * g_o = exp(-s/2 tau omega_g) * g_o`, `s` the scaled time to go.
-            let target = if MOVING {
-                moving_goal(&goal_q, &[twist[3], twist[4], twist[5]], -0.5 * to_go)
-            } else {
-                goal_q
-            };
-            let e = quaternion::log(&quaternion::product(&target, &quaternion::conjugate(&q)));
-            let turn = quaternion::exp(&eta.map(|c| c * half_step));
-            let (mut omega, mut omega_dot) = ([0.0; 3], [0.0; 3]);
-            for d in 0..3 {
-                let to_goal = 2.0 * e[d];
-                // Damped towards the goal's own `eta = tau omega_g` with a final velocity.
-                let spring = if MOVING {
-                    cfg.alpha_z * (cfg.beta_z * to_goal + twist[3 + d] - eta[d])
-                } else {
-                    cfg.alpha_z * (cfg.beta_z * to_goal - eta[d])
-                };
-                let deta = (spring + f[3 + d]) * inv_tau;
-                omega[d] = eta[d] * inv_tau;
-                omega_dot[d] = deta * inv_tau;
-                at_rest &= to_goal.abs() <= opts.rest_tol && eta[d].abs() <= opts.rest_tol;
-                eta[d] += deta * dt;
-            }
-            out.t.push(step as f64 * dt);
-            out.position.extend_from_slice(&p);
-            out.velocity.extend_from_slice(&v);
-            out.acceleration.extend_from_slice(&acc);
-            out.quaternion.extend_from_slice(&q);
-            out.angular_velocity.extend_from_slice(&omega);
-            out.angular_acceleration.extend_from_slice(&omega_dot);
-            for d in 0..3 {
-                p[d] += v[d] * dt;
-            }
-            let past_end = step as f64 >= steps;
-            if past_end && (!opts.until_rest || at_rest) {
-                break;
-            }
-            if past_end {
-                // Going on until rest: the work beyond `steps` was not bounded up front.
-                check_work((step + 2) as f64, N_COORDS, "Cartesian DMP rollout")?;
-            }
-            if step as f64 >= max_steps || out.t.len() * POSE_WIDTH >= MAX_VALUES {
-                return Err(Error::Numerical {
-                    context: "Cartesian DMP rollout",
-                    detail: format!(
-                        "not at rest within {REST_HORIZON_TAUS} tau past the duration (rest_tol = {})",
-                        opts.rest_tol
-                    ),
-                });
-            }
-            q = quaternion::renormalize(&quaternion::product(&turn, &q));
-            x -= cfg.alpha_x * x * inv_tau * dt;
-            step += 1;
-        }
-        // An unstable step (dt far above tau / alpha_z) overflows, and inf and NaN then persist
-        // to the last sample: checking it is enough to never return a non-finite trajectory.
-        let last = [&p[..], &z[..], &q[..], &eta[..]].concat();
-        if last.iter().any(|v| !v.is_finite()) {
-            return Err(Error::Numerical {
-                context: "Cartesian DMP rollout",
-                detail: format!(
-                    "the integration diverged (dt = {} s is too large for tau = {tau} s and alpha_z = {})",
-                    opts.dt, cfg.alpha_z
-                ),
-            });
-        }
-        Ok(out)
-    }
-}
-
-/// Rolls out many Cartesian DMPs in parallel (rayon); bit-identical to one by one.
-pub fn rollout_batch_cartesian(
-    dmps: &[CartesianDmp],
-    opts: &RolloutOptions,
-) -> Result<Vec<CartesianTrajectory>> {
-    opts.validate()?;
-    dmps.par_iter().map(|d| d.rollout(opts)).collect()
 }

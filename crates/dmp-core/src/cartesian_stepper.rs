@@ -2,12 +2,10 @@
 //! [`crate::stepper::Stepper`] for a pose (docs/method.md §2.5, docs/cartesian.md).
 //!
 //! Without measurements, couplings, limits or goal changes, the k-th call returns sample k of
-//! [`CartesianDmp::rollout`] to rounding (the forcing term as the private `forcing` module computes it):
-//! the same updates in the same order (position as the
-//! discrete DMP, `q <- exp(dt/(2 tau) eta) * q`, then the phase). When `dt` is beyond explicit
-//! Euler's stability limit the period is split into the joint rollout's sub-steps (the Cartesian
-//! rollout has none and diverges there); each sub-step is then one step of the Cartesian rollout
-//! at `dt / substeps`.
+//! [`CartesianDmp::rollout`] bit for bit: the rollout is this stepper run open loop
+//! ([`crate::cartesian_rollout`]). Each period updates the position as the discrete DMP does,
+//! then `q <- exp(dt/(2 tau) eta) * q`, then the phase; when `dt` is beyond explicit Euler's
+//! stability limit the period is split into the joint rollout's sub-steps.
 //!
 //! The six coordinates of the phase stopping, the limits and the coupling terms are those of the
 //! underlying DMP: x, y, z (units of position), then the three of the orientation (rad): the
@@ -23,9 +21,9 @@ use crate::coupling::{
 };
 use crate::dmp::{DmpConfig, phase_clock, phase_to_go};
 use crate::error::{Error, Result, fmt_g};
-use crate::forcing::{Forcing, padded};
+use crate::euler::{MAX_SUBSTEPS, moving_spring};
+use crate::forcing::{Forcing, SumStart, padded};
 use crate::quaternion::{self, Quaternion};
-use crate::rollout::{MAX_SUBSTEPS, moving_spring};
 use crate::stepper::{
     Clock, StepperOptions, acceleration_at, check_coordinates, check_state, implicit_step,
     moving_start_refused, position_limits,
@@ -38,6 +36,17 @@ const N: usize = 6;
 const OBSTACLE_STEP: f64 = 0.5;
 /// An orientation within this angle (rad) of its filtered target is set to it.
 const GOAL_SNAP: f64 = 1e-12;
+
+/// A sample of a Cartesian rollout's arrays, to be written (3 values each, 4 for the
+/// quaternion).
+pub(crate) struct CartesianRows<'a> {
+    pub position: &'a mut [f64],
+    pub quaternion: &'a mut [f64],
+    pub velocity: &'a mut [f64],
+    pub acceleration: &'a mut [f64],
+    pub angular_velocity: &'a mut [f64],
+    pub angular_acceleration: &'a mut [f64],
+}
 
 /// The options of a [`CartesianStepper`]: those of the joint stepper over the six coordinates
 /// (position limits over the three of the position), and obstacles.
@@ -148,6 +157,9 @@ pub struct CartesianStepper {
     final_velocity: Option<[f64; N]>,
     /// `f(x)`, padded as the forcing term writes it.
     f: [f64; padded(N)],
+    /// Half the rotation vector from the current orientation to the (unmoving) goal, `log(g_o *
+    /// conj(q))`, as the last derivative found it: the rest test's too.
+    to_goal: [f64; 3],
     h: [f64; N],
     stiffness: [f64; 3],
     user: [f64; N],
@@ -200,7 +212,7 @@ impl CartesianStepper {
             rest_tol: opts.base.rest_tol,
             avx2: crate::linalg::has_avx2_fma(),
             max_w: w.iter().fold(0.0f64, |m, w| m.max(w.abs())),
-            forcing: Forcing::new(dmp.basis(), w),
+            forcing: Forcing::new(dmp.basis(), w, SumStart::Zero),
             x: 1.0,
             p: [0.0; 3],
             q: quaternion::IDENTITY,
@@ -212,6 +224,7 @@ impl CartesianStepper {
             goal_moving: false,
             final_velocity: dmp.final_velocity().map(|v| v.map(|c| c * dmp.tau())),
             f: [0.0; padded(N)],
+            to_goal: [0.0; 3],
             h: [0.0; N],
             stiffness: [0.0; 3],
             user: [0.0; N],
@@ -384,28 +397,53 @@ impl CartesianStepper {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: the CPU supports the enabled features (detected in `new`).
-            return unsafe { self.step_avx2(measured, coupling) };
+            unsafe { self.period_avx2(measured, coupling) }?;
+        } else {
+            self.period(measured, coupling)?;
         }
-        self.step_inner(measured, coupling)
+        #[cfg(not(target_arch = "x86_64"))]
+        self.period(measured, coupling)?;
+        self.check_finite()?;
+        Ok((&self.out_pose, &self.out_velocity, &self.out_acceleration))
     }
 
-    /// [`CartesianStepper::step_inner`] compiled for AVX2 (same bits: no fused multiply-adds).
+    /// One period without a measurement or a coupling term, its command copied into a sample
+    /// of a rollout's arrays (`t` aside): the Cartesian rollout's sample, by the stepper's own
+    /// code. The state is not checked: a rollout checks what it returns.
+    pub(crate) fn step_into(&mut self, sample: CartesianRows<'_>) -> Result<()> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: the CPU supports the enabled features (detected in `new`).
+            unsafe { self.period_avx2(None, None) }?;
+        } else {
+            self.period(None, None)?;
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        self.period(None, None)?;
+        let (pose, v, a) = (&self.out_pose, &self.out_velocity, &self.out_acceleration);
+        sample.position.copy_from_slice(&pose[..3]);
+        sample.quaternion.copy_from_slice(&pose[3..]);
+        sample.velocity.copy_from_slice(&v[..3]);
+        sample.angular_velocity.copy_from_slice(&v[3..]);
+        sample.acceleration.copy_from_slice(&a[..3]);
+        sample.angular_acceleration.copy_from_slice(&a[3..]);
+        Ok(())
+    }
+
+    /// [`CartesianStepper::period`] compiled for AVX2 (same bits: no fused multiply-adds).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn step_avx2(
+    unsafe fn period_avx2(
         &mut self,
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
-    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
-        self.step_inner(measured, coupling)
+    ) -> Result<()> {
+        self.period(measured, coupling)
     }
 
+    /// One period: the command of this period into the last command, the state advanced.
     #[inline(always)]
-    fn step_inner(
-        &mut self,
-        measured: Option<&[f64]>,
-        coupling: Option<&[f64]>,
-    ) -> Result<(&[f64; POSE_WIDTH], &[f64; N], &[f64; N])> {
+    fn period(&mut self, measured: Option<&[f64]>, coupling: Option<&[f64]>) -> Result<()> {
         let factor = match measured {
             Some(m) => {
                 let q = check_pose("measured", m)?;
@@ -489,8 +527,7 @@ impl CartesianStepper {
             .as_ref()
             .is_some_and(|tc| tc.exceeded(&self.out_acceleration));
         self.steps += 1;
-        self.check_finite()?;
-        Ok((&self.out_pose, &self.out_velocity, &self.out_acceleration))
+        Ok(())
     }
 
     /// The rate of the obstacles' field at the current state (0 without obstacles), by which
@@ -666,7 +703,7 @@ impl CartesianStepper {
     /// `tau dz/dt` of the springs and the forcing term towards the (filtered) goal.
     #[allow(clippy::needless_range_loop)]
     #[inline(always)]
-    fn spring(&self) -> [f64; N] {
+    fn spring(&mut self) -> [f64; N] {
         let cfg = &self.cfg;
         let mut h = [0.0; N];
         for d in 0..3 {
@@ -678,6 +715,7 @@ impl CartesianStepper {
             &self.goal_q,
             &quaternion::conjugate(&self.q),
         ));
+        self.to_goal = e;
         for d in 0..3 {
             let to_goal = 2.0 * e[d];
             h[3 + d] = cfg.alpha_z * (cfg.beta_z * to_goal - self.z[3 + d]) + self.f[3 + d];
@@ -725,10 +763,9 @@ impl CartesianStepper {
         {
             return false;
         }
-        let e = quaternion::log(&quaternion::product(
-            &self.target_q,
-            &quaternion::conjugate(&self.q),
-        ));
+        // The goal does not move, so it is the target, and the derivative just took the
+        // logarithm to it.
+        let e = self.to_goal;
         (0..3).all(|d| {
             (self.target_p[d] - self.p[d]).abs() <= tol
                 && (2.0 * e[d]).abs() <= tol

@@ -209,7 +209,6 @@ fn r4_term(r: f64, r2: f64, r_tail: f64, r4: f64) -> f64 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 #[inline]
-#[allow(dead_code)]
 pub(crate) fn exp4(x: std::arch::x86_64::__m256d) -> std::arch::x86_64::__m256d {
     use std::arch::x86_64::*;
     let c = |v: f64| _mm256_set1_pd(v);

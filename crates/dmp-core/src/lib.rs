@@ -13,6 +13,7 @@
 pub mod basis;
 pub mod cartesian;
 pub mod cartesian_generalize;
+pub mod cartesian_rollout;
 pub mod cartesian_sequence;
 pub mod cartesian_stepper;
 pub mod chain;
@@ -20,6 +21,7 @@ pub mod coupling;
 pub mod design_matrix;
 pub mod dmp;
 pub mod error;
+pub mod euler;
 pub mod exp;
 pub mod finite_difference;
 mod forcing;
@@ -46,10 +48,9 @@ pub mod temporal_coupling;
 pub mod via_points;
 
 pub use basis::Basis;
-pub use cartesian::{
-    CartesianDemonstration, CartesianDmp, CartesianTrajectory, rollout_batch_cartesian,
-};
+pub use cartesian::{CartesianDemonstration, CartesianDmp, CartesianTrajectory};
 pub use cartesian_generalize::CartesianGeneralizer;
+pub use cartesian_rollout::rollout_batch_cartesian;
 pub use cartesian_sequence::CartesianSequenceStepper;
 pub use cartesian_stepper::{CartesianStepper, CartesianStepperOptions};
 pub use dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity};

@@ -28,10 +28,9 @@ use crate::design_matrix::{
 };
 use crate::dmp::{Demonstration, FIT_RIDGE, MAX_BASIS};
 use crate::error::{Error, Result, check_scalar, fmt_g};
+use crate::euler::{MAX_SUBSTEPS, spring_stable_step};
 use crate::periodic_forcing::{ForcingScratch, PeriodicForcing};
-use crate::rollout::{
-    MAX_SUBSTEPS, MAX_VALUES, Trajectory, check_trajectory, check_work, n_steps, spring_stable_step,
-};
+use crate::rollout::{MAX_VALUES, Trajectory, check_trajectory, check_work, n_steps};
 
 /// Relative activations below `exp(-ACTIVATION_CUTOFF)` are exactly zero, as for the discrete
 /// basis ([`crate::basis`]): they cannot change the normalized sum beyond rounding.

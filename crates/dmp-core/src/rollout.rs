@@ -1,10 +1,13 @@
 //! Integration of the DMP (docs/method.md §2.4): explicit Euler at a fixed step from `x = 1`,
-//! `y = y0`, `z = 0` (the movement starts at rest), for one DMP or many in parallel.
+//! `y = y0`, `z = 0` (the movement starts at rest), for one DMP or many in parallel. A rollout
+//! is the [`Stepper`] run open loop, its samples written in place into the arrays it returns.
 
 use rayon::prelude::*;
 
-use crate::dmp::{Dmp, DmpConfig, phase_clock, phase_to_go};
+use crate::dmp::Dmp;
 use crate::error::{Error, Result, check_scalar, fmt_g};
+use crate::euler::{MAX_SUBSTEPS, STABILITY_MARGIN, stable_step, substeps_needed};
+use crate::stepper::{Rows, Stepper, StepperOptions};
 
 /// Rollouts longer than this many values per array (samples x DOFs) are refused rather than
 /// exhausting memory on a mistyped `dt`.
@@ -64,6 +67,63 @@ impl Trajectory {
     }
 }
 
+/// A [`Trajectory`] being written sample by sample, its arrays allocated for a number of
+/// samples up front (and doubled if a rollout goes on until rest), so that each sample is
+/// written in place: no allocation per sample, no copy on the way out.
+struct Samples {
+    t: Vec<f64>,
+    y: Vec<f64>,
+    yd: Vec<f64>,
+    ydd: Vec<f64>,
+    n_dof: usize,
+}
+
+impl Samples {
+    fn new(capacity: usize, n_dof: usize) -> Self {
+        Self {
+            t: vec![0.0; capacity],
+            y: vec![0.0; capacity * n_dof],
+            yd: vec![0.0; capacity * n_dof],
+            ydd: vec![0.0; capacity * n_dof],
+            n_dof,
+        }
+    }
+
+    /// Sample `j` (at `t = j dt`), to be written.
+    #[inline(always)]
+    fn row(&mut self, j: usize, dt: f64) -> Rows<'_> {
+        if j == self.t.len() {
+            let grown = 2 * j.max(1);
+            self.t.resize(grown, 0.0);
+            for v in [&mut self.y, &mut self.yd, &mut self.ydd] {
+                v.resize(grown * self.n_dof, 0.0);
+            }
+        }
+        self.t[j] = j as f64 * dt;
+        let span = j * self.n_dof..(j + 1) * self.n_dof;
+        Rows {
+            y: &mut self.y[span.clone()],
+            yd: &mut self.yd[span.clone()],
+            ydd: &mut self.ydd[span],
+        }
+    }
+
+    /// The first `samples` samples.
+    fn into_trajectory(mut self, samples: usize) -> Trajectory {
+        self.t.truncate(samples);
+        for v in [&mut self.y, &mut self.yd, &mut self.ydd] {
+            v.truncate(samples * self.n_dof);
+        }
+        Trajectory {
+            t: self.t,
+            y: self.y,
+            yd: self.yd,
+            ydd: self.ydd,
+            n_dof: self.n_dof,
+        }
+    }
+}
+
 /// Number of Euler steps covering `duration`: `duration / dt` rounded when it is an integer up to
 /// rounding error, else rounded up, so the rollout never stops short.
 pub(crate) fn n_steps(duration: f64, dt: f64) -> f64 {
@@ -101,36 +161,6 @@ pub(crate) fn check_work(steps: f64, n_dof: usize, context: &'static str) -> Res
     Ok(())
 }
 
-/// Euler sub-steps per sample beyond which a rollout is refused: that many mean a `dt` far too
-/// coarse for the DMP's stiffness, and the work would grow without bound.
-pub const MAX_SUBSTEPS: usize = 1000;
-/// Fraction of the explicit-Euler stability limit a (sub-)step may use: a quarter keeps
-/// `h |lambda| <= 0.5` on a critically damped spring, where Euler is not only stable but does
-/// not overshoot (the default dt = 1 ms with tau >= 0.1 s is far inside).
-const STABILITY_MARGIN: f64 = 0.25;
-
-/// The largest step `h = dt / tau` (in units of tau) for which explicit Euler on eqs. 1-3 decays
-/// instead of blowing up. The spring `(y, z)` has the eigenvalues `lambda` of
-/// `[[0, 1], [-alpha_z beta_z, -alpha_z]]` (times 1/tau) and Euler is stable iff
-/// `|1 + h lambda| < 1`, i.e. `h < -2 Re(lambda) / |lambda|^2`: `4 / (alpha_z + sqrt(alpha_z^2 -
-/// 4 alpha_z beta_z))` for real eigenvalues, `1 / beta_z` for complex ones. The phase eq. 3 stays
-/// positive iff `h < 1 / alpha_x`.
-pub fn stable_step(alpha_z: f64, beta_z: f64, alpha_x: f64) -> f64 {
-    spring_stable_step(alpha_z, beta_z).min(STABILITY_MARGIN / alpha_x)
-}
-
-/// The spring's part of [`stable_step`], with its margin: the bound of a system whose phase
-/// needs none (the periodic DMP's advances linearly).
-pub(crate) fn spring_stable_step(alpha_z: f64, beta_z: f64) -> f64 {
-    let disc = alpha_z * alpha_z - 4.0 * alpha_z * beta_z;
-    let spring = if disc >= 0.0 {
-        4.0 / (alpha_z + disc.sqrt())
-    } else {
-        1.0 / beta_z
-    };
-    STABILITY_MARGIN * spring
-}
-
 impl Dmp {
     /// Integrates eqs. 1-3 with explicit Euler and returns positions, velocities `z / tau` and
     /// accelerations `dz/dt / tau` at `t_j = j dt`.
@@ -144,35 +174,24 @@ impl Dmp {
     /// (tau - t)`, `t` taken from the phase, and damps towards `z = tau gd`; it never rests, so
     /// `until_rest` is refused for it.
     pub fn rollout(&self, opts: &RolloutOptions) -> Result<Trajectory> {
-        // Chosen once per rollout, so the loop of a DMP without one is today's, instruction for
-        // instruction.
-        if self.final_velocity().is_some() {
-            if opts.until_rest {
-                return Err(Error::InvalidParameter {
-                    name: "until_rest",
-                    value: "true".into(),
-                    requirement: "must be false for a DMP with a final velocity: it moves on at \
-                                  that velocity past tau and never rests (docs/method.md §2.8)",
-                });
-            }
-            self.rollout_with::<true>(opts)
-        } else {
-            self.rollout_with::<false>(opts)
+        if self.final_velocity().is_some() && opts.until_rest {
+            return Err(Error::InvalidParameter {
+                name: "until_rest",
+                value: "true".into(),
+                requirement: "must be false for a DMP with a final velocity: it moves on at \
+                              that velocity past tau and never rests (docs/method.md §2.8)",
+            });
         }
-    }
-
-    /// [`Self::rollout`]; `MOVING`: the goal moves with the final velocity.
-    fn rollout_with<const MOVING: bool>(&self, opts: &RolloutOptions) -> Result<Trajectory> {
         opts.validate()?;
         let duration = opts.duration.unwrap_or(self.tau());
         let steps = n_steps(duration, opts.dt);
-        let n_dof = self.n_dof();
+        let n = self.n_dof();
         let max_steps = if opts.until_rest {
             steps + n_steps(REST_HORIZON_TAUS * self.tau(), opts.dt)
         } else {
             steps
         };
-        let values = (steps + 1.0) * n_dof as f64;
+        let values = (steps + 1.0) * n as f64;
         // Also catches a NaN step count.
         if values.is_nan() || values > MAX_VALUES as f64 {
             return Err(Error::InvalidParameter {
@@ -182,71 +201,32 @@ impl Dmp {
             });
         }
         let substeps = self.substeps(opts.dt)?;
-        let cfg = *self.config();
-        check_work((steps + 1.0) * substeps as f64, n_dof, "DMP rollout")?;
-        let capacity = (steps as usize + 1) * n_dof;
-        let mut out = Trajectory {
-            t: Vec::with_capacity(steps as usize + 1),
-            y: Vec::with_capacity(capacity),
-            yd: Vec::with_capacity(capacity),
-            ydd: Vec::with_capacity(capacity),
-            n_dof,
-        };
-
-        let (dt, inv_tau) = (opts.dt, 1.0 / self.tau());
-        let h = dt / substeps as f64;
-        let n = cfg.n_basis;
-        let goal = self.goal().as_slice();
-        let tau = self.tau();
-        // The goal's velocity per unit of scaled time t / tau (docs/method.md §2.8).
-        let v: Vec<f64> = self
-            .final_velocity()
-            .map_or(vec![], |gd| (gd * tau).data.into());
-        let clock = phase_clock(tau, cfg.alpha_x, h);
-        // N x D column-major: the weights of DOF d are the contiguous slice w[d n .. (d+1) n].
-        let w = self.weights().as_slice();
-        let max_w = w.iter().fold(0.0f64, |m, w| m.max(w.abs()));
-        let mut y: Vec<f64> = self.y0().iter().copied().collect();
-        let mut z = vec![0.0; n_dof];
-        let mut dz = vec![0.0; n_dof];
-        let mut x = 1.0;
-        let mut psi = vec![0.0; n];
-        // dz/dt * tau at the current state; the phase's activations are shared by every DOF.
-        let mut derivative = |x: f64, y: &[f64], z: &[f64], dz: &mut [f64]| {
-            let range = self.basis().normalized_activations(x, &mut psi);
-            let psi = &psi[range.clone()];
-            let to_go = if MOVING { phase_to_go(x, clock) } else { 0.0 };
-            for d in 0..n_dof {
-                let wd = &w[d * n + range.start..d * n + range.end];
-                let f = x * wd.iter().zip(psi).map(|(w, p)| w * p).sum::<f64>();
-                let spring = if MOVING {
-                    moving_spring(&cfg, goal[d], v[d], to_go, y[d], z[d])
-                } else {
-                    cfg.alpha_z * (cfg.beta_z * (goal[d] - y[d]) - z[d])
-                };
-                dz[d] = (spring + f) * inv_tau;
-            }
-        };
+        check_work((steps + 1.0) * substeps as f64, n, "DMP rollout")?;
+        // The rollout is the stepper run open loop: no measurement, no goal filter, no limits.
+        let mut stepper = Stepper::new(
+            self,
+            &StepperOptions {
+                substeps: Some(substeps),
+                alpha_e: vec![],
+                goal_filter: None,
+                rest_tol: opts.rest_tol,
+                ..StepperOptions::new(opts.dt)
+            },
+        )?;
+        let mut out = Samples::new(steps as usize + 1, n);
         let mut step = 0usize;
         loop {
-            derivative(x, &y, &z, &mut dz);
-            out.t.push(step as f64 * dt);
-            let mut at_rest = x * max_w / (cfg.alpha_z * cfg.beta_z) <= opts.rest_tol;
-            for d in 0..n_dof {
-                out.y.push(y[d]);
-                out.yd.push(z[d] * inv_tau);
-                out.ydd.push(dz[d] * inv_tau);
-                at_rest &= (goal[d] - y[d]).abs() <= opts.rest_tol && z[d].abs() <= opts.rest_tol;
-            }
+            let row = out.row(step, opts.dt);
+            stepper.step_into(row)?;
             let past_end = step as f64 >= steps;
-            if past_end && (!opts.until_rest || at_rest) {
+            if past_end && (!opts.until_rest || stepper.done()) {
                 break;
             }
             if past_end {
                 // Going on until rest: the work beyond `steps` was not bounded up front.
-                check_work(((step + 2) * substeps) as f64, n_dof, "DMP rollout")?;
+                check_work(((step + 2) * substeps) as f64, n, "DMP rollout")?;
             }
-            if step as f64 >= max_steps || out.y.len() >= MAX_VALUES {
+            if step as f64 >= max_steps || (step + 1) * n >= MAX_VALUES {
                 return Err(Error::Numerical {
                     context: "DMP rollout",
                     detail: format!(
@@ -255,30 +235,16 @@ impl Dmp {
                     ),
                 });
             }
-            for sub in 0..substeps {
-                if sub > 0 {
-                    derivative(x, &y, &z, &mut dz);
-                }
-                for d in 0..n_dof {
-                    y[d] += z[d] * inv_tau * h;
-                    z[d] += dz[d] * h;
-                }
-                x -= cfg.alpha_x * x * inv_tau * h;
-            }
             step += 1;
         }
+        let out = out.into_trajectory(step + 1);
         check_trajectory(&out, "DMP rollout")?;
         Ok(out)
     }
 
     /// Euler sub-steps per sample that keep the integration stable (1 when `dt` already is).
     fn substeps(&self, dt: f64) -> Result<usize> {
-        let cfg = self.config();
-        let limit = stable_step(cfg.alpha_z, cfg.beta_z, cfg.alpha_x) * self.tau();
-        if dt <= limit {
-            return Ok(1);
-        }
-        let k = (dt / limit).ceil();
+        let k = substeps_needed(self.config(), self.tau(), dt);
         if k.is_nan() || k > MAX_SUBSTEPS as f64 {
             return Err(self.too_coarse(dt, k, "at most 1000 are taken"));
         }
@@ -306,16 +272,6 @@ impl Dmp {
             ),
         }
     }
-}
-
-/// The spring of eq. 1 towards a goal moving with the final velocity `gd` (docs/method.md
-/// §2.8): `alpha_z (beta_z (g - gd (tau - t) - y) + tau gd - z)`, written with the goal's
-/// velocity per unit of scaled time, `v = tau gd`, and the scaled time to go, `s = (tau - t) /
-/// tau`: `alpha_z (beta_z (g - v s - y) + v - z)`. So written it depends on time only through
-/// the phase, and a stepper whose time scale changes keeps the path.
-#[inline(always)]
-pub(crate) fn moving_spring(cfg: &DmpConfig, g: f64, v: f64, s: f64, y: f64, z: f64) -> f64 {
-    cfg.alpha_z * (cfg.beta_z * (g - v * s - y) + v - z)
 }
 
 /// A rollout whose values overflowed (a huge goal or weights) is an error, not a result.
@@ -452,8 +408,7 @@ mod final_velocity_tests {
         );
     }
 
-    /// To rounding, as without a final velocity: only the forcing term's exponentials are
-    /// computed differently (crate::stepper's module docs).
+    /// Bit for bit, as without a final velocity: the rollout is the stepper run open loop.
     #[test]
     fn the_stepper_is_the_rollout() {
         let dmp = shaped(3)
@@ -474,10 +429,15 @@ mod final_velocity_tests {
             for j in 0..tr.n_samples() {
                 let (y, yd, _) = stepper.step(None).unwrap();
                 for d in 0..3 {
-                    let (ey, ev) = (y[d] - tr.y[j * 3 + d], yd[d] - tr.yd[j * 3 + d]);
-                    assert!(
-                        ey.abs() < 1e-12 && ev.abs() < 1e-11,
-                        "sample {j} at dt {dt}"
+                    assert_eq!(
+                        y[d].to_bits(),
+                        tr.y[j * 3 + d].to_bits(),
+                        "sample {j} at {dt}"
+                    );
+                    assert_eq!(
+                        yd[d].to_bits(),
+                        tr.yd[j * 3 + d].to_bits(),
+                        "sample {j} at {dt}"
                     );
                 }
             }

@@ -2,10 +2,10 @@
 //! [`Stepper::step`] per control period returns the next command `(y, yd, ydd)`.
 //!
 //! Without measurements, coupling terms, limits or goal changes the k-th call returns the
-//! rollout's sample k (`t = k dt`) to rounding: the same explicit Euler in the same order of
-//! updates (`y += z/tau h`, `z += dz h`, `x -= alpha_x x/tau h`), with the rollout's sub-steps
-//! when `dt` is beyond the stability limit ([`crate::rollout::stable_step`]); only the forcing
-//! term's exponentials are computed differently (in the private `forcing` module).
+//! rollout's sample k (`t = k dt`) bit for bit: the rollout ([`crate::rollout`]) is this stepper
+//! run open loop, each sample written into the returned arrays. Explicit Euler in the order
+//! `y += z/tau h`, `z += dz h`, `x -= alpha_x x/tau h`, in sub-steps when `dt` is beyond the
+//! stability limit ([`crate::euler::stable_step`]).
 //!
 //! Online, the stepper adds
 //! * **phase stopping** (Ijspeert et al. 2002, 2013): a measured state `y~` slows the clock by
@@ -27,8 +27,8 @@
 use crate::coupling::PositionLimits;
 use crate::dmp::{Dmp, DmpConfig, phase_clock, phase_to_go};
 use crate::error::{Error, Result, check_scalar, fmt_g};
-use crate::forcing::{Forcing, padded};
-use crate::rollout::{MAX_SUBSTEPS, moving_spring, stable_step};
+use crate::euler::{MAX_SUBSTEPS, moving_spring, substeps_needed};
+use crate::forcing::{Forcing, SumStart, padded};
 use crate::temporal_coupling::{TemporalCoupling, TemporalCouplingGains};
 
 /// Default phase-stopping gain, in 1 / (units of y)^2: a tracking error of 0.01 (rad or m)
@@ -194,12 +194,7 @@ pub(crate) fn substeps_for(
     dt: f64,
     requested: Option<usize>,
 ) -> Result<usize> {
-    let limit = stable_step(cfg.alpha_z, cfg.beta_z, cfg.alpha_x) * tau;
-    let needed = if dt <= limit {
-        1.0
-    } else {
-        (dt / limit).ceil()
-    };
+    let needed = substeps_needed(cfg, tau, dt);
     if needed.is_nan() || needed > MAX_SUBSTEPS as f64 {
         return Err(Error::InvalidParameter {
             name: "dt",
@@ -491,6 +486,23 @@ fn acceleration(out: &mut [f64], h: &[f64], z: &[f64], taud: f64, inv_tau: f64, 
     }
 }
 
+/// Where a period's command goes when it is not the stepper's last command: a sample of a
+/// rollout's arrays, `n` values each.
+pub(crate) struct Rows<'a> {
+    pub y: &'a mut [f64],
+    pub yd: &'a mut [f64],
+    pub ydd: &'a mut [f64],
+}
+
+/// The constants of one plain period.
+struct Pass {
+    inv_tau: f64,
+    inv_next: f64,
+    hs: f64,
+    taud: f64,
+    tol: f64,
+}
+
 /// Executes a [`Dmp`] one control period at a time (module docs).
 #[derive(Debug, Clone)]
 pub struct Stepper {
@@ -499,7 +511,7 @@ pub struct Stepper {
     clock: Clock,
     limits: Option<PositionLimits>,
     rest_tol: f64,
-    /// Whether the CPU runs [`Stepper::step_avx2`]: detected once, not at every step.
+    /// Whether the CPU runs [`Stepper::period_avx2`]: detected once, not at every step.
     avx2: bool,
     /// `max |w|`, for the rest criterion's bound on the forcing term.
     max_w: f64,
@@ -566,7 +578,7 @@ impl Stepper {
             goal_moving: false,
             final_velocity: dmp.final_velocity().map(|gd| (gd * dmp.tau()).data.into()),
             f: vec![0.0; padded(n)],
-            forcing: Forcing::new(dmp.basis(), dmp.weights()),
+            forcing: Forcing::new(dmp.basis(), dmp.weights(), SumStart::NegativeZero),
             h: vec![0.0; padded(n)],
             h_sub: vec![0.0; n],
             stiffness: vec![0.0; n],
@@ -693,33 +705,57 @@ impl Stepper {
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
     ) -> Result<(&[f64], &[f64], &[f64])> {
+        if !self.period(measured, coupling, None)? {
+            self.check_finite()?;
+        }
+        Ok(self.output())
+    }
+
+    /// One period without a measurement or a coupling term, its command written into `rows`
+    /// (`n` values each) instead of the stepper's last command: a rollout's sample, by the
+    /// stepper's own code. The state is not checked: a rollout checks what it returns.
+    pub(crate) fn step_into(&mut self, rows: Rows<'_>) -> Result<()> {
+        self.period(None, None, Some(rows)).map(|_| ())
+    }
+
+    /// One period, the command into `rows` if given, else into the last command; returns
+    /// whether the new state is known to be finite (false: unchecked).
+    #[inline(always)]
+    fn period(
+        &mut self,
+        measured: Option<&[f64]>,
+        coupling: Option<&[f64]>,
+        rows: Option<Rows<'_>>,
+    ) -> Result<bool> {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: the CPU supports the enabled features (detected in `new`).
-            return unsafe { self.step_avx2(measured, coupling) };
+            return unsafe { self.period_avx2(measured, coupling, rows) };
         }
-        self.step_inner::<false>(measured, coupling)
+        self.period_inner::<false>(measured, coupling, rows)
     }
 
-    /// [`Stepper::step_inner`] compiled for AVX2 (the per-coordinate loops run 4 wide); Rust
+    /// [`Stepper::period_inner`] compiled for AVX2 (the per-coordinate loops run 4 wide); Rust
     /// never fuses a multiply and an add on its own, so both copies give the same bits.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn step_avx2(
+    unsafe fn period_avx2(
         &mut self,
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
-    ) -> Result<(&[f64], &[f64], &[f64])> {
-        self.step_inner::<true>(measured, coupling)
+        rows: Option<Rows<'_>>,
+    ) -> Result<bool> {
+        self.period_inner::<true>(measured, coupling, rows)
     }
 
-    /// One period; `AVX2`: compiled into [`Stepper::step_avx2`], on a CPU with AVX2 and FMA.
+    /// One period; `AVX2`: compiled into [`Stepper::period_avx2`], on a CPU with AVX2 and FMA.
     #[inline(always)]
-    fn step_inner<const AVX2: bool>(
+    fn period_inner<const AVX2: bool>(
         &mut self,
         measured: Option<&[f64]>,
         coupling: Option<&[f64]>,
-    ) -> Result<(&[f64], &[f64], &[f64])> {
+        rows: Option<Rows<'_>>,
+    ) -> Result<bool> {
         let factor = match measured {
             Some(m) => {
                 check_coordinates("measured", m, self.n)?;
@@ -748,8 +784,7 @@ impl Stepper {
             && !self.goal_moving
             && self.final_velocity.is_none()
         {
-            self.plain_period::<AVX2>(tau, inv_tau, target)?;
-            return Ok(self.output());
+            return Ok(self.plain_period::<AVX2>(tau, inv_tau, target, rows));
         }
         self.derivative(coupled);
         self.at_rest = self.rest();
@@ -800,29 +835,46 @@ impl Stepper {
         );
         self.over_limit = self.exceeds_limits();
         self.steps += 1;
-        self.check_finite()?;
-        Ok(self.output())
+        if let Some(rows) = rows {
+            rows.y.copy_from_slice(&self.out_y[..n]);
+            rows.yd.copy_from_slice(&self.out_yd[..n]);
+            rows.ydd.copy_from_slice(&self.out_ydd[..n]);
+        }
+        Ok(false)
     }
 
-    /// The period of [`Stepper::step_inner`] without coupling terms, limits, sub-steps or a
+    /// The period of [`Stepper::period_inner`] without coupling terms, limits, sub-steps or a
     /// moving goal, the common case: the same operations on every coordinate, in one pass over
     /// the coordinates instead of one per stage.
     #[inline(always)]
-    fn plain_period<const AVX2: bool>(&mut self, tau: f64, inv_tau: f64, next: f64) -> Result<()> {
+    fn plain_period<const AVX2: bool>(
+        &mut self,
+        tau: f64,
+        inv_tau: f64,
+        next: f64,
+        rows: Option<Rows<'_>>,
+    ) -> bool {
         let cfg = *self.dmp.config();
         let hs = self.clock.dt;
         let taud = self.clock.rate(tau, next);
         let inv_next = 1.0 / next;
         let tol = self.rest_tol;
+        let pass = Pass {
+            inv_tau,
+            inv_next,
+            hs,
+            taud,
+            tol,
+        };
         #[cfg(target_arch = "x86_64")]
         let (rests, finite) = if AVX2 {
-            // SAFETY: with `AVX2` the CPU has AVX2 and FMA (`step_inner`).
-            unsafe { self.plain_pass_avx2(&cfg, inv_tau, inv_next, hs, taud, tol) }
+            // SAFETY: with `AVX2` the CPU has AVX2 and FMA (`period_inner`).
+            unsafe { self.plain_pass_avx2(&cfg, &pass, rows) }
         } else {
-            self.plain_pass(&cfg, inv_tau, inv_next, hs, taud, tol)
+            self.plain_pass(&cfg, &pass, rows)
         };
         #[cfg(not(target_arch = "x86_64"))]
-        let (rests, finite) = self.plain_pass(&cfg, inv_tau, inv_next, hs, taud, tol);
+        let (rests, finite) = self.plain_pass(&cfg, &pass, rows);
         self.at_rest = rests && self.forcing_spent();
         self.out_x = self.x;
         self.out_tau = tau;
@@ -841,96 +893,89 @@ impl Stepper {
         // Without coupling terms or limits the spring always pulls on to the goal.
         self.blocked = false;
         self.steps += 1;
-        if finite && self.x.is_finite() {
-            return Ok(());
-        }
-        self.check_finite()
+        finite && self.x.is_finite()
     }
 
-    /// The plain period's pass over the coordinates: the command from the state, the explicit
-    /// Euler step; returns whether every coordinate rests and whether the new state is finite.
+    /// The plain period's pass over the coordinates: the command from the state (into `rows`,
+    /// or the last command), the explicit Euler step; returns whether every coordinate rests
+    /// and whether the new state is finite.
     #[inline(always)]
-    fn plain_pass(
-        &mut self,
-        cfg: &DmpConfig,
-        inv_tau: f64,
-        inv_next: f64,
-        hs: f64,
-        taud: f64,
-        tol: f64,
-    ) -> (bool, bool) {
+    fn plain_pass(&mut self, cfg: &DmpConfig, pass: &Pass, rows: Option<Rows<'_>>) -> (bool, bool) {
         let n = self.n;
         let (g, g_target, f) = (&self.g[..n], &self.g_target[..n], &self.f[..n]);
         let (y, z) = (&mut self.y[..n], &mut self.z[..n]);
-        let (out_y, out_yd, out_ydd) = (
-            &mut self.out_y[..n],
-            &mut self.out_yd[..n],
-            &mut self.out_ydd[..n],
-        );
+        let Rows {
+            y: out_y,
+            yd: out_yd,
+            ydd: out_ydd,
+        } = rows.unwrap_or(Rows {
+            y: &mut self.out_y[..n],
+            yd: &mut self.out_yd[..n],
+            ydd: &mut self.out_ydd[..n],
+        });
+        let (out_yd, out_ydd) = (&mut out_yd[..n], &mut out_ydd[..n]);
         let mut rests = true;
         let mut finite = true;
         for d in 0..n {
             let (y0, z0) = (y[d], z[d]);
             let h = spring_at(cfg, g[d], y0, z0, f[d]);
-            rests &= rests_at(g_target[d], y0, z0, tol);
+            rests &= rests_at(g_target[d], y0, z0, pass.tol);
             out_y[d] = y0;
-            out_yd[d] = z0 * inv_tau;
-            explicit_step(&mut y[d], &mut z[d], h, inv_tau, hs);
-            out_ydd[d] = acceleration_at(h, z0, taud, inv_tau, inv_next);
+            out_yd[d] = z0 * pass.inv_tau;
+            explicit_step(&mut y[d], &mut z[d], h, pass.inv_tau, pass.hs);
+            out_ydd[d] = acceleration_at(h, z0, pass.taud, pass.inv_tau, pass.inv_next);
             finite &= y[d].is_finite() & z[d].is_finite() & out_ydd[d].is_finite();
         }
         (rests, finite)
     }
 
     /// [`Stepper::plain_pass`] four coordinates at a time in AVX2 registers, the same operations
-    /// lane by lane, over the padded arrays (their zeros stay zeros).
+    /// lane by lane, over the padded state (its zeros stay zeros); the command's last vector is
+    /// stored masked into `rows`, which hold `n` values.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     #[inline]
     unsafe fn plain_pass_avx2(
         &mut self,
         cfg: &DmpConfig,
-        inv_tau: f64,
-        inv_next: f64,
-        hs: f64,
-        taud: f64,
-        tol: f64,
+        pass: &Pass,
+        rows: Option<Rows<'_>>,
     ) -> (bool, bool) {
         use std::arch::x86_64::*;
         let c = |v: f64| _mm256_set1_pd(v);
         let (alpha_z, beta_z, inv_tau_v, hs_v, taud_v, tol_v) = (
             c(cfg.alpha_z),
             c(cfg.beta_z),
-            c(inv_tau),
-            c(hs),
-            c(taud),
-            c(tol),
+            c(pass.inv_tau),
+            c(pass.hs),
+            c(pass.taud),
+            c(pass.tol),
         );
-        let inv_next_v = c(inv_next);
+        let inv_next_v = c(pass.inv_next);
         let (sign, inf) = (c(-0.0), c(f64::INFINITY));
         let mut rests = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
         let mut finite = rests;
         // The arrays' addresses once (stores through them could otherwise change `self`'s).
-        let len = self.y.len();
+        let (n, len) = (self.n, self.y.len());
         let padded = |v: &Vec<f64>| {
             assert_eq!(v.len(), len, "the state is padded");
             v.as_ptr()
         };
         let [g, g_target, f] = [&self.g, &self.g_target, &self.f].map(padded);
-        let [y, z, out_y, out_yd, out_ydd] = [
-            &mut self.y,
-            &mut self.z,
-            &mut self.out_y,
-            &mut self.out_yd,
-            &mut self.out_ydd,
-        ]
-        .map(|v| {
+        let [y, z] = [&mut self.y, &mut self.z].map(|v| {
             assert_eq!(v.len(), len, "the state is padded");
             v.as_mut_ptr()
         });
+        let [out_y, out_yd, out_ydd] = match rows {
+            Some(r) => [r.y, r.yd, r.ydd].map(|v| {
+                assert!(v.len() >= n, "a row holds n values");
+                v.as_mut_ptr()
+            }),
+            None => [&mut self.out_y, &mut self.out_yd, &mut self.out_ydd].map(|v| v.as_mut_ptr()),
+        };
         let mut d = 0;
         while d < len {
-            // SAFETY: `d + 4 <= len`, the length of every array (asserted above).
+            // SAFETY: `d + 4 <= len`, the length of every state array (asserted above).
             let load = |v: *const f64| unsafe { _mm256_loadu_pd(v.add(d)) };
             let (y0, z0) = (load(y), load(z));
             let (g, g_target, f) = (load(g), load(g_target), load(f));
@@ -948,7 +993,7 @@ impl Stepper {
             let y1 = _mm256_add_pd(y0, _mm256_mul_pd(yd, hs_v));
             let z1 = _mm256_add_pd(z0, _mm256_mul_pd(dz, hs_v));
             // acceleration_at
-            let ydd = if taud == 0.0 {
+            let ydd = if pass.taud == 0.0 {
                 _mm256_mul_pd(_mm256_mul_pd(h, inv_tau_v), inv_tau_v)
             } else {
                 let rate = _mm256_sub_pd(h, _mm256_mul_pd(taud_v, z0));
@@ -957,11 +1002,20 @@ impl Stepper {
             let is_finite = |v| _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_andnot_pd(sign, v), inf);
             finite = _mm256_and_pd(finite, _mm256_and_pd(is_finite(y1), is_finite(z1)));
             finite = _mm256_and_pd(finite, is_finite(ydd));
-            // SAFETY: as for the loads.
+            // SAFETY: as for the loads; the command's stores stop at its `n` values.
             let store = |v: *mut f64, x| unsafe { _mm256_storeu_pd(v.add(d), x) };
-            store(out_y, y0);
-            store(out_yd, yd);
-            store(out_ydd, ydd);
+            if d + 4 <= n {
+                store(out_y, y0);
+                store(out_yd, yd);
+                store(out_ydd, ydd);
+            } else {
+                let lanes = _mm256_set_epi64x(d as i64 + 3, d as i64 + 2, d as i64 + 1, d as i64);
+                let mask = _mm256_cmpgt_epi64(_mm256_set1_epi64x(n as i64), lanes);
+                let store_n = |v: *mut f64, x| unsafe { _mm256_maskstore_pd(v.add(d), mask, x) };
+                store_n(out_y, y0);
+                store_n(out_yd, yd);
+                store_n(out_ydd, ydd);
+            }
             store(y, y1);
             store(z, z1);
             d += 4;
@@ -1244,10 +1298,12 @@ mod tests {
                 let measured: Vec<f64> = scalar.output().0.iter().map(|y| y - lag).collect();
                 let m = (k % 2 == 0).then_some(measured.as_slice());
                 let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-                let a = scalar.step_inner::<false>(m, None).unwrap();
-                let a = (bits(a.0), bits(a.1), bits(a.2));
+                let a = scalar.period_inner::<false>(m, None, None).unwrap();
                 // SAFETY: the CPU supports the enabled features (checked above).
-                let b = unsafe { vector.step_avx2(m, None) }.unwrap();
+                let b = unsafe { vector.period_avx2(m, None, None) }.unwrap();
+                assert_eq!(a, b, "n={n} step {k}");
+                let (a, b) = (scalar.output(), vector.output());
+                let a = (bits(a.0), bits(a.1), bits(a.2));
                 assert_eq!(a, (bits(b.0), bits(b.1), bits(b.2)), "n={n} step {k}");
                 assert_eq!(scalar.phase().to_bits(), vector.phase().to_bits());
                 assert_eq!(scalar.done(), vector.done(), "n={n} step {k}");

@@ -3,7 +3,7 @@
 //! truth where there is one: the closed-form spring for stiff settings the sub-steps rescue.
 
 use dmp_core::dmp::MAX_FIT_ALPHA_X;
-use dmp_core::rollout::stable_step;
+use dmp_core::euler::stable_step;
 use dmp_core::{Demonstration, Dmp, DmpConfig, Error, RolloutOptions};
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
