@@ -182,6 +182,46 @@ impl PeriodicBasis {
         self.exp2_64ths[(k & 63) as usize] * p * scale
     }
 
+    /// [`PeriodicBasis::exp`] of four lanes, for callers compiled for AVX2: the same
+    /// operations lane by lane (multiplies and adds, never fused), so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    pub(crate) fn exp4(&self, x: std::arch::x86_64::__m256d) -> std::arch::x86_64::__m256d {
+        use std::arch::x86_64::*;
+        const SIXTY_FOUR_OVER_LN2: f64 = 92.332_482_616_893_66;
+        const LN2_64_HI: f64 = 0.010_830_424_693_267_56;
+        const LN2_64_LO: f64 = 2.981_585_826_985_293_3e-12;
+        const ROUND: f64 = 6_755_399_441_055_744.0;
+        let c = |v: f64| _mm256_set1_pd(v);
+        let shifted = _mm256_add_pd(_mm256_mul_pd(x, c(SIXTY_FOUR_OVER_LN2)), c(ROUND));
+        let kf = _mm256_sub_pd(shifted, c(ROUND));
+        let k = _mm256_sub_epi64(
+            _mm256_castpd_si256(shifted),
+            _mm256_set1_epi64x(ROUND.to_bits() as i64),
+        );
+        let r = _mm256_sub_pd(
+            _mm256_sub_pd(x, _mm256_mul_pd(kf, c(LN2_64_HI))),
+            _mm256_mul_pd(kf, c(LN2_64_LO)),
+        );
+        let horner = |a: f64, inner| _mm256_add_pd(c(a), _mm256_mul_pd(r, inner));
+        let p = horner(
+            1.0,
+            horner(
+                1.0,
+                horner(0.5, horner(1.0 / 6.0, horner(1.0 / 24.0, c(1.0 / 120.0)))),
+            ),
+        );
+        // 2^(k div 64): `k` is small, so its low 32 bits shift arithmetically as the whole
+        // would, and only the low 12 bits of `1023 + (k >> 6)` reach the exponent field.
+        let e = _mm256_add_epi32(_mm256_srai_epi32::<6>(k), _mm256_set1_epi64x(1023));
+        let scale = _mm256_castsi256_pd(_mm256_slli_epi64::<52>(e));
+        let idx = _mm256_and_si256(k, _mm256_set1_epi64x(63));
+        // SAFETY: every index is below 64, within the table.
+        let t = unsafe { _mm256_i64gather_pd::<8>(self.exp2_64ths.as_ptr(), idx) };
+        _mm256_mul_pd(_mm256_mul_pd(t, p), scale)
+    }
+
     #[inline(always)]
     pub(crate) fn arg(&self, i: usize, cos_phi: f64, sin_phi: f64) -> f64 {
         self.h * (cos_phi * self.cos_c[i] + sin_phi * self.sin_c[i] - 1.0)
@@ -518,12 +558,19 @@ impl PeriodicDmp {
         dz: &mut [f64],
     ) {
         let cfg = &self.config;
-        self.forcing.eval(state.phi, &mut ws.scratch, &mut ws.shape);
-        let shape = &ws.shape;
+        let shape = self.shape(state.phi, ws);
         for d in 0..dz.len() {
             dz[d] = cfg.alpha_z * (cfg.beta_z * (goal[d] - state.y[d]) - state.z[d])
                 + amplitude[d] * shape[d];
         }
+    }
+
+    /// The forcing term's shape `sum_i psi_i w_i / sum_i psi_i` at phase `phi` (eq. P4 without
+    /// the amplitude), per coordinate, in `ws`.
+    #[inline]
+    pub(crate) fn shape<'w>(&self, phi: f64, ws: &'w mut Workspace) -> &'w [f64] {
+        self.forcing.eval(phi, &mut ws.scratch, &mut ws.shape);
+        &ws.shape
     }
 
     /// One semi-implicit (symplectic) Euler step of length `h` (s) at time constant `tau`, with

@@ -119,8 +119,8 @@ impl PeriodicForcing {
         self.window(m, half, cos_phi, sin_phi, top, psi, out);
     }
 
-    /// [`PeriodicForcing::window`] compiled for AVX2: Rust never fuses a multiply and an add on
-    /// its own, so it gives the same bits.
+    /// [`PeriodicForcing::window`] in AVX2 registers: the activations four at a time, each
+    /// operation the scalar one's (multiplies and adds, never fused), so the same bits.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     #[allow(clippy::too_many_arguments)]
@@ -134,7 +134,43 @@ impl PeriodicForcing {
         psi: &mut [f64],
         out: &mut [f64],
     ) {
-        self.window(m, half, cos_phi, sin_phi, top, psi, out);
+        use std::arch::x86_64::*;
+        let c = |v: f64| _mm256_set1_pd(v);
+        let window = 2 * half + 1;
+        let (cos_c, sin_c) = (&self.cos_c[m..m + self.len], &self.sin_c[m..m + self.len]);
+        let (h, floor) = (c(self.basis.h()), c(top - ACTIVATION_CUTOFF));
+        let (cos_v, sin_v, top_v, lowest) =
+            (c(cos_phi), c(sin_phi), c(top), c(-ACTIVATION_CUTOFF - 1.0));
+        let window_v = _mm256_set1_epi64x(window as i64);
+        let mut j = 0;
+        while j < self.len {
+            // SAFETY: `j + 4 <= len`, the length of the window's slices and of `psi`.
+            let (cj, sj) = unsafe {
+                (
+                    _mm256_loadu_pd(cos_c.as_ptr().add(j)),
+                    _mm256_loadu_pd(sin_c.as_ptr().add(j)),
+                )
+            };
+            let a = _mm256_mul_pd(
+                h,
+                _mm256_sub_pd(
+                    _mm256_add_pd(_mm256_mul_pd(cos_v, cj), _mm256_mul_pd(sin_v, sj)),
+                    c(1.0),
+                ),
+            );
+            let e = self
+                .basis
+                .exp4(_mm256_max_pd(_mm256_sub_pd(a, top_v), lowest));
+            let lanes = _mm256_set_epi64x(j as i64 + 3, j as i64 + 2, j as i64 + 1, j as i64);
+            let keep = _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(a, floor),
+                _mm256_castsi256_pd(_mm256_cmpgt_epi64(window_v, lanes)),
+            );
+            // SAFETY: as above.
+            unsafe { _mm256_storeu_pd(psi.as_mut_ptr().add(j), _mm256_and_pd(e, keep)) };
+            j += LANES;
+        }
+        self.weigh(m, window, psi, out);
     }
 
     /// [`PeriodicForcing::eval`] over the window about centre `m`.
@@ -160,6 +196,13 @@ impl PeriodicForcing {
             let e = self.basis.exp((a - top).max(-ACTIVATION_CUTOFF - 1.0));
             *p = if a > floor && j < window { e } else { 0.0 };
         }
+        self.weigh(m, window, psi, out);
+    }
+
+    /// The activations `psi` of the window about centre `m` normalized, and each coordinate's
+    /// weighted sum over them into `out`.
+    #[inline(always)]
+    fn weigh(&self, m: usize, window: usize, psi: &mut [f64], out: &mut [f64]) {
         // summed in the walk's order (the zeros outside it change nothing; those past the window
         // are left out)
         let psi = &mut psi[..window];
