@@ -501,6 +501,8 @@ struct Pass {
     hs: f64,
     taud: f64,
     tol: f64,
+    /// The scaled time to go of a final velocity's moving goal (0 without one).
+    to_go: f64,
 }
 
 /// Executes a [`Dmp`] one control period at a time (module docs).
@@ -576,7 +578,9 @@ impl Stepper {
             g: padded_copy(dmp.goal().as_slice()),
             g_target: padded_copy(dmp.goal().as_slice()),
             goal_moving: false,
-            final_velocity: dmp.final_velocity().map(|gd| (gd * dmp.tau()).data.into()),
+            final_velocity: dmp
+                .final_velocity()
+                .map(|gd| padded_copy((gd * dmp.tau()).as_slice())),
             f: vec![0.0; padded(n)],
             forcing: Forcing::new(dmp.basis(), dmp.weights(), SumStart::NegativeZero),
             h: vec![0.0; padded(n)],
@@ -782,7 +786,6 @@ impl Stepper {
             && self.clock.coupling.is_none()
             && self.clock.substeps == 1
             && !self.goal_moving
-            && self.final_velocity.is_none()
         {
             return Ok(self.plain_period::<AVX2>(tau, inv_tau, target, rows));
         }
@@ -859,12 +862,18 @@ impl Stepper {
         let taud = self.clock.rate(tau, next);
         let inv_next = 1.0 / next;
         let tol = self.rest_tol;
+        // A final velocity's goal moves with the scaled time to go, read from the phase.
+        let to_go = match self.final_velocity {
+            Some(_) => phase_to_go(self.x, phase_clock(tau, cfg.alpha_x, hs)),
+            None => 0.0,
+        };
         let pass = Pass {
             inv_tau,
             inv_next,
             hs,
             taud,
             tol,
+            to_go,
         };
         #[cfg(target_arch = "x86_64")]
         let (rests, finite) = if AVX2 {
@@ -879,15 +888,16 @@ impl Stepper {
         self.out_x = self.x;
         self.out_tau = tau;
         self.x -= cfg.alpha_x * self.x * inv_tau * hs;
+        let x = self.forcing_phase();
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
             // SAFETY: as above.
-            unsafe { self.forcing.eval_avx2(self.x, &mut self.f) };
+            unsafe { self.forcing.eval_avx2(x, &mut self.f) };
         } else {
-            self.update_forcing();
+            self.forcing.eval(x, &mut self.f);
         }
         #[cfg(not(target_arch = "x86_64"))]
-        self.update_forcing();
+        self.forcing.eval(x, &mut self.f);
         self.clock.tau = next;
         self.over_limit = false;
         // Without coupling terms or limits the spring always pulls on to the goal.
@@ -916,9 +926,13 @@ impl Stepper {
         let (out_yd, out_ydd) = (&mut out_yd[..n], &mut out_ydd[..n]);
         let mut rests = true;
         let mut finite = true;
+        let v = self.final_velocity.as_deref();
         for d in 0..n {
             let (y0, z0) = (y[d], z[d]);
-            let h = spring_at(cfg, g[d], y0, z0, f[d]);
+            let h = match v {
+                None => spring_at(cfg, g[d], y0, z0, f[d]),
+                Some(v) => moving_spring(cfg, g[d], v[d], pass.to_go, y0, z0) + f[d],
+            };
             rests &= rests_at(g_target[d], y0, z0, pass.tol);
             out_y[d] = y0;
             out_yd[d] = z0 * pass.inv_tau;
@@ -962,6 +976,8 @@ impl Stepper {
             v.as_ptr()
         };
         let [g, g_target, f] = [&self.g, &self.g_target, &self.f].map(padded);
+        let moving = self.final_velocity.as_ref().map(padded);
+        let to_go = c(pass.to_go);
         let [y, z] = [&mut self.y, &mut self.z].map(|v| {
             assert_eq!(v.len(), len, "the state is padded");
             v.as_mut_ptr()
@@ -979,9 +995,19 @@ impl Stepper {
             let load = |v: *const f64| unsafe { _mm256_loadu_pd(v.add(d)) };
             let (y0, z0) = (load(y), load(z));
             let (g, g_target, f) = (load(g), load(g_target), load(f));
-            // spring_at
-            let spring = _mm256_sub_pd(_mm256_mul_pd(beta_z, _mm256_sub_pd(g, y0)), z0);
-            let h = _mm256_add_pd(_mm256_mul_pd(alpha_z, spring), f);
+            // spring_at, or moving_spring + f
+            let h = match moving {
+                None => {
+                    let spring = _mm256_sub_pd(_mm256_mul_pd(beta_z, _mm256_sub_pd(g, y0)), z0);
+                    _mm256_add_pd(_mm256_mul_pd(alpha_z, spring), f)
+                }
+                Some(v) => {
+                    let v = load(v);
+                    let gap = _mm256_sub_pd(_mm256_sub_pd(g, _mm256_mul_pd(v, to_go)), y0);
+                    let pull = _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(beta_z, gap), v), z0);
+                    _mm256_add_pd(_mm256_mul_pd(alpha_z, pull), f)
+                }
+            };
             // rests_at
             let gap = _mm256_andnot_pd(sign, _mm256_sub_pd(g_target, y0));
             let near = _mm256_cmp_pd::<_CMP_LE_OQ>(gap, tol_v);
@@ -1099,7 +1125,23 @@ impl Stepper {
     /// `self.f = f(x)` (eq. 4).
     #[inline(always)]
     fn update_forcing(&mut self) {
-        self.forcing.eval(self.x, &mut self.f);
+        let x = self.forcing_phase();
+        self.forcing.eval(x, &mut self.f);
+    }
+
+    /// The phase the forcing term is read at: the integrator's, or with a final velocity the
+    /// closed form `exp(-alpha_x t / tau)` (the fit's) of the time read from it
+    /// (docs/method.md §2.8): there the velocity at tau is the point, and explicit Euler's phase
+    /// runs ahead of the closed form by `O(dt)`, which would play the forcing term early.
+    #[inline(always)]
+    fn forcing_phase(&self) -> f64 {
+        if !self.final_velocity.is_some() {
+            return self.x;
+        }
+        let alpha_x = self.dmp.config().alpha_x;
+        let hs = self.clock.dt / self.clock.substeps as f64;
+        let to_go = phase_to_go(self.x, phase_clock(self.clock.tau, alpha_x, hs));
+        crate::exp::exp(-alpha_x * (1.0 - to_go))
     }
 
     /// `tau dz/dt` of the current state (eq. 1 with the coupling terms) into `out`, and the

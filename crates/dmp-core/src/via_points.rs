@@ -77,20 +77,27 @@ pub fn through_via_points(
     let base = dmp.rollout(&opts)?;
     // J (V x N, row-major): the impulse response of each weight at the via samples
     let n = dmp.n_basis();
+    // With a final velocity the forcing term is read at another phase (docs/method.md §2.8):
+    // the impulse responses are then those of a moving DMP, less its spring's own motion.
+    let unit = |w: DMatrix<f64>| -> Result<Dmp> {
+        let d = Dmp::new(*dmp.config(), w, DVector::zeros(1), DVector::zeros(1), dmp.tau())?;
+        match dmp.final_velocity() {
+            Some(_) => d.with_final_velocity(DVector::from_element(1, 1.0)),
+            None => Ok(d),
+        }
+    };
+    let spring = match dmp.final_velocity() {
+        Some(_) => Some(unit(DMatrix::zeros(n, 1))?.rollout(&opts)?),
+        None => None,
+    };
     let mut jac = vec![0.0; n_via * n];
     for i in 0..n {
         let mut w = DMatrix::zeros(n, 1);
         w[i] = 1.0;
-        let unit = Dmp::new(
-            *dmp.config(),
-            w,
-            DVector::zeros(1),
-            DVector::zeros(1),
-            dmp.tau(),
-        )?;
-        let tr = unit.rollout(&opts)?;
+        let tr = unit(w)?.rollout(&opts)?;
         for (v, &k) in samples.iter().enumerate() {
-            jac[v * n + i] = at(&tr.y, 1, k, 0);
+            let own = spring.as_ref().map_or(0.0, |s| at(&s.y, 1, k, 0));
+            jac[v * n + i] = at(&tr.y, 1, k, 0) - own;
         }
     }
     // G = J J^T (V x V, column-major, symmetric), factored once for every DOF

@@ -226,6 +226,17 @@ fn the_one_pass_period_gives_the_staged_periods_bits() {
         .collect();
     let start = [0.0, 0.5, 1.0, -0.3, 0.2, 0.0, 2.0];
     let dmp = joint_dmp(&w, 30, &[0.4, -1.0, 2.0, 0.1, 0.9, 0.0, 1.5], &start, 0.8);
+    let moving = dmp
+        .with_final_velocity(nalgebra::DVector::from_vec(vec![
+            0.5, 0.0, -1.0, 0.2, 0.0, 0.3, 1.0,
+        ]))
+        .unwrap();
+    for dmp in [dmp, moving] {
+        one_pass_is_staged(&dmp);
+    }
+}
+
+fn one_pass_is_staged(dmp: &Dmp) {
     let base = StepperOptions {
         goal_filter: None,
         ..StepperOptions::new(2e-3)
@@ -239,8 +250,8 @@ fn the_one_pass_period_gives_the_staged_periods_bits() {
     let staged_by: [(StepperOptions, Option<&[f64]>); 2] =
         [(base.clone(), Some(&zeros)), (far, None)];
     for (opts, coupling) in staged_by {
-        let mut one_pass = Stepper::new(&dmp, &base).unwrap();
-        let mut staged = Stepper::new(&dmp, &opts).unwrap();
+        let mut one_pass = Stepper::new(dmp, &base).unwrap();
+        let mut staged = Stepper::new(dmp, &opts).unwrap();
         for k in 0..3000 {
             if k == 300 {
                 for s in [&mut one_pass, &mut staged] {
@@ -259,7 +270,8 @@ fn the_one_pass_period_gives_the_staged_periods_bits() {
             assert_eq!(one_pass.tau().to_bits(), staged.tau().to_bits());
             assert_eq!(one_pass.done(), staged.done(), "step {k}");
         }
-        assert!(one_pass.done());
+        // A movement with a final velocity moves on and is never done.
+        assert_eq!(one_pass.done(), dmp.final_velocity().is_none());
     }
 }
 
