@@ -656,7 +656,7 @@ impl CartesianStepper {
     /// runs ahead of the closed form by `O(dt)`, which would play the forcing term early.
     #[inline(always)]
     fn forcing_phase(&self) -> f64 {
-        if !self.final_velocity.is_some() {
+        if self.final_velocity.is_none() {
             return self.x;
         }
         let alpha_x = self.cfg.alpha_x;

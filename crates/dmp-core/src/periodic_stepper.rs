@@ -119,6 +119,108 @@ pub struct PeriodicStepper {
     out_ydd: Vec<f64>,
 }
 
+/// The constants of one plain period (`PeriodicStepper::plain_period`).
+struct PlainPass {
+    alpha_z: f64,
+    beta_z: f64,
+    /// The envelope's factor.
+    m: f64,
+    inv_tau: f64,
+    /// `dt / tau` as the rollout's step takes it.
+    k: f64,
+    dt: f64,
+    /// `1 / tau_next - 1 / tau`.
+    change: f64,
+    inv_tau2: f64,
+}
+
+/// What one plain period reads and writes per coordinate, `n` values each.
+struct PlainRows<'a> {
+    goal: &'a [f64],
+    amplitude: &'a [f64],
+    shape: &'a [f64],
+    y: &'a mut [f64],
+    z: &'a mut [f64],
+    dz: &'a mut [f64],
+    out_y: &'a mut [f64],
+    out_yd: &'a mut [f64],
+    out_ydd: &'a mut [f64],
+}
+
+impl PlainRows<'_> {
+    /// The period's pass over the coordinates (eqs. P1-P2, then the position step at the next
+    /// period's scale); returns whether the new state and the command are finite.
+    #[inline(always)]
+    fn pass(self, c: &PlainPass) -> bool {
+        let mut finite = true;
+        for d in 0..self.y.len() {
+            let (y0, z0) = (self.y[d], self.z[d]);
+            let h = c.alpha_z * (c.beta_z * (self.goal[d] - y0) - z0)
+                + c.m * self.amplitude[d] * self.shape[d];
+            self.dz[d] = h;
+            self.out_y[d] = y0;
+            self.out_yd[d] = z0 * c.inv_tau;
+            let z1 = z0 + h * c.k;
+            let y1 = y0 + z1 * c.k;
+            self.z[d] = z1;
+            self.y[d] = y1 + z1 * c.dt * c.change;
+            self.out_ydd[d] = h * c.inv_tau2 + z1 * c.change / c.dt;
+            finite &= self.y[d].is_finite() & z1.is_finite() & self.out_ydd[d].is_finite();
+        }
+        finite
+    }
+
+    /// [`PlainRows::pass`] four coordinates at a time in AVX2 registers, the same operations
+    /// lane by lane (never fused), the last vector loaded and stored masked.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn pass_avx2(self, c: &PlainPass) -> bool {
+        use std::arch::x86_64::*;
+        let v = |x: f64| _mm256_set1_pd(x);
+        let n = self.y.len();
+        let (sign, inf) = (v(-0.0), v(f64::INFINITY));
+        let mut finite = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        let mut d = 0;
+        while d < n {
+            let lanes = _mm256_set_epi64x(d as i64 + 3, d as i64 + 2, d as i64 + 1, d as i64);
+            let mask = _mm256_cmpgt_epi64(_mm256_set1_epi64x(n as i64), lanes);
+            // SAFETY: the mask covers the lanes below `n`, within every slice (all `n` long).
+            let load = |s: &[f64]| unsafe { _mm256_maskload_pd(s.as_ptr().add(d), mask) };
+            let store =
+                |s: &mut [f64], x| unsafe { _mm256_maskstore_pd(s.as_mut_ptr().add(d), mask, x) };
+            let (y0, z0) = (load(self.y), load(self.z));
+            let spring = _mm256_sub_pd(
+                _mm256_mul_pd(v(c.beta_z), _mm256_sub_pd(load(self.goal), y0)),
+                z0,
+            );
+            let forcing = _mm256_mul_pd(
+                _mm256_mul_pd(v(c.m), load(self.amplitude)),
+                load(self.shape),
+            );
+            let h = _mm256_add_pd(_mm256_mul_pd(v(c.alpha_z), spring), forcing);
+            let z1 = _mm256_add_pd(z0, _mm256_mul_pd(h, v(c.k)));
+            let y1 = _mm256_add_pd(y0, _mm256_mul_pd(z1, v(c.k)));
+            let y2 = _mm256_add_pd(y1, _mm256_mul_pd(_mm256_mul_pd(z1, v(c.dt)), v(c.change)));
+            let ydd = _mm256_add_pd(
+                _mm256_mul_pd(h, v(c.inv_tau2)),
+                _mm256_div_pd(_mm256_mul_pd(z1, v(c.change)), v(c.dt)),
+            );
+            let is_finite = |x| _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_andnot_pd(sign, x), inf);
+            finite = _mm256_and_pd(finite, _mm256_and_pd(is_finite(y2), is_finite(z1)));
+            finite = _mm256_and_pd(finite, is_finite(ydd));
+            store(&mut *self.dz, h);
+            store(&mut *self.out_y, y0);
+            store(&mut *self.out_yd, _mm256_mul_pd(z0, v(c.inv_tau)));
+            store(&mut *self.z, z1);
+            store(&mut *self.y, y2);
+            store(&mut *self.out_ydd, ydd);
+            d += 4;
+        }
+        // the lanes past `n` hold zeros, finite
+        _mm256_movemask_pd(finite) == 0b1111
+    }
+}
+
 fn smoothstep(s: f64) -> f64 {
     s * s * (3.0 - 2.0 * s)
 }
@@ -297,33 +399,38 @@ impl PeriodicStepper {
         let next = stop * (1.0 / self.frequency.value[0]);
         let change = 1.0 / next - inv_tau;
         let inv_tau2 = 1.0 / (tau * tau);
-        let mut finite = next.is_finite();
+        let pass = PlainPass {
+            alpha_z: cfg.alpha_z,
+            beta_z: cfg.beta_z,
+            m,
+            inv_tau,
+            k,
+            dt,
+            change,
+            inv_tau2,
+        };
         let n = self.dz.len();
-        let (goal, amplitude, shape) = (
-            &self.goal.value[..n],
-            &self.amplitude.value[..n],
-            &shape[..n],
-        );
-        let (y, z) = (&mut self.state.y[..n], &mut self.state.z[..n]);
-        let (dz, out_y, out_yd, out_ydd) = (
-            &mut self.dz[..n],
-            &mut self.out_y[..n],
-            &mut self.out_yd[..n],
-            &mut self.out_ydd[..n],
-        );
-        for d in 0..n {
-            let (y0, z0) = (y[d], z[d]);
-            let h = cfg.alpha_z * (cfg.beta_z * (goal[d] - y0) - z0) + m * amplitude[d] * shape[d];
-            dz[d] = h;
-            out_y[d] = y0;
-            out_yd[d] = z0 * inv_tau;
-            let z1 = z0 + h * k;
-            let y1 = y0 + z1 * k;
-            z[d] = z1;
-            y[d] = y1 + z1 * dt * change;
-            out_ydd[d] = h * inv_tau2 + z1 * change / dt;
-            finite &= y[d].is_finite() & z1.is_finite() & out_ydd[d].is_finite();
-        }
+        let rows = PlainRows {
+            goal: &self.goal.value[..n],
+            amplitude: &self.amplitude.value[..n],
+            shape: &shape[..n],
+            y: &mut self.state.y[..n],
+            z: &mut self.state.z[..n],
+            dz: &mut self.dz[..n],
+            out_y: &mut self.out_y[..n],
+            out_yd: &mut self.out_yd[..n],
+            out_ydd: &mut self.out_ydd[..n],
+        };
+        #[cfg(target_arch = "x86_64")]
+        let finite = if crate::linalg::has_avx2_fma() {
+            // SAFETY: the CPU supports the enabled features (checked just above).
+            unsafe { rows.pass_avx2(&pass) }
+        } else {
+            rows.pass(&pass)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let finite = rows.pass(&pass);
+        let finite = finite && next.is_finite();
         self.state.phi += k;
         if self.state.phi >= TWO_PI {
             self.state.phi -= TWO_PI;

@@ -80,7 +80,13 @@ pub fn through_via_points(
     // With a final velocity the forcing term is read at another phase (docs/method.md §2.8):
     // the impulse responses are then those of a moving DMP, less its spring's own motion.
     let unit = |w: DMatrix<f64>| -> Result<Dmp> {
-        let d = Dmp::new(*dmp.config(), w, DVector::zeros(1), DVector::zeros(1), dmp.tau())?;
+        let d = Dmp::new(
+            *dmp.config(),
+            w,
+            DVector::zeros(1),
+            DVector::zeros(1),
+            dmp.tau(),
+        )?;
         match dmp.final_velocity() {
             Some(_) => d.with_final_velocity(DVector::from_element(1, 1.0)),
             None => Ok(d),
