@@ -232,6 +232,8 @@ class _Scene:
         self.bodies = bodies
         self._ids = np.array([b.id for b in bodies], dtype=np.uint64)
         self._buffer = pymunk.batch.Buffer()
+        self._listed = np.zeros(0, dtype=np.uint64)  # the batch's bodies when _rows was made
+        self._rows = np.zeros(0, dtype=np.intp)
 
     def positions(self) -> NDArray[np.float64]:
         """(n, 2) disc positions in insertion order, read in one batch call."""
@@ -244,11 +246,13 @@ class _Scene:
         ids = np.frombuffer(buf.int_buf(), dtype=np.uint64)
         xy = np.frombuffer(buf.float_buf(), dtype=np.float64).reshape(-1, 2)
         # The batch lists every non-static body (the kinematic bottle too), in the space's
-        # order: select and order the discs by id rather than trusting that order.
-        if ids.shape[0] == self._ids.shape[0] + 1 and np.array_equal(ids[1:], self._ids):
-            return xy[1:].copy()
-        order = {int(i): k for k, i in enumerate(ids)}
-        return xy[[order[int(i)] for i in self._ids]].copy()
+        # order: select and order the discs by id rather than trusting that order. The rows
+        # are looked up again only when the batch's order changed since the last call.
+        if not np.array_equal(ids, self._listed):
+            order = {int(i): k for k, i in enumerate(ids)}
+            self._rows = np.array([order[int(i)] for i in self._ids], dtype=np.intp)
+            self._listed = ids.copy()
+        return xy[self._rows]
 
     def velocities(self) -> NDArray[np.float64]:
         return np.array([tuple(b.velocity) for b in self.bodies], dtype=float).reshape(-1, 2)
