@@ -88,9 +88,11 @@ def _particle_positions(data: Any, n: int) -> NDArray[np.float64]:
     return data.qpos[7:].reshape(n, 7)[:, :3].copy() if n else np.zeros((0, 3))
 
 
-#: settled liquids kept per process, most recently used last (each holds a compiled model)
+#: settled liquids kept per process, most recently used last (each holds a compiled model):
+#: enough for every liquid of the reproduction's arm pours (its bottles times its liquid seeds),
+#: so that a worker handed their runs in any order settles each liquid once
 _SETTLED: dict[tuple[int, int, tuple[str, int, int]], SettledLiquid] = {}
-_SETTLED_KEPT = 8
+_SETTLED_KEPT = 32
 
 
 def liquid_xml(n: int, seed: int = 0, solver: tuple[str, int, int] = (am.SOLVER, am.ITERATIONS, am.CONDIM),

@@ -14,6 +14,7 @@ from dmprs.adapters import BaseAdapter, Outcome, SignalSpec, Status
 from dmprs.adapters.spec import pose_problems, start_problems
 from dmprs.portable import arccos
 from dmprs.sim import arm_scene as scene
+from dmprs.sim import pour_memo
 from dmprs.sim.arm_ik import ArmKinematics
 from dmprs.sim.arm_scene import HOME_POSE, home_configuration
 from dmprs.tasks import iiwa
@@ -169,12 +170,19 @@ class ArmPouringAdapter(BaseAdapter):
         joints, pe, re, problems = self.plan(trajectory)
         if problems or joints is None:  # execute() checked already; a changed trajectory is refused
             return Outcome(Status.REJECTED, message="; ".join(problems) or "not a trajectory")
-        liquid = scene.settle_liquid(self.n_particles, self.liquid.seed, should_stop=self._interrupted)
-        if liquid is None:  # stopped or timed out while the liquid settled
-            return self._interrupted_outcome()
         t = controller_times(joints.t)
         qd = joints.yd if joints.yd is not None else np.gradient(joints.y, t, axis=0)
-        result = scene.simulate_pour(t, joints.y, qd, liquid, hold=self.liquid.hold, should_stop=self._interrupted)
+        n, seed, hold = self.n_particles, self.liquid.seed, self.liquid.hold
+
+        def pour() -> scene.ArmPourResult | None:
+            liquid = scene.settle_liquid(n, seed, should_stop=self._interrupted)
+            if liquid is None:
+                return None
+            return scene.simulate_pour(t, joints.y, qd, liquid, hold=hold, should_stop=self._interrupted)
+
+        result = pour_memo.memoized("arm-pouring", (n, seed, hold, t, joints.y, qd), pour)
+        if result is None:  # stopped or timed out while the liquid settled
+            return self._interrupted_outcome()
         t_rel = joints.t - joints.t[0]
         reached = t_rel <= result.times[-1] + 1e-12
         executed = None

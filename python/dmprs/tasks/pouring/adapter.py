@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from dmprs.adapters import AdapterSpec, BaseAdapter, Outcome, SignalSpec, Status
+from dmprs.sim import pour_memo
 from dmprs.sim import pouring_scene as scene
 from dmprs.tasks.liquid import CURVE_SIGNALS, PARTICLE_VOLUME, Liquid, check_volume, counts
 from dmprs.tasks.liquid import signals as liquid_signals
@@ -101,10 +102,12 @@ class PouringAdapter(BaseAdapter):
         return problems or self._extra_checks(trajectory)
 
     def _execute(self, trajectory: Trajectory) -> Outcome:
-        liquid = scene.settled_liquid(self.n_particles, self.liquid.seed)
+        n, seed, hold = self.n_particles, self.liquid.seed, self.liquid.hold
         trajectory = self.noise.track(trajectory, self._rng)
-        result = scene.simulate_pour(trajectory.t, trajectory.y[:, 0], liquid, hold=self.liquid.hold,
-                                     should_stop=self._interrupted)
+        t, tilt = trajectory.t, trajectory.y[:, 0]
+        result = pour_memo.memoized("pouring", (n, seed, hold, t, tilt), lambda: scene.simulate_pour(
+            t, tilt, scene.settled_liquid(n, seed), hold=hold, should_stop=self._interrupted))
+        assert result is not None  # a 2-D pour always starts
         # What the bottle did, at the command's sample times (up to where the pour got).
         t_rel = trajectory.t - trajectory.t[0]
         reached = t_rel <= result.times[-1] + 1e-12
