@@ -18,6 +18,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import shutil
+import tempfile
 import time
 from collections import Counter
 from collections.abc import Callable
@@ -31,25 +33,38 @@ from dmprs.reproduce.plan import LearnSpec, plan, skipped
 from dmprs.reproduce.report import PAPER, markdown, summarize
 from dmprs.reproduce.run import (
     dispatch,
-    longest_first,
+    experiment_of,
     part_of,
     pinned_numerics,
-    prepare_pouring,
     run_learning,
+    schedule,
     seconds_left,
 )
+from dmprs.sim import pour_memo
 
 
 @dataclasses.dataclass
 class PartTime:
-    """Where a part's time went: its runs, their summed wall-clock seconds (in the workers), and
-    the job's elapsed seconds when its last run finished.
+    """Where a part's time went: its runs, their summed wall-clock and CPU seconds (in the
+    workers), the job's elapsed seconds when its last run finished, and per experiment of the
+    part (:func:`~dmprs.reproduce.run.experiment_of`) its runs and their wall-clock seconds.
     """
 
     part: str
     runs: int
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
     finished_at: float | None = None
+    experiments: dict[str, list[float]] = dataclasses.field(default_factory=dict)
+
+    def add(self, result: dict[str, Any]) -> None:
+        """Counts a finished run of the part."""
+        seconds = float(result.get("seconds", 0.0))
+        self.seconds += seconds
+        self.cpu_seconds += float(result.get("cpu_seconds", 0.0))
+        runs_seconds = self.experiments.setdefault(experiment_of(result), [0, 0.0])
+        runs_seconds[0] += 1
+        runs_seconds[1] += seconds
 
 
 __all__ = ["PAPER", "LearnSpec", "PartTime", "dispatch", "markdown", "plan", "reproduce", "run_learning", "skipped",
@@ -65,7 +80,7 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
     ``progress(done, total, result)`` follows every run; ``part_done(part, elapsed, remaining)``
     every part as its last run finishes, with the job's elapsed seconds and an estimate of the
     seconds left (:func:`~dmprs.reproduce.run.seconds_left`). The report keeps each part's time
-    (``timing``: its runs, their summed run time, when it finished).
+    (``timing``: :class:`PartTime`, the slowest part first).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -73,9 +88,13 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
     cache.mkdir(exist_ok=True)
     specs = plan(quick)
     start = time.perf_counter()
-    # Workers inherit the environment: they read the pouring calibration from this disk cache.
+    # Workers inherit the environment: they read the pouring calibration from this disk cache,
+    # and each pour another run of this job has simulated from the job's memo.
     saved = os.environ.get("DMPRS_CACHE_DIR")
     os.environ["DMPRS_CACHE_DIR"] = saved or str(cache.resolve())
+    memo = Path(tempfile.mkdtemp(prefix="pours-", dir=cache)).resolve()
+    saved_memo = os.environ.get(pour_memo.MEMO_DIR)
+    os.environ[pour_memo.MEMO_DIR] = str(memo)
     done = [0]
     parts = {name: PartTime(name, runs) for name, runs in Counter(part_of(s) for s in specs).items()}
     left = Counter(part_of(s) for s in specs)
@@ -83,7 +102,7 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
     def on_result(i: int, r: dict[str, Any]) -> None:
         done[0] += 1
         part = part_of(specs[i])
-        parts[part].seconds += float(r.get("seconds", 0.0))
+        parts[part].add(r)
         left[part] -= 1
         elapsed = time.perf_counter() - start
         if left[part] == 0:
@@ -97,9 +116,10 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
 
     try:
         with pinned_numerics():
-            prepare_pouring(specs, Path(os.environ["DMPRS_CACHE_DIR"]), backend=backend, workers=workers)
-            results = pmap(dispatch, specs, backend=backend, workers=workers, on_result=on_result,
-                           order=longest_first(specs))
+            items, order, after = schedule(specs, Path(os.environ["DMPRS_CACHE_DIR"]))
+            first = len(items) - len(specs)  # the calibrations come first; on_result tells the runs
+            results = pmap(dispatch, items, backend=backend, workers=workers, order=order, after=after,
+                           on_result=lambda i, r: on_result(i - first, r) if i >= first else None)[first:]
         report = summarize(results)
         report.update(quick=quick, backend=backend, seconds=round(time.perf_counter() - start, 1),
                       skipped=skipped(quick),
@@ -110,5 +130,10 @@ def reproduce(out: str | Path = "out", *, quick: bool = False, backend: str = "l
     finally:
         if saved is None:
             del os.environ["DMPRS_CACHE_DIR"]
+        if saved_memo is None:
+            del os.environ[pour_memo.MEMO_DIR]
+        else:
+            os.environ[pour_memo.MEMO_DIR] = saved_memo
+        shutil.rmtree(memo, ignore_errors=True)
     (out / "report.md").write_text(markdown(report, figures))
     return report

@@ -91,9 +91,16 @@ def markdown(report: dict[str, Any], figures: list[Path]) -> str:
     lines += [f"\n{note}" for note in report.get("skipped", [])]
     if report.get("timing"):
         lines += ["", "## Where the time went", "",
-                  ("Each part's runs, their wall-clock seconds summed over the workers, and when in the job "
-                   "its last run finished."), "",
-                  "| part | runs | run time (s) | finished at (s) |", "|---|---:|---:|---:|"]
-        lines += [f"| {p['part']} | {p['runs']} | {p['seconds']:.1f} | {p['finished_at']} |" for p in report["timing"]]
+                  ("Each part's runs, their wall-clock and CPU seconds summed over the workers, and when in "
+                   "the job its last run finished; then each experiment of a part that has more than one."), "",
+                  "| part | runs | run time (s) | CPU time (s) | finished at (s) |", "|---|---:|---:|---:|---:|"]
+        lines += [f"| {p['part']} | {p['runs']} | {p['seconds']:.1f} | {p.get('cpu_seconds', 0.0):.1f} | "
+                  f"{p['finished_at']} |" for p in report["timing"]]
+        per_experiment = [(p["part"], name, runs, seconds) for p in report["timing"]
+                          if len(p.get("experiments", {})) > 1
+                          for name, (runs, seconds) in sorted(p["experiments"].items(), key=lambda e: -e[1][1])]
+        if per_experiment:
+            lines += ["", "| part | experiment | runs | run time (s) |", "|---|---|---:|---:|"]
+            lines += [f"| {part} | {name} | {runs:g} | {seconds:.1f} |" for part, name, runs, seconds in per_experiment]
     lines += ["", "Figures:", ""] + [f"![{p.stem}]({p.name})" for p in figures]
     return "\n".join(lines) + "\n"

@@ -7,15 +7,15 @@ import importlib
 import os
 import time
 from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from dmprs import experiments
 from dmprs.baselines import BaselineSpec, run_baseline
 from dmprs.experiments import arm_pouring
-from dmprs.parallel import pmap
 from dmprs.reproduce.parts import BY_KIND
-from dmprs.reproduce.plan import LearnSpec
+from dmprs.reproduce.plan import SEED_KEYS, LearnSpec
 from dmprs.tasks import pouring
 from dmprs.tasks.arm_pouring import DEMO_VOLUMES as ARM_DEMO_VOLUMES
 
@@ -96,6 +96,19 @@ def part_of(spec: Any) -> str:
     return str(spec.kind)
 
 
+def experiment_of(result: dict[str, Any]) -> str:
+    """The experiment a run's ``result`` belongs to within its part: its experiment and setting
+    (a learning run's bottle volume, a comparison's setting), or its part where it names none.
+    """
+    if "name" in result:  # a comparison's setting
+        return str(result["name"])
+    if "experiment" in result:
+        setting = {k: v for k, v in result.get("setup", {}).items() if k not in SEED_KEYS}
+        return f"{result['experiment']} ({', '.join(f'{k} {v}' for k, v in setting.items())})" if setting \
+            else str(result["experiment"])
+    return str(result["part"])
+
+
 def longest_first(specs: list[Any]) -> list[int]:
     """The specs' indices, the longest runs first (:data:`RUN_SECONDS`), in plan order otherwise."""
     return sorted(range(len(specs)), key=lambda i: -RUN_SECONDS.get(part_of(specs[i]), 1.0))
@@ -123,35 +136,65 @@ def seconds_left(elapsed: float, measured: Mapping[str, float], finished: Mappin
 
 def dispatch(spec: Any) -> dict[str, Any]:
     """Runs one spec of the plan: a paper experiment, a baseline, or a run of another part; its
-    result carries the run's wall-clock ``seconds``.
+    result carries the run's wall-clock ``seconds`` and the ``cpu_seconds`` of its process.
     """
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     if isinstance(spec, LearnSpec):
         result = run_learning(spec)
+    elif isinstance(spec, CalibrationSpec):
+        result = _calibrate(spec)
     elif isinstance(spec, BaselineSpec):
         result = _baseline(spec)
     else:
         result = BY_KIND[spec.kind].run(spec)
         result.update(kind=spec.kind, part=spec.kind)
     result["seconds"] = round(time.perf_counter() - start, 2)
+    result["cpu_seconds"] = round(time.process_time() - cpu, 2)
     return result
 
 
-def _calibrate(job: tuple[str, float, str]) -> None:
-    """Calibrates one pouring demonstration (``experiment``, bottle volume) into the disk cache."""
-    experiment, volume, cache_dir = job
-    if experiment == "pouring":
-        pouring.demonstration(volume, cache_dir=cache_dir)
-    else:
-        arm_pouring.demonstration(volume, cache_dir=cache_dir)
-
-
-def prepare_pouring(specs: list[Any], cache_dir: Path, *, backend: str = "local", workers: int | None = None) -> None:
-    """Calibrates the pouring demonstrations the runs share, each once and side by side (on
-    ``backend``'s workers), into the disk cache the runs then read, before they start.
+@dataclass(frozen=True)
+class CalibrationSpec:
+    """Calibrating the pouring demonstration of ``experiment`` for a bottle of ``volume`` l into
+    the disk cache ``cache_dir``, which the runs of that experiment then read.
     """
-    experiments = {getattr(s, "experiment", "") for s in specs}
-    jobs = [(e, v, str(cache_dir)) for e, volumes in (("pouring", pouring.DEMO_VOLUMES),
-                                                        ("arm-pouring", ARM_DEMO_VOLUMES))
-            if e in experiments for v in volumes]
-    pmap(_calibrate, jobs, backend=backend, workers=workers)
+
+    experiment: str
+    volume: float
+    cache_dir: str
+    kind: str = "calibration"
+
+    @property
+    def label(self) -> str:
+        """The job's name in progress lines and errors."""
+        return f"calibrating the {self.experiment} demonstration from {self.volume:g} l"
+
+
+def _calibrate(spec: CalibrationSpec) -> dict[str, Any]:
+    if spec.experiment == "pouring":
+        pouring.demonstration(spec.volume, cache_dir=spec.cache_dir)
+    else:
+        arm_pouring.demonstration(spec.volume, cache_dir=spec.cache_dir)
+    return {"kind": spec.kind, "part": spec.kind}
+
+
+#: the experiments whose runs read calibrated demonstrations, and their demonstrations' bottles
+CALIBRATED = {"pouring": pouring.DEMO_VOLUMES, "arm-pouring": ARM_DEMO_VOLUMES}
+
+
+def schedule(specs: list[Any], cache_dir: Path) -> tuple[list[Any], list[int], dict[int, list[int]]]:
+    """The job's items, the order they are handed out in and what each waits for
+    (:func:`dmprs.parallel.pmap`'s ``items``, ``order`` and ``after``): first the calibrations
+    of the demonstrations the runs share, each once, the arm's and the fuller bottle's (the most
+    simulated) first; then ``specs``, :func:`longest_first`. A run that reads calibrated
+    demonstrations waits for its experiment's calibrations; every other run may go at once.
+    """
+    poured = {getattr(s, "experiment", "") for s in specs}
+    calibrations = sorted((CalibrationSpec(e, v, str(cache_dir)) for e, volumes in CALIBRATED.items()
+                           if e in poured for v in volumes),
+                          key=lambda c: (c.experiment != "arm-pouring", -c.volume))
+    first = len(calibrations)
+    after = {first + k: [j for j, c in enumerate(calibrations) if c.experiment == getattr(s, "experiment", "")]
+             for k, s in enumerate(specs)}
+    after = {i: before for i, before in after.items() if before}
+    return [*calibrations, *specs], [*range(first), *(first + i for i in longest_first(specs))], after
