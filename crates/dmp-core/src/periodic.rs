@@ -21,7 +21,6 @@
 use std::f64::consts::TAU as TWO_PI;
 
 use nalgebra::{DMatrix, DMatrixView, DVector};
-use rayon::prelude::*;
 
 use crate::design_matrix::{
     DESIGN_CUTOFF, NormalEquations, PreparedDemo, accumulate_row, solve_ridge,
@@ -30,7 +29,7 @@ use crate::dmp::{Demonstration, FIT_RIDGE, MAX_BASIS};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::euler::{MAX_SUBSTEPS, spring_stable_step};
 use crate::periodic_forcing::{ForcingScratch, PeriodicForcing};
-use crate::rollout::{MAX_VALUES, Trajectory, check_trajectory, check_work, n_steps};
+use crate::rollout::{MAX_VALUES, check_work, n_steps};
 
 /// Relative activations below `exp(-ACTIVATION_CUTOFF)` are exactly zero, as for the discrete
 /// basis ([`crate::basis`]): they cannot change the normalized sum beyond rounding.
@@ -589,47 +588,6 @@ impl PeriodicDmp {
         }
     }
 
-    /// Integrates eqs. P1-P3 from the start at rest at phase `phi0` and returns positions,
-    /// velocities `z / tau` and accelerations `dz/dt / tau` at `t_j = j dt` up to `duration`
-    /// (default one period). Too coarse a `dt` is integrated in stable sub-steps, as for the
-    /// discrete DMP.
-    pub fn rollout(&self, dt: f64, duration: Option<f64>, phi0: f64) -> Result<Trajectory> {
-        let n_dof = self.n_dof();
-        let (len, substeps) = self.plan(dt, duration, phi0, n_dof, "periodic DMP rollout")?;
-        let mut out = Trajectory {
-            t: Vec::with_capacity(len),
-            y: Vec::with_capacity(len * n_dof),
-            yd: Vec::with_capacity(len * n_dof),
-            ydd: Vec::with_capacity(len * n_dof),
-            n_dof,
-        };
-        let (tau, h) = (self.tau, dt / substeps as f64);
-        // velocities z / tau and accelerations (tau dz/dt) / tau^2, by products
-        let (inv_tau, inv_tau2) = (1.0 / tau, 1.0 / (tau * tau));
-        let (goal, amplitude) = (self.goal.as_slice(), self.amplitude.as_slice());
-        let mut state = self.initial_state(phi0);
-        let mut ws = self.workspace();
-        let mut dz = vec![0.0; n_dof];
-        for j in 0..len {
-            self.acceleration(&state, goal, amplitude, &mut ws, &mut dz);
-            out.t.push(j as f64 * dt);
-            out.y.extend_from_slice(&state.y);
-            out.yd.extend(state.z.iter().map(|z| z * inv_tau));
-            out.ydd.extend(dz.iter().map(|dz| dz * inv_tau2));
-            if j + 1 == len {
-                break;
-            }
-            for sub in 0..substeps {
-                if sub > 0 {
-                    self.acceleration(&state, goal, amplitude, &mut ws, &mut dz);
-                }
-                Self::advance(&mut state, &dz, tau, h);
-            }
-        }
-        check_trajectory(&out, "periodic DMP rollout")?;
-        Ok(out)
-    }
-
     /// Validates a rollout's arguments and returns its samples and the sub-steps per sample;
     /// `width` values are returned per sample.
     pub(crate) fn plan(
@@ -721,18 +679,6 @@ pub(crate) fn baseline_and_amplitude(y: &DMatrixView<'_, f64>) -> (DVector<f64>,
         amplitude[d] = if r > 0.0 { r } else { 1.0 };
     }
     (goal, amplitude)
-}
-
-/// Rolls out many periodic DMPs in parallel (rayon); the same bits as one by one.
-pub fn rollout_batch_periodic(
-    dmps: &[PeriodicDmp],
-    dt: f64,
-    duration: Option<f64>,
-    phi0: f64,
-) -> Result<Vec<Trajectory>> {
-    dmps.par_iter()
-        .map(|d| d.rollout(dt, duration, phi0))
-        .collect()
 }
 
 #[cfg(test)]
@@ -887,23 +833,6 @@ mod tests {
             .unwrap();
         for (a, b) in base.y.iter().zip(&slow.y) {
             assert!((a - b).abs() < 1e-12);
-        }
-    }
-
-    #[test]
-    fn batch_is_the_same_bits() {
-        let dmps: Vec<PeriodicDmp> = (0..5)
-            .map(|k| {
-                dmp(
-                    DMatrix::from_element(8, 3, k as f64),
-                    0.1 + 0.05 * k as f64,
-                    0.0,
-                )
-            })
-            .collect();
-        let batch = rollout_batch_periodic(&dmps, 1e-3, Some(0.5), 0.3).unwrap();
-        for (d, tr) in dmps.iter().zip(batch) {
-            assert_eq!(d.rollout(1e-3, Some(0.5), 0.3).unwrap(), tr);
         }
     }
 

@@ -373,6 +373,13 @@ impl PeriodicStepper {
         }
     }
 
+    /// [`PeriodicStepper::step`] without a measurement and without keeping what a failed step
+    /// would put back: the rollout's step, whose error ends the rollout.
+    pub(crate) fn step_open_loop(&mut self) -> Result<(&[f64], &[f64], &[f64])> {
+        self.advance(1.0)?;
+        Ok((&self.out_y, &self.out_yd, &self.out_ydd))
+    }
+
     fn advance(&mut self, stop: f64) -> Result<()> {
         if self.coupling.is_none() && self.substeps == 1 {
             return self.plain_period(stop);
