@@ -650,19 +650,14 @@ impl CartesianStepper {
         self.forcing.eval(x, &mut self.f);
     }
 
-    /// The phase the forcing term is read at: the integrator's, or with a final velocity the
-    /// closed form `exp(-alpha_x t / tau)` (the fit's) of the time read from it
-    /// (docs/method.md §2.8): there the velocity at tau is the point, and explicit Euler's phase
-    /// runs ahead of the closed form by `O(dt)`, which would play the forcing term early.
+    /// The phase the forcing term is read at: the integrator's, or with a final velocity
+    /// [`Clock::closed_form_phase`].
     #[inline(always)]
     fn forcing_phase(&self) -> f64 {
-        if self.final_velocity.is_none() {
-            return self.x;
+        match self.final_velocity {
+            None => self.x,
+            Some(_) => self.clock.closed_form_phase(self.x, self.cfg.alpha_x),
         }
-        let alpha_x = self.cfg.alpha_x;
-        let hs = self.clock.dt / self.clock.substeps as f64;
-        let to_go = phase_to_go(self.x, phase_clock(self.clock.tau, alpha_x, hs));
-        crate::exp::exp(-alpha_x * (1.0 - to_go))
     }
 
     /// `tau dz/dt` of the current state with the coupling terms, and the position repulsion's

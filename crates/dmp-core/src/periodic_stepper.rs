@@ -380,6 +380,22 @@ impl PeriodicStepper {
         Ok((&self.out_y, &self.out_yd, &self.out_ydd))
     }
 
+    /// That the new state, the command's acceleration and the next period's scale `next` are
+    /// finite.
+    fn check_finite(&self, next: f64) -> Result<()> {
+        check_state(
+            "periodic stepper",
+            self.state.phi,
+            &[
+                &self.state.y,
+                &self.state.z,
+                &self.out_ydd,
+                std::slice::from_ref(&next),
+            ],
+            self.steps,
+        )
+    }
+
     fn advance(&mut self, stop: f64) -> Result<()> {
         if self.coupling.is_none() && self.substeps == 1 {
             return self.plain_period(stop);
@@ -443,17 +459,7 @@ impl PeriodicStepper {
             self.state.phi -= TWO_PI;
         }
         if !finite {
-            check_state(
-                "periodic stepper",
-                self.state.phi,
-                &[
-                    &self.state.y,
-                    &self.state.z,
-                    &self.out_ydd,
-                    std::slice::from_ref(&next),
-                ],
-                self.steps,
-            )?;
+            self.check_finite(next)?;
         }
         self.move_envelope(dphase);
         self.goal.advance(alpha, dphase);
@@ -560,17 +566,7 @@ impl PeriodicStepper {
             *y += z * dt * change;
             *ydd = dz * inv_tau2 + z * change / dt;
         }
-        check_state(
-            "periodic stepper",
-            self.state.phi,
-            &[
-                &self.state.y,
-                &self.state.z,
-                &self.out_ydd,
-                std::slice::from_ref(&next),
-            ],
-            self.steps,
-        )?;
+        self.check_finite(next)?;
         self.over_limit = match &self.coupling {
             Some(tc) if tc.limits_acceleration() => self
                 .out_ydd

@@ -287,6 +287,17 @@ pub(crate) struct Clock {
 }
 
 impl Clock {
+    /// The closed form `exp(-alpha_x t / tau)` (the fit's phase) of the time read from the
+    /// integrator's phase `x` (docs/method.md §2.8): with a final velocity the velocity at tau
+    /// is the point, and explicit Euler's phase runs ahead of the closed form by `O(dt)`, which
+    /// would play the forcing term early.
+    #[inline(always)]
+    pub fn closed_form_phase(&self, x: f64, alpha_x: f64) -> f64 {
+        let hs = self.dt / self.substeps as f64;
+        let to_go = phase_to_go(x, phase_clock(self.tau, alpha_x, hs));
+        crate::exp::exp(-alpha_x * (1.0 - to_go))
+    }
+
     pub fn new(cfg: &DmpConfig, tau: f64, n: usize, opts: &StepperOptions) -> Result<Self> {
         check_scalar("dt", opts.dt, true)?;
         check_scalar("rest_tol", opts.rest_tol, true)?;
@@ -1129,19 +1140,16 @@ impl Stepper {
         self.forcing.eval(x, &mut self.f);
     }
 
-    /// The phase the forcing term is read at: the integrator's, or with a final velocity the
-    /// closed form `exp(-alpha_x t / tau)` (the fit's) of the time read from it
-    /// (docs/method.md §2.8): there the velocity at tau is the point, and explicit Euler's phase
-    /// runs ahead of the closed form by `O(dt)`, which would play the forcing term early.
+    /// The phase the forcing term is read at: the integrator's, or with a final velocity
+    /// [`Clock::closed_form_phase`].
     #[inline(always)]
     fn forcing_phase(&self) -> f64 {
-        if self.final_velocity.is_none() {
-            return self.x;
+        match self.final_velocity {
+            None => self.x,
+            Some(_) => self
+                .clock
+                .closed_form_phase(self.x, self.dmp.config().alpha_x),
         }
-        let alpha_x = self.dmp.config().alpha_x;
-        let hs = self.clock.dt / self.clock.substeps as f64;
-        let to_go = phase_to_go(self.x, phase_clock(self.clock.tau, alpha_x, hs));
-        crate::exp::exp(-alpha_x * (1.0 - to_go))
     }
 
     /// `tau dz/dt` of the current state (eq. 1 with the coupling terms) into `out`, and the
