@@ -514,6 +514,8 @@ struct Pass {
     tol: f64,
     /// The scaled time to go of a final velocity's moving goal (0 without one).
     to_go: f64,
+    /// Whether `Stepper::user` is added to `tau dz/dt`.
+    coupled: bool,
 }
 
 /// Executes a [`Dmp`] one control period at a time (module docs).
@@ -599,7 +601,7 @@ impl Stepper {
             stiffness: vec![0.0; n],
             z_k: vec![0.0; n],
             h_next: vec![0.0; n],
-            user: vec![0.0; n],
+            user: vec![0.0; padded(n)],
             out_y: vec![0.0; padded(n)],
             out_yd: vec![0.0; padded(n)],
             out_ydd: vec![0.0; padded(n)],
@@ -782,7 +784,7 @@ impl Stepper {
         let coupled = coupling.is_some();
         if let Some(c) = coupling {
             check_coordinates("coupling", c, self.n)?;
-            self.user.copy_from_slice(c);
+            self.user[..self.n].copy_from_slice(c);
         }
         let target = if factor == 1.0 {
             self.clock.nominal
@@ -792,13 +794,12 @@ impl Stepper {
         // This period's scale was chosen by the last step; this step chooses the next one's.
         let tau = self.clock.tau;
         let inv_tau = 1.0 / tau;
-        if !coupled
-            && self.limits.is_none()
+        if self.limits.is_none()
             && self.clock.coupling.is_none()
             && self.clock.substeps == 1
             && !self.goal_moving
         {
-            return Ok(self.plain_period::<AVX2>(tau, inv_tau, target, rows));
+            return Ok(self.plain_period::<AVX2>(tau, inv_tau, target, coupled, rows));
         }
         self.derivative(coupled);
         self.at_rest = self.rest();
@@ -857,15 +858,17 @@ impl Stepper {
         Ok(false)
     }
 
-    /// The period of [`Stepper::period_inner`] without coupling terms, limits, sub-steps or a
-    /// moving goal, the common case: the same operations on every coordinate, in one pass over
-    /// the coordinates instead of one per stage.
+    /// The period of [`Stepper::period_inner`] without limits, sub-steps or a moving goal, the
+    /// common case (a sequence's join adds a coupling term for the rest of its movement): the
+    /// same operations on every coordinate, in one pass over the coordinates instead of one per
+    /// stage; `coupled`: `self.user` is added to `tau dz/dt`.
     #[inline(always)]
     fn plain_period<const AVX2: bool>(
         &mut self,
         tau: f64,
         inv_tau: f64,
         next: f64,
+        coupled: bool,
         rows: Option<Rows<'_>>,
     ) -> bool {
         let cfg = *self.dmp.config();
@@ -885,17 +888,21 @@ impl Stepper {
             taud,
             tol,
             to_go,
+            coupled,
         };
         #[cfg(target_arch = "x86_64")]
-        let (rests, finite) = if AVX2 {
+        let (rests, still, finite) = if AVX2 {
             // SAFETY: with `AVX2` the CPU has AVX2 and FMA (`period_inner`).
             unsafe { self.plain_pass_avx2(&cfg, &pass, rows) }
         } else {
             self.plain_pass(&cfg, &pass, rows)
         };
         #[cfg(not(target_arch = "x86_64"))]
-        let (rests, finite) = self.plain_pass(&cfg, &pass, rows);
-        self.at_rest = rests && self.forcing_spent();
+        let (rests, still, finite) = self.plain_pass(&cfg, &pass, rows);
+        let spent = self.forcing_spent();
+        self.at_rest = rests && spent;
+        // (`Stepper::stalled`: without a coupling term the spring always pulls on to the goal)
+        self.blocked = coupled && !self.at_rest && spent && still;
         self.out_x = self.x;
         self.out_tau = tau;
         self.x -= cfg.alpha_x * self.x * inv_tau * hs;
@@ -911,19 +918,24 @@ impl Stepper {
         self.forcing.eval(x, &mut self.f);
         self.clock.tau = next;
         self.over_limit = false;
-        // Without coupling terms or limits the spring always pulls on to the goal.
-        self.blocked = false;
         self.steps += 1;
         finite && self.x.is_finite()
     }
 
     /// The plain period's pass over the coordinates: the command from the state (into `rows`,
-    /// or the last command), the explicit Euler step; returns whether every coordinate rests
-    /// and whether the new state is finite.
+    /// or the last command), the explicit Euler step; returns whether every coordinate rests,
+    /// whether every one is still ([`Stepper::stalled`]'s test of each) and whether the new
+    /// state is finite.
     #[inline(always)]
-    fn plain_pass(&mut self, cfg: &DmpConfig, pass: &Pass, rows: Option<Rows<'_>>) -> (bool, bool) {
+    fn plain_pass(
+        &mut self,
+        cfg: &DmpConfig,
+        pass: &Pass,
+        rows: Option<Rows<'_>>,
+    ) -> (bool, bool, bool) {
         let n = self.n;
         let (g, g_target, f) = (&self.g[..n], &self.g_target[..n], &self.f[..n]);
+        let (user, weak_bound) = (&self.user[..n], cfg.alpha_z * cfg.beta_z * pass.tol);
         let (y, z) = (&mut self.y[..n], &mut self.z[..n]);
         let Rows {
             y: out_y,
@@ -935,23 +947,26 @@ impl Stepper {
             ydd: &mut self.out_ydd[..n],
         });
         let (out_yd, out_ydd) = (&mut out_yd[..n], &mut out_ydd[..n]);
-        let mut rests = true;
-        let mut finite = true;
+        let (mut rests, mut still, mut finite) = (true, true, true);
         let v = self.final_velocity.as_deref();
         for d in 0..n {
             let (y0, z0) = (y[d], z[d]);
-            let h = match v {
+            let mut h = match v {
                 None => spring_at(cfg, g[d], y0, z0, f[d]),
                 Some(v) => moving_spring(cfg, g[d], v[d], pass.to_go, y0, z0) + f[d],
             };
+            if pass.coupled {
+                h += user[d];
+            }
             rests &= rests_at(g_target[d], y0, z0, pass.tol);
+            still &= z0.abs() <= pass.tol && h.abs() <= weak_bound;
             out_y[d] = y0;
             out_yd[d] = z0 * pass.inv_tau;
             explicit_step(&mut y[d], &mut z[d], h, pass.inv_tau, pass.hs);
             out_ydd[d] = acceleration_at(h, z0, pass.taud, pass.inv_tau, pass.inv_next);
             finite &= y[d].is_finite() & z[d].is_finite() & out_ydd[d].is_finite();
         }
-        (rests, finite)
+        (rests, still, finite)
     }
 
     /// [`Stepper::plain_pass`] four coordinates at a time in AVX2 registers, the same operations
@@ -965,7 +980,7 @@ impl Stepper {
         cfg: &DmpConfig,
         pass: &Pass,
         rows: Option<Rows<'_>>,
-    ) -> (bool, bool) {
+    ) -> (bool, bool, bool) {
         use std::arch::x86_64::*;
         let c = |v: f64| _mm256_set1_pd(v);
         let (alpha_z, beta_z, inv_tau_v, hs_v, taud_v, tol_v) = (
@@ -979,14 +994,15 @@ impl Stepper {
         let inv_next_v = c(pass.inv_next);
         let (sign, inf) = (c(-0.0), c(f64::INFINITY));
         let mut rests = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-        let mut finite = rests;
+        let (mut still, mut finite) = (rests, rests);
+        let weak_bound = c(cfg.alpha_z * cfg.beta_z * pass.tol);
         // The arrays' addresses once (stores through them could otherwise change `self`'s).
         let (n, len) = (self.n, self.y.len());
         let padded = |v: &Vec<f64>| {
             assert_eq!(v.len(), len, "the state is padded");
             v.as_ptr()
         };
-        let [g, g_target, f] = [&self.g, &self.g_target, &self.f].map(padded);
+        let [g, g_target, f, user] = [&self.g, &self.g_target, &self.f, &self.user].map(padded);
         let moving = self.final_velocity.as_ref().map(padded);
         let to_go = c(pass.to_go);
         let [y, z] = [&mut self.y, &mut self.z].map(|v| {
@@ -1019,11 +1035,18 @@ impl Stepper {
                     _mm256_add_pd(_mm256_mul_pd(alpha_z, pull), f)
                 }
             };
+            let h = if pass.coupled {
+                _mm256_add_pd(h, load(user))
+            } else {
+                h
+            };
             // rests_at
             let gap = _mm256_andnot_pd(sign, _mm256_sub_pd(g_target, y0));
             let near = _mm256_cmp_pd::<_CMP_LE_OQ>(gap, tol_v);
             let slow = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_andnot_pd(sign, z0), tol_v);
             rests = _mm256_and_pd(rests, _mm256_and_pd(near, slow));
+            let weak = _mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_andnot_pd(sign, h), weak_bound);
+            still = _mm256_and_pd(still, _mm256_and_pd(slow, weak));
             // explicit_step
             let yd = _mm256_mul_pd(z0, inv_tau_v);
             let dz = _mm256_mul_pd(h, inv_tau_v);
@@ -1060,6 +1083,7 @@ impl Stepper {
         // The zeros after the coordinates compare as 0 <= tol and 0 < inf: true.
         (
             _mm256_movemask_pd(rests) == 0b1111,
+            _mm256_movemask_pd(still) == 0b1111,
             _mm256_movemask_pd(finite) == 0b1111,
         )
     }

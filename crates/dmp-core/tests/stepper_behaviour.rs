@@ -215,10 +215,11 @@ fn steps_are_the_rollout_and_an_idle_goal_filter_is_inert() {
     }
 }
 
-/// The common period (no coupling term, limits, sub-steps or moving goal) runs in one pass over
-/// the coordinates; it must give the bits of the staged period, which a coupling term of zeros
-/// or position limits that are never approached select, open loop and phase-stopped, across an
-/// unfiltered goal jump and the rest at the end.
+/// The common period (no limits, sub-steps or moving goal) runs in one pass over the
+/// coordinates, with or without a coupling term; it must give the bits of the staged period,
+/// which position limits that are never approached select, open loop and phase-stopped, across
+/// an unfiltered goal jump, with a coupling term that varies and then one that holds the
+/// movement off its goal (blocked), and the rest at the end.
 #[test]
 fn the_one_pass_period_gives_the_staged_periods_bits() {
     let w: Vec<f64> = (0..7 * 30)
@@ -232,11 +233,13 @@ fn the_one_pass_period_gives_the_staged_periods_bits() {
         ]))
         .unwrap();
     for dmp in [dmp, moving] {
-        one_pass_is_staged(&dmp);
+        for coupled in [false, true] {
+            one_pass_is_staged(&dmp, coupled);
+        }
     }
 }
 
-fn one_pass_is_staged(dmp: &Dmp) {
+fn one_pass_is_staged(dmp: &Dmp, coupled: bool) {
     let base = StepperOptions {
         goal_filter: None,
         ..StepperOptions::new(2e-3)
@@ -246,33 +249,42 @@ fn one_pass_is_staged(dmp: &Dmp) {
         position_max: Some(vec![1e9; 7]),
         ..base.clone()
     };
-    let zeros = [0.0; 7];
-    let staged_by: [(StepperOptions, Option<&[f64]>); 2] =
-        [(base.clone(), Some(&zeros)), (far, None)];
-    for (opts, coupling) in staged_by {
-        let mut one_pass = Stepper::new(dmp, &base).unwrap();
-        let mut staged = Stepper::new(dmp, &opts).unwrap();
-        for k in 0..3000 {
-            if k == 300 {
-                for s in [&mut one_pass, &mut staged] {
-                    s.set_goal(&[1.0, 0.0, 1.0, 0.5, 0.5, 0.5, 0.0]).unwrap();
-                }
+    let mut one_pass = Stepper::new(dmp, &base).unwrap();
+    let mut staged = Stepper::new(dmp, &far).unwrap();
+    let mut blocked = 0;
+    for k in 0..3000 {
+        if k == 300 {
+            for s in [&mut one_pass, &mut staged] {
+                s.set_goal(&[1.0, 0.0, 1.0, 0.5, 0.5, 0.5, 0.0]).unwrap();
             }
-            // A robot that lags behind the command for a while: phase stopping.
-            let lag = if (500..700).contains(&k) { 0.02 } else { 0.0 };
-            let measured: Vec<f64> = one_pass.output().0.iter().map(|y| y - lag).collect();
-            let m = (k % 2 == 0).then_some(measured.as_slice());
-            let a = one_pass.step(m).unwrap();
-            let a = (a.0.to_vec(), a.1.to_vec(), a.2.to_vec());
-            let b = staged.step_coupled(m, coupling).unwrap();
-            assert_eq!(a, (b.0.to_vec(), b.1.to_vec(), b.2.to_vec()), "step {k}");
-            assert_eq!(one_pass.phase().to_bits(), staged.phase().to_bits());
-            assert_eq!(one_pass.tau().to_bits(), staged.tau().to_bits());
-            assert_eq!(one_pass.done(), staged.done(), "step {k}");
         }
-        // A movement with a final velocity moves on and is never done.
-        assert_eq!(one_pass.done(), dmp.final_velocity().is_none());
+        // A robot that lags behind the command for a while: phase stopping.
+        let lag = if (500..700).contains(&k) { 0.02 } else { 0.0 };
+        let measured: Vec<f64> = one_pass.output().0.iter().map(|y| y - lag).collect();
+        let m = (k % 2 == 0).then_some(measured.as_slice());
+        // a push that varies, then a constant one the spring balances 0.1 off the goal
+        let push: Vec<f64> = (0..7)
+            .map(|d| match k {
+                ..1500 => 30.0 * (0.01 * k as f64 + d as f64).sin(),
+                _ => 48.0 * 12.0 * 0.1,
+            })
+            .collect();
+        let c = coupled.then_some(push.as_slice());
+        let a = one_pass.step_coupled(m, c).unwrap();
+        let a = (a.0.to_vec(), a.1.to_vec(), a.2.to_vec());
+        let b = staged.step_coupled(m, c).unwrap();
+        assert_eq!(a, (b.0.to_vec(), b.1.to_vec(), b.2.to_vec()), "step {k}");
+        assert_eq!(one_pass.phase().to_bits(), staged.phase().to_bits());
+        assert_eq!(one_pass.tau().to_bits(), staged.tau().to_bits());
+        assert_eq!(one_pass.done(), staged.done(), "step {k}");
+        assert_eq!(one_pass.blocked(), staged.blocked(), "step {k}");
+        blocked += usize::from(one_pass.blocked());
     }
+    // held off its goal by the push the movement is blocked, never done; without it, it rests
+    // (a movement with a final velocity moves on and is never either)
+    let plain = dmp.final_velocity().is_none();
+    assert_eq!(one_pass.done(), plain && !coupled);
+    assert_eq!(blocked > 0, plain && coupled, "{blocked} blocked steps");
 }
 
 /// A 1-DOF reach from 0 to 1 in 1 s with a bump (weights from a fit).
