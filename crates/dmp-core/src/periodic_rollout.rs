@@ -121,11 +121,16 @@ mod tests {
 
     #[test]
     fn the_rollout_is_the_staged_integration_bit_for_bit() {
-        // 7 DOF (two vectors, the second masked), 3 DOF, 1 DOF; one Euler step a sample and
-        // sub-steps (a coarse dt and a fast rhythm)
-        for (n_basis, n_dof, tau, dt) in
-            [(50, 7, 1.0, 1e-3), (25, 3, 0.2, 1e-3), (12, 1, 0.05, 2e-2)]
-        {
+        // 7 and 5 DOF (the last vector overlapping the one before), 4 DOF (one whole vector),
+        // 3 and 1 DOF (one by one); one Euler step a sample and sub-steps (a coarse dt and a fast
+        // rhythm)
+        for (n_basis, n_dof, tau, dt) in [
+            (50, 7, 1.0, 1e-3),
+            (20, 5, 0.7, 1e-3),
+            (30, 4, 0.5, 2e-3),
+            (25, 3, 0.2, 1e-3),
+            (12, 1, 0.05, 2e-2),
+        ] {
             let d = dmp(n_basis, n_dof, tau, n_dof as f64);
             for phi0 in [0.0, 2.5] {
                 let tr = d.rollout(dt, Some(3.0), phi0).unwrap();

@@ -119,6 +119,9 @@ pub struct PeriodicStepper {
     out_ydd: Vec<f64>,
 }
 
+/// f64 lanes of an AVX2 vector.
+const LANES: usize = 4;
+
 /// The constants of one plain period (`PeriodicStepper::plain_period`).
 struct PlainPass {
     alpha_z: f64,
@@ -171,53 +174,99 @@ impl PlainRows<'_> {
     }
 
     /// [`PlainRows::pass`] four coordinates at a time in AVX2 registers, the same operations
-    /// lane by lane (never fused), the last vector loaded and stored masked.
+    /// lane by lane (never fused). With `n` not a multiple of four the last vector is the last
+    /// four coordinates, overlapping the one before: it is computed first, from the values
+    /// before any store, so an overlapped coordinate is computed twice from the same values
+    /// with the same bits, and no store is masked (AMD cores microcode masked stores). Fewer
+    /// than four coordinates take the scalar pass.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn pass_avx2(self, c: &PlainPass) -> bool {
+    unsafe fn pass_avx2(mut self, c: &PlainPass) -> bool {
+        use std::arch::x86_64::*;
+        let n = self.y.len();
+        if n < LANES {
+            return self.pass(c);
+        }
+        let mut finite = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        // SAFETY (every call below): each vector's four coordinates `at..at + 4` are within
+        // every slice, all `n` long.
+        let tail = (!n.is_multiple_of(LANES)).then(|| {
+            let at = n - LANES;
+            (at, unsafe { self.lanes_avx2(c, at, &mut finite) })
+        });
+        for at in (0..n - n % LANES).step_by(LANES) {
+            let row = unsafe { self.lanes_avx2(c, at, &mut finite) };
+            unsafe { self.store_avx2(at, row) };
+        }
+        if let Some((at, row)) = tail {
+            unsafe { self.store_avx2(at, row) };
+        }
+        _mm256_movemask_pd(finite) == 0b1111
+    }
+
+    /// The pass on coordinates `at..at + 4`: `[dz, y, yd, z, y, ydd]` to store (the command's
+    /// and the new state's), their finiteness folded into `finite`.
+    ///
+    /// # Safety
+    /// `at + 4 <= n`, and the CPU has AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    unsafe fn lanes_avx2(
+        &self,
+        c: &PlainPass,
+        at: usize,
+        finite: &mut std::arch::x86_64::__m256d,
+    ) -> [std::arch::x86_64::__m256d; 6] {
         use std::arch::x86_64::*;
         let v = |x: f64| _mm256_set1_pd(x);
-        let n = self.y.len();
+        // SAFETY: `at + 4 <= n` (the caller's).
+        let load = |s: &[f64]| unsafe { _mm256_loadu_pd(s.as_ptr().add(at)) };
+        let (y0, z0) = (load(self.y), load(self.z));
+        let spring = _mm256_sub_pd(
+            _mm256_mul_pd(v(c.beta_z), _mm256_sub_pd(load(self.goal), y0)),
+            z0,
+        );
+        let forcing = _mm256_mul_pd(
+            _mm256_mul_pd(v(c.m), load(self.amplitude)),
+            load(self.shape),
+        );
+        let h = _mm256_add_pd(_mm256_mul_pd(v(c.alpha_z), spring), forcing);
+        let z1 = _mm256_add_pd(z0, _mm256_mul_pd(h, v(c.k)));
+        let y1 = _mm256_add_pd(y0, _mm256_mul_pd(z1, v(c.k)));
+        let y2 = _mm256_add_pd(y1, _mm256_mul_pd(_mm256_mul_pd(z1, v(c.dt)), v(c.change)));
+        let ydd = _mm256_add_pd(
+            _mm256_mul_pd(h, v(c.inv_tau2)),
+            _mm256_div_pd(_mm256_mul_pd(z1, v(c.change)), v(c.dt)),
+        );
         let (sign, inf) = (v(-0.0), v(f64::INFINITY));
-        let mut finite = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-        let mut d = 0;
-        while d < n {
-            let lanes = _mm256_set_epi64x(d as i64 + 3, d as i64 + 2, d as i64 + 1, d as i64);
-            let mask = _mm256_cmpgt_epi64(_mm256_set1_epi64x(n as i64), lanes);
-            // SAFETY: the mask covers the lanes below `n`, within every slice (all `n` long).
-            let load = |s: &[f64]| unsafe { _mm256_maskload_pd(s.as_ptr().add(d), mask) };
-            let store =
-                |s: &mut [f64], x| unsafe { _mm256_maskstore_pd(s.as_mut_ptr().add(d), mask, x) };
-            let (y0, z0) = (load(self.y), load(self.z));
-            let spring = _mm256_sub_pd(
-                _mm256_mul_pd(v(c.beta_z), _mm256_sub_pd(load(self.goal), y0)),
-                z0,
-            );
-            let forcing = _mm256_mul_pd(
-                _mm256_mul_pd(v(c.m), load(self.amplitude)),
-                load(self.shape),
-            );
-            let h = _mm256_add_pd(_mm256_mul_pd(v(c.alpha_z), spring), forcing);
-            let z1 = _mm256_add_pd(z0, _mm256_mul_pd(h, v(c.k)));
-            let y1 = _mm256_add_pd(y0, _mm256_mul_pd(z1, v(c.k)));
-            let y2 = _mm256_add_pd(y1, _mm256_mul_pd(_mm256_mul_pd(z1, v(c.dt)), v(c.change)));
-            let ydd = _mm256_add_pd(
-                _mm256_mul_pd(h, v(c.inv_tau2)),
-                _mm256_div_pd(_mm256_mul_pd(z1, v(c.change)), v(c.dt)),
-            );
-            let is_finite = |x| _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_andnot_pd(sign, x), inf);
-            finite = _mm256_and_pd(finite, _mm256_and_pd(is_finite(y2), is_finite(z1)));
-            finite = _mm256_and_pd(finite, is_finite(ydd));
-            store(&mut *self.dz, h);
-            store(&mut *self.out_y, y0);
-            store(&mut *self.out_yd, _mm256_mul_pd(z0, v(c.inv_tau)));
-            store(&mut *self.z, z1);
-            store(&mut *self.y, y2);
-            store(&mut *self.out_ydd, ydd);
-            d += 4;
+        let is_finite = |x| _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_andnot_pd(sign, x), inf);
+        *finite = _mm256_and_pd(*finite, _mm256_and_pd(is_finite(y2), is_finite(z1)));
+        *finite = _mm256_and_pd(*finite, is_finite(ydd));
+        [h, y0, _mm256_mul_pd(z0, v(c.inv_tau)), z1, y2, ydd]
+    }
+
+    /// Stores a vector of [`PlainRows::lanes_avx2`] at coordinates `at..at + 4`.
+    ///
+    /// # Safety
+    /// `at + 4 <= n`, and the CPU has AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    unsafe fn store_avx2(&mut self, at: usize, row: [std::arch::x86_64::__m256d; 6]) {
+        use std::arch::x86_64::*;
+        let [dz, y0, yd, z1, y2, ydd] = row;
+        for (s, x) in [
+            (&mut *self.dz, dz),
+            (&mut *self.out_y, y0),
+            (&mut *self.out_yd, yd),
+            (&mut *self.z, z1),
+            (&mut *self.y, y2),
+            (&mut *self.out_ydd, ydd),
+        ] {
+            // SAFETY: `at + 4 <= n` (the caller's), the length of every slice.
+            unsafe { _mm256_storeu_pd(s.as_mut_ptr().add(at), x) };
         }
-        // the lanes past `n` hold zeros, finite
-        _mm256_movemask_pd(finite) == 0b1111
     }
 }
 
