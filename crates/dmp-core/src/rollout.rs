@@ -100,11 +100,12 @@ impl Samples {
             }
         }
         self.t[j] = j as f64 * dt;
-        let span = j * self.n_dof..(j + 1) * self.n_dof;
+        // the row and the rows after it, which are written later (see `Rows`)
+        let from = j * self.n_dof;
         Rows {
-            y: &mut self.y[span.clone()],
-            yd: &mut self.yd[span.clone()],
-            ydd: &mut self.ydd[span],
+            y: &mut self.y[from..],
+            yd: &mut self.yd[from..],
+            ydd: &mut self.ydd[from..],
         }
     }
 

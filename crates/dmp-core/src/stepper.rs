@@ -498,7 +498,9 @@ fn acceleration(out: &mut [f64], h: &[f64], z: &[f64], taud: f64, inv_tau: f64, 
 }
 
 /// Where a period's command goes when it is not the stepper's last command: a sample of a
-/// rollout's arrays, `n` values each.
+/// rollout's arrays, its `n` values first. What follows them in each slice (the rows after it,
+/// written later) may be written over, so that the command is stored in whole vectors where
+/// there is room.
 pub(crate) struct Rows<'a> {
     pub y: &'a mut [f64],
     pub yd: &'a mut [f64],
@@ -851,9 +853,9 @@ impl Stepper {
         self.over_limit = self.exceeds_limits();
         self.steps += 1;
         if let Some(rows) = rows {
-            rows.y.copy_from_slice(&self.out_y[..n]);
-            rows.yd.copy_from_slice(&self.out_yd[..n]);
-            rows.ydd.copy_from_slice(&self.out_ydd[..n]);
+            rows.y[..n].copy_from_slice(&self.out_y[..n]);
+            rows.yd[..n].copy_from_slice(&self.out_yd[..n]);
+            rows.ydd[..n].copy_from_slice(&self.out_ydd[..n]);
         }
         Ok(false)
     }
@@ -1009,12 +1011,18 @@ impl Stepper {
             assert_eq!(v.len(), len, "the state is padded");
             v.as_mut_ptr()
         });
-        let [out_y, out_yd, out_ydd] = match rows {
-            Some(r) => [r.y, r.yd, r.ydd].map(|v| {
-                assert!(v.len() >= n, "a row holds n values");
-                v.as_mut_ptr()
-            }),
-            None => [&mut self.out_y, &mut self.out_yd, &mut self.out_ydd].map(|v| v.as_mut_ptr()),
+        // The command's room: its stores are whole vectors up to it (a rollout's row may be
+        // written past its `n` values, `Rows`), masked past it (AMD cores microcode masked stores).
+        let ([out_y, out_yd, out_ydd], room) = match rows {
+            Some(r) => {
+                let room = r.y.len().min(r.yd.len()).min(r.ydd.len());
+                assert!(room >= n, "a row holds n values");
+                ([r.y, r.yd, r.ydd].map(|v| v.as_mut_ptr()), room)
+            }
+            None => (
+                [&mut self.out_y, &mut self.out_yd, &mut self.out_ydd].map(|v| v.as_mut_ptr()),
+                len,
+            ),
         };
         let mut d = 0;
         while d < len {
@@ -1062,9 +1070,10 @@ impl Stepper {
             let is_finite = |v| _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_andnot_pd(sign, v), inf);
             finite = _mm256_and_pd(finite, _mm256_and_pd(is_finite(y1), is_finite(z1)));
             finite = _mm256_and_pd(finite, is_finite(ydd));
-            // SAFETY: as for the loads; the command's stores stop at its `n` values.
+            // SAFETY: as for the loads; the command's stores stop at its room, or masked at its
+            // `n` values.
             let store = |v: *mut f64, x| unsafe { _mm256_storeu_pd(v.add(d), x) };
-            if d + 4 <= n {
+            if d + 4 <= room {
                 store(out_y, y0);
                 store(out_yd, yd);
                 store(out_ydd, ydd);
