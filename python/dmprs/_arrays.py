@@ -7,6 +7,7 @@ objects are rejected (silently turning them into floats hides mistakes).
 
 from __future__ import annotations
 
+import math
 import operator
 from typing import Any
 
@@ -98,7 +99,7 @@ def as_scalar(value: Any, name: str, *, positive: bool = False) -> float:
         raise InvalidInputError(f"{name} must be a real number; got {short(value)}") from None
     except OverflowError:
         raise InvalidInputError(f"{name} = {short(value)} is invalid: too large for a float") from None
-    if not np.isfinite(x):
+    if not math.isfinite(x):
         raise InvalidInputError(f"{name} is {x}: all values must be finite")
     if positive and x <= 0:
         raise InvalidInputError(f"{name} = {x:g} is invalid: must be > 0")
