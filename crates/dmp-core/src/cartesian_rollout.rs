@@ -7,7 +7,9 @@ use rayon::prelude::*;
 use crate::cartesian::{CartesianDmp, CartesianTrajectory, N_COORDS, POSE_WIDTH};
 use crate::cartesian_stepper::{CartesianRows, CartesianStepper, CartesianStepperOptions};
 use crate::error::{Error, Result};
-use crate::rollout::{MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, check_work, n_steps};
+use crate::rollout::{
+    MAX_VALUES, REST_HORIZON_TAUS, RolloutOptions, check_values, check_work, max_steps, n_steps,
+};
 use crate::stepper::StepperOptions;
 
 impl CartesianDmp {
@@ -33,19 +35,8 @@ impl CartesianDmp {
         opts.validate()?;
         let tau = self.tau();
         let steps = n_steps(opts.duration.unwrap_or(tau), opts.dt);
-        let max_steps = if opts.until_rest {
-            steps + n_steps(REST_HORIZON_TAUS * tau, opts.dt)
-        } else {
-            steps
-        };
-        let values = (steps + 1.0) * POSE_WIDTH as f64;
-        if values.is_nan() || values > MAX_VALUES as f64 {
-            return Err(Error::InvalidParameter {
-                name: "dt",
-                value: opts.dt.to_string(),
-                requirement: "is too small for the duration: the rollout would exceed 20 million values",
-            });
-        }
+        let max_steps = max_steps(steps, opts.until_rest, tau, opts.dt);
+        check_values(steps, POSE_WIDTH, opts.dt)?;
         // The rollout is the stepper run open loop: no measurement, no goal filter, no limits.
         // Its sub-steps are the joint rollout's where `dt` is beyond explicit Euler's limit.
         let mut stepper = CartesianStepper::new(

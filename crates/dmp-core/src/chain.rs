@@ -11,7 +11,7 @@
 
 use crate::dmp::{DmpConfig, phase_clock};
 use crate::error::{Error, Result, fmt_g};
-use crate::rollout::{MAX_VALUES, REST_HORIZON_TAUS, check_work, n_steps};
+use crate::rollout::{MAX_VALUES, REST_HORIZON_TAUS, check_values, check_work, max_steps, n_steps};
 
 /// A stepper that can run as a movement of a sequence.
 pub trait Movement: Clone {
@@ -225,19 +225,8 @@ impl<M: Movement> Chain<M> {
                 .map(|s| n_steps(s.nominal(), dt) + 1.0)
                 .sum(),
         };
-        let max_steps = if until_rest {
-            steps + n_steps(REST_HORIZON_TAUS * last_tau, dt)
-        } else {
-            steps
-        };
-        let values = (steps + 1.0) * width as f64;
-        if values.is_nan() || values > MAX_VALUES as f64 {
-            return Err(Error::InvalidParameter {
-                name: "dt",
-                value: fmt_g(dt),
-                requirement: "is too small for the duration: the rollout would exceed 20 million values",
-            });
-        }
+        let max_steps = max_steps(steps, until_rest, last_tau, dt);
+        check_values(steps, width, dt)?;
         let substeps = self.steppers.iter().map(M::substeps_now).max();
         let substeps = substeps.expect("at least one movement") as f64;
         check_work((steps + 1.0) * substeps, n, context)?;

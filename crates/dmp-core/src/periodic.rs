@@ -29,7 +29,7 @@ use crate::dmp::{Demonstration, FIT_RIDGE, MAX_BASIS};
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::euler::{MAX_SUBSTEPS, spring_stable_step};
 use crate::periodic_forcing::{ForcingScratch, PeriodicForcing};
-use crate::rollout::{MAX_VALUES, check_work, n_steps};
+use crate::rollout::{check_values, check_work, n_steps};
 
 /// Relative activations below `exp(-ACTIVATION_CUTOFF)` are exactly zero, as for the discrete
 /// basis ([`crate::basis`]): they cannot change the normalized sum beyond rounding.
@@ -603,14 +603,7 @@ impl PeriodicDmp {
         let duration = duration.unwrap_or(self.period());
         check_scalar("duration", duration, true)?;
         let steps = n_steps(duration, dt);
-        let values = (steps + 1.0) * width as f64;
-        if values.is_nan() || values > MAX_VALUES as f64 {
-            return Err(Error::InvalidParameter {
-                name: "dt",
-                value: fmt_g(dt),
-                requirement: "is too small for the duration: the rollout would exceed 20 million values",
-            });
-        }
+        check_values(steps, width, dt)?;
         let substeps = self.substeps(dt)?;
         check_work((steps + 1.0) * substeps as f64, self.n_dof(), context)?;
         Ok((steps as usize + 1, substeps))

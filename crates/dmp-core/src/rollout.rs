@@ -142,6 +142,30 @@ pub(crate) fn n_steps(duration: f64, dt: f64) -> f64 {
 /// DMP at a coarse `dt`; every rollout within [`MAX_VALUES`] without sub-steps stays within it.
 pub const MAX_WORK: f64 = 5e7;
 
+/// Refuses a rollout of `steps` steps (`steps + 1` samples) of `width` values each beyond
+/// [`MAX_VALUES`] per array (and a NaN step count): `dt` is too small for its duration.
+pub(crate) fn check_values(steps: f64, width: usize, dt: f64) -> Result<()> {
+    let values = (steps + 1.0) * width as f64;
+    if values.is_nan() || values > MAX_VALUES as f64 {
+        return Err(Error::InvalidParameter {
+            name: "dt",
+            value: fmt_g(dt),
+            requirement: "is too small for the duration: the rollout would exceed 20 million values",
+        });
+    }
+    Ok(())
+}
+
+/// The most steps a rollout of `steps` steps may take: with `until_rest`, on to
+/// [`REST_HORIZON_TAUS`] times `tau` more.
+pub(crate) fn max_steps(steps: f64, until_rest: bool, tau: f64, dt: f64) -> f64 {
+    if until_rest {
+        steps + n_steps(REST_HORIZON_TAUS * tau, dt)
+    } else {
+        steps
+    }
+}
+
 /// Refuses a rollout of `steps` Euler (sub-)steps of `n_dof` DOFs beyond [`MAX_WORK`];
 /// `context` names the rollout.
 pub(crate) fn check_work(steps: f64, n_dof: usize, context: &'static str) -> Result<()> {
@@ -187,20 +211,8 @@ impl Dmp {
         let duration = opts.duration.unwrap_or(self.tau());
         let steps = n_steps(duration, opts.dt);
         let n = self.n_dof();
-        let max_steps = if opts.until_rest {
-            steps + n_steps(REST_HORIZON_TAUS * self.tau(), opts.dt)
-        } else {
-            steps
-        };
-        let values = (steps + 1.0) * n as f64;
-        // Also catches a NaN step count.
-        if values.is_nan() || values > MAX_VALUES as f64 {
-            return Err(Error::InvalidParameter {
-                name: "dt",
-                value: fmt_g(opts.dt),
-                requirement: "is too small for the duration: the rollout would exceed 20 million values",
-            });
-        }
+        let max_steps = max_steps(steps, opts.until_rest, self.tau(), opts.dt);
+        check_values(steps, n, opts.dt)?;
         let substeps = self.substeps(opts.dt)?;
         check_work((steps + 1.0) * substeps as f64, n, "DMP rollout")?;
         // The rollout is the stepper run open loop: no measurement, no goal filter, no limits.
