@@ -16,11 +16,13 @@ import pytest
 from dmprs._core import RobotNode, Ros2GoalClient, Ros2JointStateListener
 from dmprs.errors import AdapterError, InvalidInputError
 from dmprs.ros2 import (
+    ACTION_STATUS,
     CLOCK,
     ActionClient,
     JointStateRecorder,
     Node,
     ServiceClient,
+    ServiceServer,
     stamp_seconds,
 )
 from dmprs.ros2 import messages as m
@@ -238,7 +240,6 @@ def test_bad_calls_raise_dmprs_errors(robot: RobotNode) -> None:
 
 def test_ros2_client_goals_reach_a_cyclone_server_and_its_header_round_trips(node: Node, domain_id: int) -> None:
     from dmprs._core import Ros2GoalClient
-    from dmprs.ros2 import ServiceServer
 
     server = ServiceServer(node, FJT + "_SendGoal", ACTION + "/_action/send_goal")
     client = Ros2GoalClient(domain_id, ACTION)
@@ -280,6 +281,68 @@ def test_two_action_clients_of_one_node_share_its_topics(robot: RobotNode, node:
         assert client.result(handle, WAIT)[0] == m.GoalStatus.STATUS_SUCCEEDED
     with pytest.raises(InvalidInputError, match="takes FollowJointTrajectory_Goal"):
         first.send_goal(m.JointTrajectory(), WAIT)
+
+
+class Served(threading.Thread):
+    """Answers one service of ours from its own node until stopped, counting the requests."""
+
+    def __init__(self, domain_id: int, service_type: str, service: str, answer) -> None:
+        super().__init__(daemon=True)
+        self.node = Node("server_side", domain_id)
+        self.server = ServiceServer(self.node, service_type, service)
+        self.answer, self.requests, self.halt = answer, 0, threading.Event()
+
+    def run(self) -> None:
+        while not self.halt.is_set():
+            self.requests += self.server.serve(self.answer, 0.05)
+
+    def stop(self) -> None:
+        self.halt.set()
+        self.join()
+        self.node.close()
+
+
+def test_a_result_request_that_reached_no_one_is_sent_again_once_the_goal_shows_finished(domain_id: int) -> None:
+    # the result server leaves just before the client asks for the result and returns: the first
+    # request reaches no one (as when a DDS stack writes before it is matched); the client asks
+    # again once the status topic has shown the goal finished for RESULT_RETRY, and not before
+    from dmprs.ros2.action import RESULT_RETRY
+
+    succeeded = m.GoalStatus.STATUS_SUCCEEDED
+    with Node("client", domain_id) as node, Node("action_server", domain_id) as host:
+        status = host.create_publisher(m.GoalStatusArray, ACTION + "/_action/status", ACTION_STATUS)
+        feedback = host.create_publisher(m.message_class(FJT + "_FeedbackMessage"), ACTION + "/_action/feedback")
+        accept = Served(domain_id, FJT + "_SendGoal", ACTION + "/_action/send_goal",
+                        lambda request: m.FollowJointTrajectory_SendGoal_Response(accepted=True, stamp=m.Time(sec=1)))
+        cancel = Served(domain_id, "action_msgs/srv/CancelGoal", ACTION + "/_action/cancel_goal",
+                        lambda request: m.CancelGoal_Response())
+
+        def result(request):
+            return m.FollowJointTrajectory_GetResult_Response(status=succeeded, result=m.FollowJointTrajectory_Result())
+
+        first = Served(domain_id, FJT + "_GetResult", ACTION + "/_action/get_result", result)
+        for served in (accept, cancel, first):
+            served.start()
+        client = ActionClient(node, FJT, ACTION)
+        assert client.wait_for_server(WAIT) and feedback.subscription_count() == 1
+        first.stop()
+        handle = client.send_goal(goal_of(JOINTS)[0], WAIT)
+        assert handle.accepted
+        second = Served(domain_id, FJT + "_GetResult", ACTION + "/_action/get_result", result)
+        second.start()
+        try:
+            assert client._get_result.wait_for_server(WAIT)
+            # the goal still runs as far as the status topic shows: nothing is asked again
+            assert client.result(handle, 2 * RESULT_RETRY) is None and second.requests == 0
+            status.publish(m.GoalStatusArray(status_list=[m.GoalStatus(
+                goal_info=m.GoalInfo(goal_id=m.UUID(uuid=handle.goal_id), stamp=m.Time(sec=1)), status=succeeded)]))
+            start = time.monotonic()
+            answer = client.result(handle, WAIT)
+            assert answer is not None and answer[0] == succeeded
+            assert time.monotonic() - start >= RESULT_RETRY and second.requests == 1
+        finally:
+            for served in (accept, cancel, second):
+                served.stop()
 
 
 def test_a_topic_trajectory_carries_its_start_stamp_to_the_robot(robot: RobotNode, node: Node) -> None:

@@ -4,7 +4,9 @@ An action `<name>` is three services, `<name>/_action/send_goal`, `get_result` a
 and two topics, `<name>/_action/feedback` (each feedback message carries its goal's UUID) and
 `<name>/_action/status` (action_msgs/msg/GoalStatusArray, transient local). As rclpy does, the
 client asks for a goal's result as soon as the goal is accepted; the server answers when the
-goal ends.
+goal ends. Unlike rclpy, the client asks again when the status topic has shown the goal finished
+for a while and no answer came: one DDS stack can match the other's endpoint before it is matched
+in return, and a request or an answer written in between reaches no one and is never resent.
 """
 
 from __future__ import annotations
@@ -27,6 +29,15 @@ STATUS_NAMES = {
     if name.startswith("STATUS_")
 }
 
+#: The statuses a goal ends in.
+FINISHED = frozenset(
+    (messages.GoalStatus.STATUS_SUCCEEDED, messages.GoalStatus.STATUS_CANCELED, messages.GoalStatus.STATUS_ABORTED)
+)
+
+#: Seconds a finished goal's result may take to come before it is asked for again (the server
+#: answers at once, and its answer is written before the status that shows the goal finished).
+RESULT_RETRY = 1.0
+
 
 @dataclasses.dataclass
 class GoalHandle:
@@ -38,6 +49,8 @@ class GoalHandle:
     accepted: bool
     stamp: float
     _result_seq: int | None = None
+    _asked_at: float = 0.0
+    _seen_finished_at: float | None = None
     _feedback: list[Any] = dataclasses.field(default_factory=list)
     _result: tuple[int, Any] | None = None
 
@@ -93,9 +106,25 @@ class ActionClient:
         handle = GoalHandle(goal_id, bool(reply.accepted), reply.stamp.sec + reply.stamp.nanosec * 1e-9)
         if handle.accepted:
             self._handles[goal_id] = handle
-            result_request = self._get_result.request_type(goal_id=uuid_message(goal_id))
-            handle._result_seq = self._get_result.send(result_request)
+            self._ask_result(handle)
         return handle
+
+    def _ask_result(self, handle: GoalHandle) -> None:
+        if handle._result_seq is not None:
+            self._get_result.forget(handle._result_seq)
+        handle._result_seq = self._get_result.send(self._get_result.request_type(goal_id=uuid_message(handle.goal_id)))
+        handle._asked_at = time.monotonic()
+
+    def _ask_again_if_lost(self, handle: GoalHandle) -> None:
+        """A new result request once the goal has been seen finished, and its result has not come,
+        for RESULT_RETRY s since both the sighting and the last request.
+        """
+        now = time.monotonic()
+        if handle._seen_finished_at is None:
+            if self.statuses().get(handle.goal_id) in FINISHED:
+                handle._seen_finished_at = now
+        elif now - max(handle._seen_finished_at, handle._asked_at) >= RESULT_RETRY:
+            self._ask_result(handle)
 
     def _collect_feedback(self) -> None:
         for message in self._feedback.take():
@@ -122,10 +151,16 @@ class ActionClient:
         if handle._result is None:
             if handle._result_seq is None:
                 raise AdapterError("a rejected goal has no result")
-            reply = self._get_result.wait_for_reply(handle._result_seq, timeout)
-            if reply is None:
-                return None
-            handle._result = (int(reply.status), reply.result)
+            deadline = time.monotonic() + check_timeout(timeout) * 1e-9
+            while True:
+                left = max(0.0, deadline - time.monotonic())
+                reply = self._get_result.wait_for_reply(handle._result_seq, min(left, RESULT_RETRY))
+                if reply is not None:
+                    handle._result = (int(reply.status), reply.result)
+                    break
+                self._ask_again_if_lost(handle)
+                if left <= 0:
+                    return None
         return handle._result
 
     def cancel(self, handle: GoalHandle, timeout: float) -> Any:

@@ -33,7 +33,7 @@ from dmprs.adapters.base import BaseAdapter
 from dmprs.adapters.spec import AdapterSpec, Outcome, SignalSpec, Status
 from dmprs.errors import InvalidInputError
 from dmprs.ros2 import messages, names
-from dmprs.ros2.action import ActionClient, GoalHandle
+from dmprs.ros2.action import STATUS_NAMES, ActionClient, GoalHandle
 from dmprs.ros2.node import Node, Subscription, stamp_seconds
 from dmprs.ros2.qos import DEFAULT
 from dmprs.ros2.recorder import JointRecording, JointStateRecorder, increasing
@@ -300,9 +300,11 @@ class Ros2TrajectoryAdapter(Ros2Adapter):
             if answer is not None:
                 return _ended(*answer)
             if self._interrupted():
+                # what the robot last said of the goal tells a lost answer from a goal still running
+                last = STATUS_NAMES.get(self._client.statuses().get(handle.goal_id, -1), "none")
                 self._cancel(handle)
                 outcome = self._interrupted_outcome()
-                return outcome.status, f"{outcome.message}; the goal was canceled"
+                return outcome.status, f"{outcome.message}; the goal was canceled (its last status: {last})"
             silent = time.monotonic() - recorder.last_arrival
             if silent > self.answer_timeout:
                 return Status.ERROR, (f"the robot went silent: no {self.joint_states} for {silent:.1f} s "

@@ -107,6 +107,7 @@ class ServiceClient(_ServiceEndpoints):
         # rmw_cyclonedds names the client by its request writer's instance handle (a uint64)
         self.client_guid = int(self._writer.get_instance_handle()) & 0xFFFF_FFFF_FFFF_FFFF
         self._replies: dict[int, Any] = {}
+        self._forgotten: set[int] = set()
         self._matched = False
 
     def wait_for_server(self, timeout: float) -> bool:
@@ -137,13 +138,22 @@ class ServiceClient(_ServiceEndpoints):
         while True:
             for sample in self._reader.take(N=64, condition=self._unread):
                 if getattr(sample, HEADER_FIELDS[0]) == self.client_guid:
-                    self._replies[getattr(sample, HEADER_FIELDS[1])] = unwrap(self.response_type, sample)
+                    number = getattr(sample, HEADER_FIELDS[1])
+                    if number in self._forgotten:
+                        self._forgotten.discard(number)
+                    else:
+                        self._replies[number] = unwrap(self.response_type, sample)
             if seq in self._replies:
                 return self._replies.pop(seq)
             left = deadline - time.monotonic()
             if left <= 0:
                 return None
             self._waitset.wait(int(left * 1e9))
+
+    def forget(self, seq: int) -> None:
+        """Request `seq`'s reply is no longer wanted: dropped now, or when it comes."""
+        if self._replies.pop(seq, None) is None:
+            self._forgotten.add(seq)
 
     def call(self, request: Any, timeout: float) -> Any:
         """Send `request` and return the reply; AdapterError if no server answers in `timeout`."""
