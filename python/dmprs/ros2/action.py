@@ -159,7 +159,7 @@ class ActionClient:
                     handle._result = (int(reply.status), reply.result)
                     break
                 self._ask_again_if_lost(handle)
-                if left <= 0:
+                if time.monotonic() >= deadline:
                     return None
         return handle._result
 
