@@ -33,10 +33,12 @@
 //! quaternions; the rounding drift, ~1e-16 per step, is removed by one Newton step for `1/|q|`).
 //! For a rotation about one fixed axis this is the discrete DMP of the angle, step for step.
 
+use std::f64::consts::PI;
+
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity};
-use crate::error::{Error, Result, check_finite_matrix, check_increasing};
+use crate::error::{Error, Result, check_finite_matrix, check_increasing, fmt_g};
 use crate::finite_difference as diff;
 use crate::quaternion::{self, Quaternion};
 
@@ -180,17 +182,40 @@ impl PreparedPose {
     /// (tau - t_j)`, with `g_m(t) = exp(-(tau - t)/2 omega_g) * g_o`, so that the joint fit's
     /// moving-goal target `beta_z (g - gd (tau - t_j) - y_j)` (goal 0, `gd = omega_g`) is the
     /// orientation's `beta_z 2 log(g_m(t_j) * conj(q_j))`. `y_T` is still exactly 0.
-    pub fn move_goal(&mut self, t: &[f64], omega_g: &[f64; 3]) {
+    ///
+    /// The logarithm's range is a full turn: where the moving goal gets a full turn or more
+    /// from the demonstration, `log` jumps to the other way round (its half-angle vector from
+    /// about `pi n` to `-pi n`), and the targets, the fitted forcing term and the rollout's
+    /// spring would jump with it. That is refused, naming the final velocity and the time.
+    pub fn move_goal(&mut self, t: &[f64], omega_g: &[f64; 3]) -> Result<()> {
         let (t0, tau) = (t[0], t[t.len() - 1] - t[0]);
         let goal = self.goal();
+        let mut last: Option<[f64; 3]> = None;
         for (j, q) in self.quaternions.iter().enumerate() {
             let to_go = tau - (t[j] - t0);
             let g_m = moving_goal(&goal, omega_g, -0.5 * to_go);
             let e = quaternion::log(&quaternion::product(&g_m, &quaternion::conjugate(q)));
+            // a continuous gap moves its half-angle vector by far less than pi per sample
+            if last.is_some_and(|l| (0..3).map(|d| (e[d] - l[d]).powi(2)).sum::<f64>() > PI * PI) {
+                return Err(Error::InvalidParameter {
+                    name: "final_velocity",
+                    value: format!(
+                        "(wx, wy, wz) = ({}, {}, {}) rad/s (its goal turns {} rad over the movement, a full turn from the demonstrated orientation at t = {} s)",
+                        fmt_g(omega_g[0]),
+                        fmt_g(omega_g[1]),
+                        fmt_g(omega_g[2]),
+                        fmt_g(tau * omega_g.iter().map(|w| w * w).sum::<f64>().sqrt()),
+                        fmt_g(t[j]),
+                    ),
+                    requirement: "the goal turning at the final angular velocity must stay within a full turn of the demonstrated orientation (the range of the quaternion logarithm; docs/cartesian.md, \"A final velocity\")",
+                });
+            }
+            last = Some(e);
             for d in 0..3 {
                 self.y[(3 + d, j)] = -2.0 * e[d] - omega_g[d] * to_go;
             }
         }
+        Ok(())
     }
 
     pub fn goal(&self) -> Quaternion {
@@ -405,7 +430,7 @@ impl CartesianDmp {
         };
         let omega_g = [twist[3], twist[4], twist[5]];
         if omega_g.iter().any(|&w| w != 0.0) {
-            prepared.move_goal(demo.t, &omega_g);
+            prepared.move_goal(demo.t, &omega_g)?;
         }
         let dmp = Dmp::fit_with_final_velocity(
             &prepared.demonstration(demo.t),

@@ -79,14 +79,15 @@ impl CartesianGeneralizer {
         config.validate_for_fit()?;
         let mut prepared = Vec::with_capacity(demos.len());
         for (k, demo) in demos.iter().enumerate() {
-            let mut p = PreparedPose::new(demo).map_err(|e| Error::InDemo {
+            let in_demo = |e| Error::InDemo {
                 index: k,
                 source: Box::new(e),
-            })?;
+            };
+            let mut p = PreparedPose::new(demo).map_err(in_demo)?;
             let last = p.yd.column(demo.t.len() - 1);
             let omega_g = [last[3], last[4], last[5]];
             if final_velocity && omega_g.iter().any(|&w| w != 0.0) {
-                p.move_goal(demo.t, &omega_g);
+                p.move_goal(demo.t, &omega_g).map_err(in_demo)?;
             }
             prepared.push(p);
         }
