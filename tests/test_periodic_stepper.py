@@ -156,6 +156,8 @@ def test_bad_options_and_measurements_are_named_and_change_nothing() -> None:
     stepper = dmp.stepper(DT)
     with pytest.raises(InvalidInputError, match="tau"):
         stepper.set_tau(1e-4)
+    with pytest.raises(InvalidInputError, match=r"^tau = 1e-9 is invalid: is too short for dt"):
+        stepper.set_tau(1e-9)  # beyond the sub-steps the rollout would take: the option is named
     run(stepper, 10)
     phase, steps = stepper.phase, stepper.steps
     for bad in ([np.nan, 1.0], [1.0], [1e300, 1.0]):

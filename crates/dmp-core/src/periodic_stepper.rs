@@ -818,17 +818,29 @@ fn check_time_scale(
     tau: f64,
     name: &'static str,
 ) -> Result<()> {
-    dmp.substeps_at(opts.dt, tau)?;
+    let refused = |requirement| Error::InvalidParameter {
+        name,
+        value: if name == "dt" {
+            fmt_g(opts.dt)
+        } else {
+            fmt_g(tau)
+        },
+        requirement,
+    };
+    // the rollout's rule, refused here as the option that broke it (the joint stepper's words)
+    if dmp.substeps_at(opts.dt, tau).is_err() {
+        return Err(refused(if name == "dt" {
+            "is too coarse for this DMP: explicit Euler would need more than 1000 sub-steps per \
+             period; use a smaller dt or a larger tau"
+        } else {
+            "is too short for dt: explicit Euler would need more than 1000 sub-steps per period; \
+             use a larger tau or a smaller dt"
+        }));
+    }
     if opts.dt * opts.change_filter > tau {
-        return Err(Error::InvalidParameter {
-            name,
-            value: if name == "dt" {
-                fmt_g(opts.dt)
-            } else {
-                fmt_g(tau)
-            },
-            requirement: "must keep the change filter stable: dt * change_filter <= tau",
-        });
+        return Err(refused(
+            "must keep the change filter stable: dt * change_filter <= tau",
+        ));
     }
     Ok(())
 }
