@@ -180,6 +180,27 @@ def test_bad_arguments_and_samples_are_named_and_change_nothing() -> None:
     assert (osc.phase, osc.frequency, osc.samples) == state
 
 
+@pytest.mark.parametrize("amplitude", [1e300, 1.7e308])
+def test_a_signal_too_large_for_f64_is_refused_sample_by_sample_and_never_estimated_non_finite(
+    amplitude: float,
+) -> None:
+    """Each sample is finite, but the series' derivatives (up to harmonics^2 Omega^2 times the
+    coefficients) or its mean square would overflow: such a sample is refused and changes
+    nothing, and every estimate stays finite."""
+    osc = AdaptiveOscillator(1.0)
+    refused = 0
+    for y in sine(1.0, 2.0, amplitude=amplitude)[1]:
+        state = (osc.phase, osc.frequency, osc.samples, osc.coefficients[0].tolist())
+        try:
+            osc.update(DT, [y])
+        except DmprsError as e:
+            assert "not taken" in str(e)
+            assert (osc.phase, osc.frequency, osc.samples, osc.coefficients[0].tolist()) == state
+            refused += 1
+        assert all(np.isfinite(v).all() for v in osc.estimate())
+    assert refused > 0
+
+
 def test_the_readmes_oscillator_example_runs_and_does_what_it_says() -> None:
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     first = readme.split("Rhythms (wiping", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]

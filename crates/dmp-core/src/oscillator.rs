@@ -72,6 +72,8 @@ pub struct AdaptiveOscillator {
     samples: u64,
     cos: Vec<f64>,
     sin: Vec<f64>,
+    /// The coefficients before the sample being taken, put back if it is refused.
+    saved: Vec<f64>,
 }
 
 impl AdaptiveOscillator {
@@ -141,6 +143,7 @@ impl AdaptiveOscillator {
             samples: 0,
             cos: vec![0.0; harmonics + 1],
             sin: vec![0.0; harmonics + 1],
+            saved: vec![0.0; n_dof * 2 * (harmonics + 1)],
         })
     }
 
@@ -198,9 +201,42 @@ impl AdaptiveOscillator {
 
     /// Takes the sample `y` (one value per coordinate) measured `dt` seconds after the previous
     /// one, and advances the oscillator and the series by one explicit Euler step. A sample that
-    /// is not finite, or a `dt` at which the highest harmonic would alias, is refused and
-    /// changes nothing.
+    /// is not finite, a `dt` at which the highest harmonic would alias, or a sample so large
+    /// that the state or [`Self::estimate`] would no longer be finite, is refused and changes
+    /// nothing.
     pub fn update(&mut self, dt: f64, y: &[f64]) -> Result<()> {
+        let before = (self.phase, self.omega, self.mean_square, self.mean_error);
+        self.saved.copy_from_slice(&self.coefficients);
+        let taken = self.take(dt, y);
+        if taken.is_ok() && !self.bounded() {
+            (self.phase, self.omega, self.mean_square, self.mean_error) = before;
+            self.coefficients.copy_from_slice(&self.saved);
+            self.samples -= 1;
+            return Err(Error::Numerical {
+                context: "adaptive oscillator",
+                detail: "the sample would make the series or its derivatives non-finite; it was \
+                         not taken (the signal is too large for f64)"
+                    .into(),
+            });
+        }
+        taken
+    }
+
+    /// Whether the state is finite and bounds every value [`Self::estimate`] can give: each
+    /// term of the series and of its derivatives is at most `(|a_c| + |b_c|) max(1, c Omega)^2`.
+    fn bounded(&self) -> bool {
+        let scale = (self.harmonics as f64 * self.omega).max(1.0).powi(2);
+        let largest = self.coefficients.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+        let bound = largest * 2.0 * (self.harmonics + 1) as f64 * scale;
+        // (a margin of 4 for the sums' rounding; NaN compares false)
+        [self.phase, self.mean_square, self.mean_error]
+            .iter()
+            .all(|v| v.is_finite())
+            && bound < f64::MAX / 4.0
+    }
+
+    /// [`Self::update`]'s step, the state's check aside.
+    fn take(&mut self, dt: f64, y: &[f64]) -> Result<()> {
         check_scalar("dt", dt, true)?;
         check_per_dof("y", y, self.n_dof())?;
         if self.harmonics as f64 * self.omega_range.1 * dt >= PI {
