@@ -276,6 +276,26 @@ def test_a_rotation_about_one_axis_is_the_periodic_dmp_of_its_angle_and_stays_un
     np.testing.assert_allclose(dmp.amplitude[3:], np.abs(axis) * angle.amplitude[0], rtol=1e-9)
 
 
+def test_a_swing_of_a_full_turn_from_the_baseline_is_refused_and_one_just_under_is_kept():
+    """About one axis the orientation's coordinates are the angle from the baseline while it is
+    within a full turn (the quaternion logarithm's range); past it they would jump by 2 pi and
+    the rollout with them (it turned at 120 rad/s). A swing of 6.2 rad each way is fitted and
+    follows the angle's own periodic DMP; one of 6.4 is refused, naming the time."""
+    tau = 1.0
+    t = np.linspace(0.0, TWO_PI * tau, 800, endpoint=False)
+    axis = np.array([0.0, 0.0, 1.0])
+    for amplitude in (6.2, 6.4):
+        theta = amplitude * np.sin(t / tau)
+        pose = np.column_stack([0 * np.outer(t, axis), _rotation_about(axis, theta)])
+        if amplitude > TWO_PI:
+            with pytest.raises(InvalidInputError, match=r"at t = 1\.38.* s is a full turn or more"):
+                dmprs.PeriodicCartesianDMP.fit(t, pose, n_basis=25)
+            continue
+        a = dmprs.PeriodicCartesianDMP.fit(t, pose, n_basis=25).rollout(dt=1e-3, duration=2.0)
+        b = dmprs.PeriodicDMP.fit(t, theta, n_basis=25).rollout(dt=1e-3, duration=2.0)
+        np.testing.assert_allclose(a.angular_velocity, np.outer(b.yd[:, 0], axis), atol=1e-7)
+
+
 def test_a_wobbling_wipe_is_reproduced_once_the_start_transient_has_gone():
     tau = 0.15
     t = np.linspace(0.0, 2 * TWO_PI * tau, 3001)

@@ -33,8 +33,6 @@
 //! quaternions; the rounding drift, ~1e-16 per step, is removed by one Newton step for `1/|q|`).
 //! For a rotation about one fixed axis this is the discrete DMP of the angle, step for step.
 
-use std::f64::consts::PI;
-
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use crate::dmp::{Demonstration, Dmp, DmpConfig, FinalVelocity};
@@ -184,9 +182,9 @@ impl PreparedPose {
     /// orientation's `beta_z 2 log(g_m(t_j) * conj(q_j))`. `y_T` is still exactly 0.
     ///
     /// The logarithm's range is a full turn: where the moving goal gets a full turn or more
-    /// from the demonstration, `log` jumps to the other way round (its half-angle vector from
-    /// about `pi n` to `-pi n`), and the targets, the fitted forcing term and the rollout's
-    /// spring would jump with it. That is refused, naming the final velocity and the time.
+    /// from the demonstration, `log` jumps to the other way round ([`quaternion::log_wrapped`]),
+    /// and the targets, the fitted forcing term and the rollout's spring would jump with it.
+    /// That is refused, naming the final velocity and the time.
     pub fn move_goal(&mut self, t: &[f64], omega_g: &[f64; 3]) -> Result<()> {
         let (t0, tau) = (t[0], t[t.len() - 1] - t[0]);
         let goal = self.goal();
@@ -195,8 +193,7 @@ impl PreparedPose {
             let to_go = tau - (t[j] - t0);
             let g_m = moving_goal(&goal, omega_g, -0.5 * to_go);
             let e = quaternion::log(&quaternion::product(&g_m, &quaternion::conjugate(q)));
-            // a continuous gap moves its half-angle vector by far less than pi per sample
-            if last.is_some_and(|l| (0..3).map(|d| (e[d] - l[d]).powi(2)).sum::<f64>() > PI * PI) {
+            if last.is_some_and(|l| quaternion::log_wrapped(&l, &e)) {
                 return Err(Error::InvalidParameter {
                     name: "final_velocity",
                     value: format!(

@@ -62,6 +62,16 @@ pub fn log(q: &Quaternion) -> [f64; 3] {
     [k * q[1], k * q[2], k * q[3]]
 }
 
+/// Whether `log` jumped between two samples of a continuous path of rotations: where the path
+/// passes a full turn from where its logarithms are taken, `log` goes to the other way round,
+/// its half-angle vector from about `pi n` to `-pi n`, while a continuous path moves it far less
+/// than `pi` per sample.
+#[inline]
+pub fn log_wrapped(before: &[f64; 3], after: &[f64; 3]) -> bool {
+    let d = [0, 1, 2].map(|i| after[i] - before[i]);
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > std::f64::consts::PI * std::f64::consts::PI
+}
+
 /// `exp(r) = [cos |r|, sin |r| r / |r|]`, a unit quaternion for every finite `r`.
 ///
 /// Below `|r| = 0.03` (an integration step of an orientation DMP is far below that) the Taylor
