@@ -52,6 +52,33 @@ def test_a_fixed_axis_rotation_is_the_discrete_dmp_of_its_angle() -> None:
     np.testing.assert_allclose(a.angular_velocity, np.outer(b.yd[:, 0], axis), rtol=0, atol=1e-9)
 
 
+def test_a_turn_of_a_full_turn_or_more_is_refused_naming_the_time_and_one_just_under_is_kept() -> None:
+    """The orientation coordinates are the rotation to the goal while it is under a full turn
+    (the quaternion logarithm's range); past it they jump by 2 pi and the rollout with them (it
+    turned at about 100 rad/s and ended the other way round). A 6.0 rad turn is still the
+    discrete DMP of its angle; a 6.4 rad one is refused by the fit and, by its index, by a
+    generalizer."""
+    t = np.linspace(0.0, 1.0, 1001)
+    axis = np.array([0.0, 0.6, 0.8])
+
+    def turn(total: float) -> np.ndarray:
+        q = Rotation.from_rotvec(np.outer(total * min_jerk(t), axis)).as_quat(scalar_first=True)
+        return np.hstack([np.zeros((len(t), 3)), q])
+
+    a = dmprs.CartesianDMP.fit(t, turn(6.0), 50).rollout(0.001, 1.0)
+    b = dmprs.DMP.fit(t, 6.0 * min_jerk(t), 50).rollout(0.001, 1.0)
+    # (to 1e-6 of the peak 11 rad/s; a wrap would be off by about 100 rad/s)
+    np.testing.assert_allclose(a.angular_velocity, np.outer(b.yd[:, 0], axis), rtol=0, atol=1e-5)
+    with pytest.raises(dmprs.errors.InvalidInputError, match=r"at t = 0\.131 s is a full turn or more from the goal"):
+        dmprs.CartesianDMP.fit(t, turn(6.4), 50)
+    db = dmprs.Database(("turn",))
+    for total in (3.0, 6.4):
+        pose = turn(total)
+        db.add([total], dmprs.CartesianTrajectory(t, pose[:, :3], pose[:, 3:]))
+    with pytest.raises(dmprs.errors.InvalidInputError, match="demonstration 1: .* full turn"):
+        dmprs.Generalizer(db, "linear", 30)
+
+
 @settings(max_examples=30, deadline=None)
 @given(
     w=st.lists(st.floats(-300, 300), min_size=60, max_size=60),

@@ -218,6 +218,19 @@ impl PreparedPose {
     pub fn goal(&self) -> Quaternion {
         self.quaternions[self.quaternions.len() - 1]
     }
+
+    /// That the orientation coordinates (`-2 log(g_o * conj(q_j))`, from the goal) stay within
+    /// a full turn of the goal ([`within_a_turn`]).
+    pub fn within_a_turn_of_the_goal(&self, t: &[f64]) -> Result<()> {
+        within_a_turn(
+            &self.y.rows(3, 3),
+            t,
+            "a Cartesian DMP",
+            "the goal orientation",
+            "every orientation of a discrete movement must be less than a full turn from its \
+             goal; make a longer turn a dmprs.Sequence of movements of less than a full turn each",
+        )
+    }
 }
 
 /// The quaternions of rows 3..7 of a `7 x T` pose matrix: checked, scaled to unit norm, and
@@ -238,6 +251,32 @@ fn unit_quaternions(
         });
     }
     Ok(out)
+}
+
+/// That the rotation vectors `v` (`3 x T`, a demonstration's orientations relative to one
+/// orientation, `from`, as `2 log` or `-2 log` gives them) never wrap
+/// ([`quaternion::log_wrapped`]): an orientation a full turn or more from `from` is beyond the
+/// range of the quaternion logarithm, and the coordinates, the forcing term and the rollout of
+/// `kind` would jump there. `need` says what the demonstration must do instead.
+pub(crate) fn within_a_turn(
+    v: &DMatrixView<'_, f64>,
+    t: &[f64],
+    kind: &'static str,
+    from: &str,
+    need: &str,
+) -> Result<()> {
+    let half = |j: usize| [0, 1, 2].map(|d| 0.5 * v[(d, j)]);
+    match (1..v.ncols()).find(|&j| quaternion::log_wrapped(&half(j - 1), &half(j))) {
+        None => Ok(()),
+        Some(j) => Err(Error::Unsuited {
+            method: kind,
+            detail: format!(
+                "the demonstration's orientation at t = {} s is a full turn or more from {from} \
+                 (the range of the quaternion logarithm): {need}",
+                fmt_g(t[j])
+            ),
+        }),
+    }
 }
 
 /// `q / |q|`, refusing the zero quaternion and, unless `normalize`, a norm off by more than
@@ -403,6 +442,7 @@ impl CartesianDmp {
     pub fn fit(demo: &CartesianDemonstration<'_>, config: DmpConfig) -> Result<Self> {
         config.validate_for_fit()?;
         let prepared = PreparedPose::new(demo)?;
+        prepared.within_a_turn_of_the_goal(demo.t)?;
         let dmp = Dmp::fit(&prepared.demonstration(demo.t), config)?;
         Self::from_coordinates(dmp, prepared.goal(), prepared.start())
     }
@@ -428,6 +468,8 @@ impl CartesianDmp {
         let omega_g = [twist[3], twist[4], twist[5]];
         if omega_g.iter().any(|&w| w != 0.0) {
             prepared.move_goal(demo.t, &omega_g)?;
+        } else {
+            prepared.within_a_turn_of_the_goal(demo.t)?;
         }
         let dmp = Dmp::fit_with_final_velocity(
             &prepared.demonstration(demo.t),

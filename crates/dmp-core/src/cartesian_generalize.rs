@@ -88,6 +88,8 @@ impl CartesianGeneralizer {
             let omega_g = [last[3], last[4], last[5]];
             if final_velocity && omega_g.iter().any(|&w| w != 0.0) {
                 p.move_goal(demo.t, &omega_g).map_err(in_demo)?;
+            } else {
+                p.within_a_turn_of_the_goal(demo.t).map_err(in_demo)?;
             }
             prepared.push(p);
         }

@@ -27,11 +27,16 @@ use rayon::prelude::*;
 
 use crate::cartesian::{
     CartesianDemonstration, CartesianTrajectory, POSE_WIDTH, PreparedPose, join_pose, split_pose,
+    within_a_turn,
 };
 use crate::design_matrix::PreparedDemo;
 use crate::error::{Error, Result, fmt_g};
 use crate::periodic::{PeriodicConfig, PeriodicDmp, baseline_and_amplitude};
 use crate::quaternion::{self, Quaternion};
+
+/// What refuses an orientation beyond a full turn, and what it needs ([`within_a_turn`]).
+const PERIODIC: &str = "a periodic orientation DMP";
+const SWING: &str = "a rhythmic orientation must swing less than a full turn about its baseline";
 
 /// x, y, z, then the three orientation coordinates.
 const N_COORDS: usize = 6;
@@ -98,7 +103,13 @@ impl PeriodicCartesianDmp {
                 v[(d, j)] = 2.0 * e[d];
             }
         }
-        within_a_turn(&v.as_view(), demo.t, "the first orientation")?;
+        within_a_turn(
+            &v.as_view(),
+            demo.t,
+            PERIODIC,
+            "the first orientation",
+            SWING,
+        )?;
         let (mid, _) = baseline_and_amplitude(&v.as_view());
         let goal_q = quaternion::renormalize(&quaternion::product(
             &quaternion::exp(&[0.5 * mid[0], 0.5 * mid[1], 0.5 * mid[2]]),
@@ -111,7 +122,13 @@ impl PeriodicCartesianDmp {
                 y[(3 + d, j)] = -2.0 * e[d];
             }
         }
-        within_a_turn(&y.rows(3, 3), demo.t, "the baseline orientation")?;
+        within_a_turn(
+            &y.rows(3, 3),
+            demo.t,
+            PERIODIC,
+            "the baseline orientation",
+            SWING,
+        )?;
         let prepared = PreparedDemo::new(&crate::dmp::Demonstration {
             t: demo.t,
             y: y.as_view(),
@@ -304,26 +321,6 @@ pub fn rollout_batch_periodic_cartesian(
     dmps.par_iter()
         .map(|d| d.rollout(dt, duration, phi0))
         .collect()
-}
-
-/// That the rotation vectors `v` (`3 x T`, twice the logarithms of a demonstration's
-/// orientations relative to `from`) never wrap ([`quaternion::log_wrapped`]): a rhythm that
-/// swings a full turn or more from them is beyond the range of the quaternion logarithm, and its
-/// coordinates, forcing term and rollout would jump.
-fn within_a_turn(v: &nalgebra::DMatrixView<'_, f64>, t: &[f64], from: &'static str) -> Result<()> {
-    let half = |j: usize| [0, 1, 2].map(|d| 0.5 * v[(d, j)]);
-    match (1..v.ncols()).find(|&j| quaternion::log_wrapped(&half(j - 1), &half(j))) {
-        None => Ok(()),
-        Some(j) => Err(Error::Unsuited {
-            method: "a periodic orientation DMP",
-            detail: format!(
-                "the demonstration's orientation at t = {} s is a full turn or more from {from} \
-                 (the range of the quaternion logarithm): a rhythmic orientation must swing less \
-                 than a full turn about its baseline",
-                fmt_g(t[j])
-            ),
-        }),
-    }
 }
 
 #[cfg(test)]
