@@ -57,7 +57,8 @@ def test_a_turn_of_a_full_turn_or_more_is_refused_naming_the_time_and_one_just_u
     (the quaternion logarithm's range); past it they jump by 2 pi and the rollout with them (it
     turned at about 100 rad/s and ended the other way round). A 6.0 rad turn is still the
     discrete DMP of its angle; a 6.4 rad one is refused by the fit and, by its index, by a
-    generalizer."""
+    generalizer.
+    """
     t = np.linspace(0.0, 1.0, 1001)
     axis = np.array([0.0, 0.6, 0.8])
 
@@ -75,7 +76,7 @@ def test_a_turn_of_a_full_turn_or_more_is_refused_naming_the_time_and_one_just_u
     for total in (3.0, 6.4):
         pose = turn(total)
         db.add([total], dmprs.CartesianTrajectory(t, pose[:, :3], pose[:, 3:]))
-    with pytest.raises(dmprs.errors.InvalidInputError, match="demonstration 1: .* full turn"):
+    with pytest.raises(dmprs.errors.InvalidInputError, match=r"demonstration 1: .* full turn"):
         dmprs.Generalizer(db, "linear", 30)
 
 

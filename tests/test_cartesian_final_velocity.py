@@ -181,7 +181,8 @@ def test_a_goal_a_full_turn_from_the_demonstration_is_refused_by_name():
     targets would jump there (the rollout's angular velocity to 35-115 rad/s): refused. Just
     inside a full turn the fit is taken and reproduces the still demonstration. A generalizer's
     demo that comes back to where it started but ends turning at 6.4 rad/s is refused the same
-    way, by its index."""
+    way, by its index.
+    """
     t, still = turning_demo(lambda t: 0 * t)
     with pytest.raises(InvalidInputError, match=r"final_velocity = .*6\.4.* full turn .* t = 0\.01"):
         dmprs.CartesianDMP.fit(t, still, 50, final_velocity=[0, 0, 0, 0, 0, 6.4])
@@ -191,15 +192,16 @@ def test_a_goal_a_full_turn_from_the_demonstration_is_refused_by_name():
     for k, angle in enumerate((lambda t: 0 * t, lambda t: 6.4 * t**2 * (t - 1))):
         t, pose = turning_demo(angle)
         db.add([k], dmprs.CartesianTrajectory(t, pose[:, :3], pose[:, 3:]))
-    with pytest.raises(InvalidInputError, match="demonstration 1: final_velocity = .* full turn"):
+    with pytest.raises(InvalidInputError, match=r"demonstration 1: final_velocity = .* full turn"):
         dmprs.Generalizer(db, "linear", 30, final_velocity=True)
 
 
 def test_a_demonstration_turning_with_its_goal_may_turn_more_than_a_full_turn():
     """Spun up to 7 rad/s over a 1 s demo (7 rad of turn, and its goal's 7): the goal turns with
     the demonstration and stays near it, so the fit is taken, and the rollout ends turning at the
-    final velocity along the demonstrated turn."""
-    spin = lambda t: 7.0 * t**2 * (2 - t)  # noqa: E731 - k(s) = s^2 (2 - s): k'(0) = 0, k'(1) = 1
+    final velocity along the demonstrated turn.
+    """
+    spin = lambda t: 7.0 * t**2 * (2 - t)
     t, spinning = turning_demo(spin)
     dmp = dmprs.CartesianDMP.fit(t, spinning, 50, final_velocity="demo")
     np.testing.assert_allclose(dmp.final_velocity, [0, 0, 0, 0, 0, 7.0], atol=1e-4)  # finite differences

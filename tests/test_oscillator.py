@@ -186,7 +186,8 @@ def test_a_signal_too_large_for_f64_is_refused_sample_by_sample_and_never_estima
 ) -> None:
     """Each sample is finite, but the series' derivatives (up to harmonics^2 Omega^2 times the
     coefficients) or its mean square would overflow: such a sample is refused and changes
-    nothing, and every estimate stays finite."""
+    nothing, and every estimate stays finite.
+    """
     osc = AdaptiveOscillator(1.0)
     refused = 0
     for y in sine(1.0, 2.0, amplitude=amplitude)[1]:

@@ -280,7 +280,8 @@ def test_a_swing_of_a_full_turn_from_the_baseline_is_refused_and_one_just_under_
     """About one axis the orientation's coordinates are the angle from the baseline while it is
     within a full turn (the quaternion logarithm's range); past it they would jump by 2 pi and
     the rollout with them (it turned at 120 rad/s). A swing of 6.2 rad each way is fitted and
-    follows the angle's own periodic DMP; one of 6.4 is refused, naming the time."""
+    follows the angle's own periodic DMP; one of 6.4 is refused, naming the time.
+    """
     tau = 1.0
     t = np.linspace(0.0, TWO_PI * tau, 800, endpoint=False)
     axis = np.array([0.0, 0.0, 1.0])
