@@ -185,7 +185,7 @@ impl PreparedPose {
     /// from the demonstration, `log` jumps to the other way round ([`quaternion::log_wrapped`]),
     /// and the targets, the fitted forcing term and the rollout's spring would jump with it.
     /// That is refused, naming the final velocity and the time.
-    pub fn move_goal(&mut self, t: &[f64], omega_g: &[f64; 3]) -> Result<()> {
+    fn move_goal(&mut self, t: &[f64], omega_g: &[f64; 3]) -> Result<()> {
         let (t0, tau) = (t[0], t[t.len() - 1] - t[0]);
         let goal = self.goal();
         let mut last: Option<[f64; 3]> = None;
@@ -217,6 +217,17 @@ impl PreparedPose {
 
     pub fn goal(&self) -> Quaternion {
         self.quaternions[self.quaternions.len() - 1]
+    }
+
+    /// The orientation coordinates of a fit whose goal turns at `omega_g`: taken relative to
+    /// the moving goal ([`Self::move_goal`]), or, for a still goal (`omega_g` zero), kept and
+    /// checked to stay within a full turn of it ([`Self::within_a_turn_of_the_goal`]).
+    pub fn toward_goal_turning_at(&mut self, t: &[f64], omega_g: &[f64; 3]) -> Result<()> {
+        if omega_g.iter().any(|&w| w != 0.0) {
+            self.move_goal(t, omega_g)
+        } else {
+            self.within_a_turn_of_the_goal(t)
+        }
     }
 
     /// That the orientation coordinates (`-2 log(g_o * conj(q_j))`, from the goal) stay within
@@ -466,11 +477,7 @@ impl CartesianDmp {
             FinalVelocity::Given(v) => checked_twist(v)?,
         };
         let omega_g = [twist[3], twist[4], twist[5]];
-        if omega_g.iter().any(|&w| w != 0.0) {
-            prepared.move_goal(demo.t, &omega_g)?;
-        } else {
-            prepared.within_a_turn_of_the_goal(demo.t)?;
-        }
+        prepared.toward_goal_turning_at(demo.t, &omega_g)?;
         let dmp = Dmp::fit_with_final_velocity(
             &prepared.demonstration(demo.t),
             config,

@@ -85,12 +85,13 @@ impl CartesianGeneralizer {
             };
             let mut p = PreparedPose::new(demo).map_err(in_demo)?;
             let last = p.yd.column(demo.t.len() - 1);
-            let omega_g = [last[3], last[4], last[5]];
-            if final_velocity && omega_g.iter().any(|&w| w != 0.0) {
-                p.move_goal(demo.t, &omega_g).map_err(in_demo)?;
+            let omega_g = if final_velocity {
+                [last[3], last[4], last[5]]
             } else {
-                p.within_a_turn_of_the_goal(demo.t).map_err(in_demo)?;
-            }
+                [0.0; 3]
+            };
+            p.toward_goal_turning_at(demo.t, &omega_g)
+                .map_err(in_demo)?;
             prepared.push(p);
         }
         let Some(first) = prepared.first() else {
