@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from dmprs.ros2 import LOOPBACK_CONFIG, MAX_DOMAIN_ID, Node
+from dmprs.ros2 import LOOPBACK_CONFIG, Node
 
 
 def min_jerk(s: np.ndarray) -> np.ndarray:
@@ -61,15 +61,21 @@ def calibration_cache(tmp_path_factory):
 
 
 _domains = itertools.count()
+SAFE_DOMAIN_IDS = 101  # the domains 1-101
 
 
 @pytest.fixture
 def domain_id(monkeypatch: pytest.MonkeyPatch, tmp_path) -> int:
-    """A ROS 2 domain of its own for each test (from the pid and a counter), Cyclone on loopback only."""
+    """A ROS 2 domain of its own for each test (from the pid and a counter), Cyclone on loopback only.
+
+    In 1-101, the range ROS 2 recommends on Linux: a higher id puts its participants' ports
+    (7400 + 250 id and up) in the kernel's ephemeral range (32768-60999), where another socket
+    may hold one; 0 is the default domain of anything else on the machine.
+    """
     config = tmp_path / "cyclonedds.xml"
     config.write_text(LOOPBACK_CONFIG)
     monkeypatch.setenv("CYCLONEDDS_URI", config.as_uri())
-    return (os.getpid() * 7 + next(_domains)) % (MAX_DOMAIN_ID + 1)
+    return 1 + (os.getpid() * 7 + next(_domains)) % SAFE_DOMAIN_IDS
 
 
 @pytest.fixture

@@ -176,13 +176,27 @@ def test_the_served_arm_moves_through_the_joint_trajectory_topic_as_through_the_
     np.testing.assert_allclose(topic.executed.y[-1], action.executed.y[-1], atol=0.01)
 
 
+def arm_moves(domain_id: int, timeout: float = 30.0) -> None:
+    """Returns once the served arm's /joint_states leave the pose they began in."""
+    with Node("watcher", domain_id) as node:
+        states = node.create_subscription(messages.JointState, "/joint_states")
+        deadline, start = time.monotonic() + timeout, None
+        while time.monotonic() < deadline:
+            for state in states.take():
+                start = start if start is not None else list(state.position)
+                if list(state.position) != start:
+                    return
+            time.sleep(0.005)
+    raise AssertionError(f"the arm did not move within {timeout:g} s")
+
+
 def test_a_trajectory_on_the_topic_replaces_the_running_goal(domain_id):
     outcomes = {}
     with (Served(domain_id, speed=1.0), throwing_adapter(domain_id) as by_action,
           throwing_adapter(domain_id, mode="topic") as by_topic):
         first = threading.Thread(target=lambda: outcomes.setdefault("goal", by_action.execute(throw(), timeout_s=60.0)))
         first.start()
-        time.sleep(0.5)  # the goal is simulated or played back at real time by now
+        arm_moves(domain_id)  # the goal is played back at real time: the topic's comes mid-motion
         outcomes["topic"] = by_topic.execute(throw(), timeout_s=60.0)
         first.join(60.0)
     assert outcomes["goal"].status is Status.ERROR
