@@ -180,6 +180,22 @@ def test_bad_arguments_and_samples_are_named_and_change_nothing() -> None:
     assert (osc.phase, osc.frequency, osc.samples) == state
 
 
+def test_sizes_beyond_any_rhythm_are_refused_before_anything_is_allocated() -> None:
+    # each of these once asked for 16 GB to 16 TB and aborted the process
+    for make, name in [(lambda: AdaptiveOscillator(1.0, harmonics=10**9), "harmonics"),
+                       (lambda: AdaptiveOscillator(1.0, 10**6, harmonics=10**6), "n_dof"),
+                       (lambda: AdaptiveOscillator(1.0, harmonics=1001), "harmonics"),
+                       (lambda: dmprs.PeriodicOnlineFit(10**10), "n_dof"),
+                       (lambda: RhythmLearner(1.0, 10_001), "n_dof")]:
+        with pytest.raises(InvalidInputError, match=name):
+            make()
+    # the largest sizes are taken and learn
+    osc = AdaptiveOscillator(1.0, 2, harmonics=1000, frequency_range=(0.5, 2.0))
+    osc.update(2e-4, [0.0, 1.0])  # 1000 harmonics of 2 Hz sampled twice a period
+    assert np.isfinite(osc.estimate()).all()
+    assert dmprs.PeriodicOnlineFit(10_000).n_dof == 10_000
+
+
 @pytest.mark.parametrize("amplitude", [1e300, 1.7e308])
 def test_a_signal_too_large_for_f64_is_refused_sample_by_sample_and_never_estimated_non_finite(
     amplitude: float,

@@ -51,8 +51,8 @@ class AdaptiveOscillator:
 
     Args:
         frequency: the initial guess (Hz).
-        n_dof: coordinates D in each sample.
-        harmonics: M, terms of each coordinate's Fourier series beyond the mean.
+        n_dof: coordinates D in each sample (1 to 10,000).
+        harmonics: M, terms of each coordinate's Fourier series beyond the mean (1 to 1000).
         drive: the coordinate whose signal moves the oscillator (the one with the clearest
             rhythm); every coordinate's series follows the oscillator's phase.
         frequency_range: ``(low, high)`` in Hz that the frequency is kept within; by default a

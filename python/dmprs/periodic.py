@@ -332,7 +332,8 @@ class PeriodicOnlineFit:
 
     ``forgetting`` (lambda, in [0.5, 1]) weighs a sample k updates old by ``lambda^k``: 1 keeps
     every sample (the batch least squares), 0.995 remembers about 200 samples. ``delta`` sets
-    the initial covariance ``P_0 = I / delta``.
+    the initial covariance ``P_0 = I / delta``. ``n_dof`` is from 1 to 10,000 and ``n_basis``
+    from 3 to 1000.
     """
 
     __slots__ = ("_constants", "_core")

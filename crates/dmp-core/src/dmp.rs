@@ -26,6 +26,22 @@ pub(crate) const FIT_RIDGE: f64 = 1e-10;
 /// The most kernels a DMP may have (see [`DmpConfig::validate`]).
 pub const MAX_BASIS: usize = 1000;
 
+/// The most coordinates a primitive built from a count (not from arrays) may have.
+pub const MAX_DOF: usize = 10_000;
+
+/// Checks a count of coordinates given as a number: its state is allocated from it, so a
+/// mistaken size must be an error, not an allocation the process cannot survive.
+pub(crate) fn check_n_dof(n_dof: usize) -> Result<()> {
+    if !(1..=MAX_DOF).contains(&n_dof) {
+        return Err(Error::InvalidParameter {
+            name: "n_dof",
+            value: n_dof.to_string(),
+            requirement: "must be from 1 to 10000: more coordinates than a robot has",
+        });
+    }
+    Ok(())
+}
+
 /// The meta-parameters of a DMP: its constants and the size of its basis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DmpConfig {

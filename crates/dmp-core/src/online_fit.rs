@@ -18,6 +18,7 @@
 
 use nalgebra::DMatrix;
 
+use crate::dmp::check_n_dof;
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::periodic::{Activations, PeriodicBasis, PeriodicConfig, check_per_dof};
 
@@ -53,13 +54,7 @@ impl OnlineFit {
                               faster than one sample can correct",
             });
         }
-        if n_dof == 0 {
-            return Err(Error::InvalidParameter {
-                name: "n_dof",
-                value: "0".into(),
-                requirement: "must be at least 1",
-            });
-        }
+        check_n_dof(n_dof)?;
         let n = config.n_basis;
         let basis = PeriodicBasis::new(n, config.width_factor)?;
         Ok(Self {

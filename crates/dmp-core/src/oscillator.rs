@@ -29,8 +29,12 @@
 
 use std::f64::consts::{PI, TAU};
 
+use crate::dmp::check_n_dof;
 use crate::error::{Error, Result, check_scalar, fmt_g};
 use crate::periodic::check_per_dof;
+
+/// The most terms a coordinate's Fourier series may have besides its baseline.
+pub const MAX_HARMONICS: usize = 1000;
 
 /// The oscillator's gains, each per radian of its own phase (dimensionless).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -109,18 +113,13 @@ impl AdaptiveOscillator {
                 requirement: "must hold the initial frequency: (low, high) with low <= frequency <= high",
             });
         }
-        if n_dof == 0 {
-            return Err(Error::InvalidParameter {
-                name: "n_dof",
-                value: "0".into(),
-                requirement: "must be at least 1",
-            });
-        }
-        if harmonics == 0 {
+        check_n_dof(n_dof)?;
+        if !(1..=MAX_HARMONICS).contains(&harmonics) {
             return Err(Error::InvalidParameter {
                 name: "harmonics",
-                value: "0".into(),
-                requirement: "must be at least 1: the fundamental",
+                value: harmonics.to_string(),
+                requirement: "must be from 1 (the fundamental) to 1000: a 0.5 Hz rhythm sampled \
+                              at 1 kHz has no more below its Nyquist frequency",
             });
         }
         if drive >= n_dof {
