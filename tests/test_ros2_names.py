@@ -59,6 +59,15 @@ def test_qos_profiles_are_ros_2_profiles() -> None:
     assert {reliable, Policy.Durability.TransientLocal, Policy.History.KeepLast(1)} <= status
 
 
+def test_a_depth_dds_cannot_hold_is_refused_not_taken_modulo_2_32() -> None:
+    # Cyclone read a depth of 2**32 + 5 as 5 and 1e20 as 1661992960
+    assert Policy.History.KeepLast(2**31 - 1) in set(DEFAULT.with_depth(2**31 - 1).to_cyclone())
+    assert Policy.History.KeepAll in set(DEFAULT.with_depth(0).to_cyclone())
+    for bad in (2**31, 2**32 + 5, 10**20, -1, 2.5, True):
+        with pytest.raises(InvalidInputError, match="depth"):
+            DEFAULT.with_depth(bad)  # type: ignore[arg-type]
+
+
 def test_import_dmprs_leaves_cyclonedds_and_rosbags_alone() -> None:
     code = "import sys, dmprs; print([m for m in ('cyclonedds', 'rosbags', 'dmprs.ros2') if m in sys.modules])"
     package_root = str(Path(dmprs.__file__).parents[1])

@@ -10,7 +10,11 @@ import dataclasses
 from cyclonedds.core import Policy, Qos
 from cyclonedds.util import duration
 
+from dmprs._arrays import as_count
 from dmprs.errors import InvalidInputError
+
+#: the deepest keep-last history DDS can hold (a 32-bit signed integer)
+MAX_DEPTH = 2**31 - 1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -22,8 +26,11 @@ class QosProfile:
     depth: int = 10
 
     def __post_init__(self) -> None:
-        if self.depth < 0:
-            raise InvalidInputError(f"QoS depth {self.depth} must be >= 0 (0 keeps all)")
+        depth = as_count(self.depth, "QoS depth", 0)
+        # DDS holds the depth in 32 bits: Cyclone would take a larger one modulo 2**32, silently
+        if depth > MAX_DEPTH:
+            raise InvalidInputError(f"QoS depth = {depth} is invalid: at most 2**31 - 1 (0 keeps all)")
+        object.__setattr__(self, "depth", depth)
 
     def with_depth(self, depth: int) -> QosProfile:
         """This profile with another history depth."""
