@@ -199,6 +199,18 @@ def test_rollout_batch_rejects_non_dmps(dmp):
         dmprs.rollout_batch([dmp, "x"])
 
 
+def test_a_batch_too_large_for_memory_is_refused_before_it_runs():
+    # 40 rollouts of 2800 s at 1 ms, each within its own bound: 40 x 8 B x (1 + 3 x 7) x 2.8e6
+    # samples = 19.7 GB in all, once allocated until the process was killed
+    seven = dmprs.DMP(np.zeros((7, 25)), np.ones(7), np.zeros(7), 1.0)
+    pose = dmprs.CartesianDMP(np.zeros((6, 25)), [1, 0, 0, 1, 0, 0, 0], [0, 0, 0, 1, 0, 0, 0], 1.0)
+    with raises(r"dmps: 40 rollouts of dt = 0\.001 would take 19\.7 GB in all, beyond 4 GB"):
+        dmprs.rollout_batch([seven] * 40, 0.001, 2800.0)
+    with raises(r"dmps: 3 rollouts .* would take 4\.96 GB"):  # kinds mixed: 8 B x (20 x 2 + 22) x 1e7
+        dmprs.rollout_batch([pose, seven, pose], 0.001, 1e4)
+    assert len(dmprs.rollout_batch([seven, pose] * 2, 0.001, 60.0)) == 4
+
+
 CONSTANTS = {"alpha_z": 48.0, "beta_z": 12.0, "alpha_x": 2.0, "width_factor": 2.0}
 
 

@@ -14,7 +14,15 @@ from dmprs.periodic import PeriodicCartesianDMP, PeriodicDMP
 from dmprs.primitive import rollout_options
 from dmprs.trajectory import CartesianTrajectory, Trajectory
 
-__all__ = ["rollout_batch"]
+__all__ = ["MAX_BATCH_BYTES", "rollout_batch"]
+
+#: The most memory the trajectories of one batch may take in all. Each rollout is held to its
+#: own bound (20 million values per array), but a batch keeps every trajectory at once: past
+#: this, a mistaken batch would exhaust the machine's memory and the process be killed.
+MAX_BATCH_BYTES = 4e9
+#: float64 values per sample of a pose trajectory: t, position (3), quaternion (4) and the
+#: linear and angular velocities and accelerations (3 each)
+_POSE_VALUES = 20
 
 
 @overload
@@ -49,6 +57,8 @@ def rollout_batch(
     :class:`dmprs.CartesianDMP` s (which give :class:`dmprs.CartesianTrajectory` s) and the
     periodic :class:`dmprs.PeriodicDMP` s and :class:`dmprs.PeriodicCartesianDMP` s (started at
     ``phase``; a rhythm never comes to rest, so ``until_rest`` is refused with them) may be mixed in.
+    A batch whose trajectories would take more than :data:`MAX_BATCH_BYTES` in all is refused
+    before anything runs.
     """
     kinds = (DMP, CartesianDMP, PeriodicDMP, PeriodicCartesianDMP)
     names = "dmprs.DMP, dmprs.CartesianDMP, dmprs.PeriodicDMP or dmprs.PeriodicCartesianDMP"
@@ -67,6 +77,7 @@ def rollout_batch(
     if (rhythm or posed) and opts["until_rest"]:
         i = min(i for i, _ in [*rhythm, *posed])
         raise InvalidInputError(f"until_rest=True: dmps[{i}] is a {type(items[i]).__name__}, which never comes to rest")
+    _check_memory(items, opts["dt"], opts["duration"])
     out: list[Any] = [None] * len(items)
     if joint:
         arrays = _core.rollout_batch([d._core for _, d in joint], **opts)
@@ -86,3 +97,19 @@ def rollout_batch(
         for (i, _), c in zip(posed, poses, strict=True):
             out[i] = CartesianTrajectory._trusted(*c)
     return out
+
+
+def _check_memory(items: list[Any], dt: float, duration: float | None) -> None:
+    """Refuses a batch whose trajectories would take more than :data:`MAX_BATCH_BYTES` (their
+    lengths as asked; a rollout ``until_rest`` may run longer, within its own bound).
+    """
+    total = 0.0
+    for d in items:
+        length = duration if duration is not None else (
+            d.period if isinstance(d, (PeriodicDMP, PeriodicCartesianDMP)) else d.tau)
+        per_sample = _POSE_VALUES if isinstance(d, (CartesianDMP, PeriodicCartesianDMP)) else 1 + 3 * d.n_dof
+        total += 8.0 * per_sample * (length / dt + 1.0)
+    if total > MAX_BATCH_BYTES:
+        raise InvalidInputError(
+            f"dmps: {len(items)} rollouts of dt = {dt:g} would take {total / 1e9:.3g} GB in all, beyond "
+            f"{MAX_BATCH_BYTES / 1e9:g} GB: roll them out in smaller batches (or at a larger dt)")
